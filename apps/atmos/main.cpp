@@ -1,0 +1,544 @@
+// atmos — command line interface.
+//
+//   atmos render      render images (no arguments: the default gallery)
+//   atmos precompute  build or verify the table cache, with timings
+//   atmos sample      radiance for directions read as CSV (tables or --reference)
+//   atmos bench       precomputation and render timings, name<TAB>value<TAB>unit
+//
+// Exit codes: 0 success, 1 runtime error (bad planet file, no OpenGL, I/O),
+// 2 usage error (unknown flag, bad value).
+#include <CLI/CLI.hpp>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "atmos/atmosphere.hpp"
+#include "atmos/colour.hpp"
+#include "atmos/image.hpp"
+#include "atmos/reference.hpp"
+#include "atmos/renderer.hpp"
+#include "atmos/sky.hpp"
+#include "atmos/tables.hpp"
+
+namespace {
+
+using atmos::Error;
+
+// A bad command-line value: reported as a usage error (exit code 2).
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+double finite(double v, const std::string& name) {
+  if (!std::isfinite(v)) throw UsageError(name + " must be a finite number");
+  return v;
+}
+
+std::vector<double> parse_numbers(const std::string& text, size_t count, const std::string& name) {
+  std::vector<double> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      size_t used = 0;
+      const double v = std::stod(item, &used);
+      if (used != item.size()) throw std::invalid_argument(item);
+      out.push_back(finite(v, name));
+    } catch (const UsageError&) {
+      throw;
+    } catch (const std::exception&) {
+      throw UsageError(name + " expects " + std::to_string(count) + " comma-separated numbers, got \"" + text + "\"");
+    }
+  }
+  if (out.size() != count)
+    throw UsageError(name + " expects " + std::to_string(count) + " comma-separated numbers, got \"" + text + "\"");
+  return out;
+}
+
+// Options shared by the commands that need tables.
+struct TableOptions {
+  std::string planet = "earth";
+  int orders = 4;
+  std::string tables = "default";
+  std::string cache_dir;
+  bool no_cache = false;
+
+  void add(CLI::App& app) {
+    app.add_option("--planet", planet, "Preset name (earth, mars) or planet JSON file")->capture_default_str();
+    app.add_option("--orders", orders, "Scattering orders K >= 1")->capture_default_str();
+    app.add_option("--tables", tables, "Table sizes: default (256x64, 64x16, 8x32x128x32) or small (for tests)")
+        ->check(CLI::IsMember({"default", "small"}))
+        ->capture_default_str();
+    app.add_option("--cache-dir", cache_dir, "Table cache directory (default $ATMOS_CACHE_DIR or ~/.cache/atmos)");
+    app.add_flag("--no-cache", no_cache, "Always precompute; neither read nor write the cache");
+  }
+
+  atmos::PrecomputeOptions precompute_options() const {
+    if (orders < 1 || orders > 100) throw UsageError("--orders must be in [1, 100]");
+    atmos::PrecomputeOptions o;
+    o.scattering_orders = orders;
+    if (tables == "small") o.sizes = atmos::TableSizes{64, 16, 32, 8, 4, 16, 32, 8};
+    return o;
+  }
+};
+
+// A progress bar on stderr when it is a terminal.
+void attach_progress(atmos::PrecomputeOptions& options) {
+  if (!isatty(STDERR_FILENO)) return;
+  options.progress = [](const std::string& step, double fraction) {
+    const int width = 30;
+    const int filled = int(fraction * width + 0.5);
+    std::fprintf(stderr, "\r[%s%s] %3d%% %-22s", std::string(size_t(filled), '#').c_str(),
+                 std::string(size_t(width - filled), ' ').c_str(), int(fraction * 100.0 + 0.5), step.c_str());
+    if (fraction >= 1.0) std::fprintf(stderr, "\r%*s\r", width + 30, "");
+    std::fflush(stderr);
+  };
+}
+
+struct LoadedTables {
+  atmos::Atmosphere atmosphere;
+  atmos::Tables tables;
+  std::string status;
+};
+
+LoadedTables load_tables(const TableOptions& t, bool quiet = false) {
+  LoadedTables out;
+  out.atmosphere = atmos::load_atmosphere(t.planet);
+  atmos::PrecomputeOptions options = t.precompute_options();
+  if (!quiet) attach_progress(options);
+  if (t.no_cache) {
+    out.tables = atmos::precompute_tables(out.atmosphere, options);
+    out.status = "computed (cache disabled)";
+    return out;
+  }
+  const std::string dir = t.cache_dir.empty() ? atmos::default_cache_directory() : t.cache_dir;
+  atmos::CacheResult r = atmos::load_or_precompute_tables(out.atmosphere, options, dir);
+  if (!r.problem.empty()) std::fprintf(stderr, "atmos: warning: %s\n", r.problem.c_str());
+  out.status = r.status == atmos::CacheStatus::hit ? "loaded from cache " + r.path
+               : r.status == atmos::CacheStatus::computed ? "computed, cached in " + r.path
+                                                          : "recomputed (invalid cache), cached in " + r.path;
+  out.tables = std::move(r.tables);
+  return out;
+}
+
+// ---------------------------------------------------------------------------
+// render
+
+struct RenderOptions {
+  double altitude = 2.0;
+  std::string position;
+  std::string look;
+  double fov = 0.0;
+  std::string projection = "perspective";
+  double sun_elevation = 30.0;
+  double sun_azimuth = 180.0;
+  std::string size = "640x360";
+  double exposure = 13.0;
+  std::vector<std::string> outputs;
+  std::string precision = "full";
+  bool cpu = false;
+};
+
+struct Shot {
+  std::string name;
+  atmos::Camera camera;
+  glm::dvec3 sun;
+  double exposure;
+};
+
+std::pair<int, int> parse_size(const std::string& text) {
+  int w = 0, h = 0;
+  char x = 0, extra = 0;
+  std::stringstream ss(text);
+  if (!(ss >> w >> x >> h) || (x != 'x' && x != 'X') || (ss >> extra))
+    throw UsageError("--size expects WxH, e.g. 1280x720, got \"" + text + "\"");
+  if (w < 1 || h < 1 || w > 16384 || h > 16384) throw UsageError("--size must be between 1x1 and 16384x16384");
+  return {w, h};
+}
+
+atmos::Projection parse_projection(const std::string& p) {
+  if (p == "perspective") return atmos::Projection::perspective;
+  if (p == "fisheye") return atmos::Projection::fisheye;
+  return atmos::Projection::equirect;
+}
+
+// Camera looking along (azimuth, elevation) of the local frame at the point
+// below it (x = east, y = north, z = up at the north pole).
+atmos::Camera make_camera(const glm::dvec3& position, double azimuth, double elevation, double fov,
+                          atmos::Projection projection, int width, int height) {
+  atmos::Camera c;
+  c.position = position;
+  c.forward = atmos::direction_from_azimuth_elevation(azimuth, elevation);
+  // Straight up or down: keep north at the top of the image.
+  c.up = std::abs(elevation) > 89.9 ? atmos::direction_from_azimuth_elevation(azimuth, 0.0) * (elevation > 0 ? -1.0 : 1.0)
+                                    : glm::dvec3(0, 0, 1);
+  c.projection = projection;
+  c.fov_deg = fov > 0.0 ? fov : (projection == atmos::Projection::fisheye ? 180.0 : 60.0);
+  c.width = width;
+  c.height = height;
+  return c;
+}
+
+void write_outputs(const atmos::Image& image, const std::vector<std::string>& outputs, double exposure) {
+  for (const auto& path : outputs) {
+    atmos::write_image(image, path, exposure);
+    std::printf("wrote %s\n", path.c_str());
+  }
+}
+
+std::vector<Shot> gallery(const atmos::Atmosphere& a) {
+  const glm::dvec3 ground = atmos::observer_position(a, 2.0);
+  std::vector<Shot> shots;
+  shots.push_back({"noon", make_camera(ground, 0.0, 12.0, 75.0, atmos::Projection::perspective, 960, 540),
+                   atmos::direction_from_azimuth_elevation(180.0, 70.0), 13.5});
+  shots.push_back({"sunset", make_camera(ground, 270.0, 8.0, 75.0, atmos::Projection::perspective, 960, 540),
+                   atmos::direction_from_azimuth_elevation(270.0, 1.0), 10.5});
+  shots.push_back({"allsky", make_camera(ground, 0.0, 90.0, 180.0, atmos::Projection::fisheye, 540, 540),
+                   atmos::direction_from_azimuth_elevation(135.0, 20.0), 13.0});
+  // The planet from 2.5 radii, looking at the centre, sun from the side.
+  const double d = 2.5 * a.bottom_radius_m;
+  atmos::Camera orbit;
+  orbit.position = glm::dvec3(d, 0.0, 0.0);
+  orbit.forward = glm::dvec3(-1.0, 0.0, 0.0);
+  orbit.up = glm::dvec3(0.0, 0.0, 1.0);
+  orbit.fov_deg = 50.0;
+  orbit.width = 960;
+  orbit.height = 540;
+  shots.push_back({"orbit", orbit, glm::normalize(glm::dvec3(0.35, 1.0, 0.25)), 13.0});
+  return shots;
+}
+
+int run_render(const RenderOptions& o, const TableOptions& t, bool use_gallery) {
+  LoadedTables loaded = load_tables(t);
+  const atmos::Atmosphere& a = loaded.atmosphere;
+  std::vector<Shot> shots;
+  if (use_gallery) {
+    shots = gallery(a);
+  } else {
+    const auto [w, h] = parse_size(o.size);
+    glm::dvec3 position;
+    if (!o.position.empty()) {
+      const auto p = parse_numbers(o.position, 3, "--position");
+      position = {p[0], p[1], p[2]};
+      if (glm::length(position) < a.bottom_radius_m)
+        throw UsageError("--position is inside the planet (closer to its centre than the ground radius)");
+    } else {
+      if (!(o.altitude >= 0.0) || o.altitude > 1e12) throw UsageError("--altitude must be in [0, 1e12] metres");
+      position = atmos::observer_position(a, o.altitude);
+    }
+    double look_az = o.sun_azimuth, look_el = 15.0;
+    if (glm::length(position) > a.top_radius_m) look_el = -90.0;  // outside: look at the planet
+    if (!o.look.empty()) {
+      const auto l = parse_numbers(o.look, 2, "--look");
+      look_az = l[0];
+      look_el = l[1];
+      if (look_el < -90.0 || look_el > 90.0) throw UsageError("--look elevation must be in [-90, 90]");
+    }
+    if (o.sun_elevation < -90.0 || o.sun_elevation > 90.0) throw UsageError("--sun-elevation must be in [-90, 90]");
+    const atmos::Projection projection = parse_projection(o.projection);
+    // Local frame at the point below the camera (the north pole for --altitude).
+    atmos::Camera camera = make_camera(position, look_az, look_el, o.fov, projection, w, h);
+    if (!o.position.empty()) {
+      // Express the local (east, north, up) frame of an arbitrary position.
+      const glm::dvec3 up = glm::normalize(position);
+      glm::dvec3 east = glm::cross(glm::dvec3(0, 0, 1), up);
+      if (glm::length(east) < 1e-9) east = glm::dvec3(1, 0, 0);
+      east = glm::normalize(east);
+      const glm::dvec3 north = glm::cross(up, east);
+      const glm::dmat3 local(east, north, up);
+      camera.forward = local * camera.forward;
+      camera.up = local * camera.up;
+      shots.push_back({"render", camera, local * atmos::direction_from_azimuth_elevation(o.sun_azimuth, o.sun_elevation),
+                       o.exposure});
+    } else {
+      shots.push_back({"render", camera, atmos::direction_from_azimuth_elevation(o.sun_azimuth, o.sun_elevation),
+                       o.exposure});
+    }
+    atmos::validate_camera(camera);
+  }
+
+  std::unique_ptr<atmos::GlContext> context;
+  std::unique_ptr<atmos::Renderer> renderer;
+  if (!o.cpu) {
+    context = atmos::GlContext::create_headless();
+    renderer = std::make_unique<atmos::Renderer>(
+        *context, a, loaded.tables, o.precision == "half" ? atmos::TexturePrecision::half : atmos::TexturePrecision::full);
+  }
+  for (const Shot& shot : shots) {
+    const atmos::Image image =
+        o.cpu ? atmos::render_cpu(a, loaded.tables, shot.camera, shot.sun) : renderer->render(shot.camera, shot.sun);
+    if (use_gallery) {
+      write_outputs(image, {shot.name + ".png", shot.name + ".exr"}, shot.exposure);
+    } else {
+      write_outputs(image, o.outputs.empty() ? std::vector<std::string>{"atmos.png"} : o.outputs, o.exposure);
+    }
+  }
+  return 0;
+}
+
+// ---------------------------------------------------------------------------
+// precompute
+
+int run_precompute(const TableOptions& t) {
+  const auto start = std::chrono::steady_clock::now();
+  LoadedTables loaded = load_tables(t);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const atmos::TableSizes& s = loaded.tables.sizes;
+  std::printf("planet          %s\n", loaded.atmosphere.name.c_str());
+  std::printf("wavelengths     ");
+  for (double w : loaded.tables.wavelengths_nm) std::printf("%g ", w);
+  std::printf("nm\norders          %d\n", loaded.tables.scattering_orders);
+  std::printf("transmittance   %d x %d (mu x r)\n", s.transmittance_mu, s.transmittance_r);
+  std::printf("irradiance      %d x %d (mu_s x r), direct and indirect\n", s.irradiance_mu_s, s.irradiance_r);
+  std::printf("scattering      %d x %d x %d x %d (nu x mu_s x mu x r), stored as 3D %d x %d x %d, Rayleigh+multiple and single aerosol\n",
+              s.scattering_nu, s.scattering_mu_s, s.scattering_mu, s.scattering_r, loaded.tables.scattering_width(),
+              loaded.tables.scattering_height(), loaded.tables.scattering_depth());
+  std::printf("cache           %s\n", loaded.status.c_str());
+  for (const auto& step : loaded.tables.timings) std::printf("time %-22s %8.3f s\n", step.name.c_str(), step.seconds);
+  std::printf("time total                   %8.3f s\n", seconds);
+  return 0;
+}
+
+// ---------------------------------------------------------------------------
+// sample
+
+struct SampleOptions {
+  double altitude = 0.0;
+  double sun_elevation = 30.0;
+  double sun_azimuth = 180.0;
+  std::string directions;
+  bool reference = false;
+  int paths = 20000;
+  bool sun_disc = false;
+};
+
+std::vector<std::pair<double, double>> read_directions(std::istream& in, const std::string& origin) {
+  std::string line;
+  int number = 0;
+  bool header = false;
+  std::vector<std::pair<double, double>> out;
+  while (std::getline(in, line)) {
+    ++number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line[0] == '#') continue;
+    if (!header) {
+      if (line.find("azimuth_deg") != 0 || line.find("elevation_deg") == std::string::npos)
+        throw UsageError(origin + ":" + std::to_string(number) + ": expected the header azimuth_deg,elevation_deg");
+      header = true;
+      continue;
+    }
+    try {
+      const auto v = parse_numbers(line, 2, "direction");
+      if (v[1] < -90.0 || v[1] > 90.0) throw UsageError("elevation outside [-90, 90]");
+      out.emplace_back(v[0], v[1]);
+    } catch (const UsageError& e) {
+      throw UsageError(origin + ":" + std::to_string(number) + ": " + e.what());
+    }
+  }
+  if (!header) throw UsageError(origin + ": no header line azimuth_deg,elevation_deg");
+  return out;
+}
+
+int run_sample(const SampleOptions& o, const TableOptions& t) {
+  if (!(o.altitude >= 0.0) || o.altitude > 1e12) throw UsageError("--altitude must be in [0, 1e12] metres");
+  if (o.sun_elevation < -90.0 || o.sun_elevation > 90.0) throw UsageError("--sun-elevation must be in [-90, 90]");
+  if (o.paths < 2 || o.paths > 100000000) throw UsageError("--paths must be in [2, 1e8]");
+  std::vector<std::pair<double, double>> directions;
+  if (o.directions.empty()) {
+    directions = read_directions(std::cin, "stdin");
+  } else {
+    std::ifstream in(o.directions);
+    if (!in) throw Error("cannot read directions file " + o.directions);
+    directions = read_directions(in, o.directions);
+  }
+  const atmos::Atmosphere atmosphere = atmos::load_atmosphere(t.planet);
+  const glm::dvec3 observer = atmos::observer_position(atmosphere, o.altitude);
+  const glm::dvec3 sun = atmos::direction_from_azimuth_elevation(o.sun_azimuth, o.sun_elevation);
+  const auto& w = atmosphere.wavelengths_nm;
+  if (w.size() != 3) throw Error("atmos sample supports three working wavelengths");
+  const glm::dmat3 to_srgb(atmos::radiance_to_srgb_matrix({w[0], w[1], w[2]}));
+
+  std::optional<LoadedTables> loaded;
+  std::unique_ptr<atmos::SkyModel> model;
+  atmos::ReferenceOptions ref;
+  ref.scattering_orders = t.orders;
+  ref.paths = o.paths;
+  if (!o.reference) {
+    loaded = load_tables(t, true);
+    model = std::make_unique<atmos::SkyModel>(atmosphere, loaded->tables);
+  } else if (t.orders < 1 || t.orders > 100) {
+    throw UsageError("--orders must be in [1, 100]");
+  }
+
+  std::printf("azimuth_deg,elevation_deg,luminance_cd_m2,red,green,blue");
+  for (double l : w) std::printf(",radiance_%gnm", l);
+  std::printf("\n");
+  for (const auto& [az, el] : directions) {
+    const glm::dvec3 view = atmos::direction_from_azimuth_elevation(az, el);
+    glm::dvec3 spectral;
+    if (o.reference) {
+      const atmos::ReferenceResult r = atmos::reference_radiance(atmosphere, observer, view, sun, ref);
+      spectral = {r.radiance[0], r.radiance[1], r.radiance[2]};
+    } else {
+      spectral = model->radiance(observer, view, sun, o.sun_disc);
+    }
+    const glm::dvec3 rgb = to_srgb * spectral;
+    std::printf("%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", az, el, atmos::srgb_luminance(rgb), rgb.x, rgb.y,
+                rgb.z, spectral.x, spectral.y, spectral.z);
+  }
+  // Irradiance on a horizontal surface at the observer, as a trailing comment.
+  glm::dvec3 sun_e, sky_e;
+  if (o.reference) {
+    atmos::ReferenceOptions direct = ref;
+    direct.scattering_orders = 1;
+    const atmos::ReferenceResult total = atmos::reference_horizontal_irradiance(atmosphere, observer, sun, ref);
+    const atmos::ReferenceResult sun_only = atmos::reference_horizontal_irradiance(atmosphere, observer, sun, direct);
+    sun_e = {sun_only.radiance[0], sun_only.radiance[1], sun_only.radiance[2]};
+    sky_e = glm::dvec3(total.radiance[0], total.radiance[1], total.radiance[2]) - sun_e;
+  } else {
+    model->horizontal_irradiance(observer, sun, sun_e, sky_e);
+  }
+  const double sun_lux = atmos::srgb_luminance(to_srgb * sun_e), sky_lux = atmos::srgb_luminance(to_srgb * sky_e);
+  std::printf("# horizontal_illuminance_lux=%.6g sun_lux=%.6g sky_lux=%.6g irradiance_W_m2_nm=%.6g;%.6g;%.6g\n",
+              sun_lux + sky_lux, sun_lux, sky_lux, sun_e.x + sky_e.x, sun_e.y + sky_e.y, sun_e.z + sky_e.z);
+  return 0;
+}
+
+// ---------------------------------------------------------------------------
+// bench
+
+int run_bench(const TableOptions& t, const std::string& size) {
+  const atmos::Atmosphere atmosphere = atmos::load_atmosphere(t.planet);
+  atmos::PrecomputeOptions options = t.precompute_options();
+  const auto start = std::chrono::steady_clock::now();
+  const atmos::Tables tables = atmos::precompute_tables(atmosphere, options);
+  const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  for (const auto& step : tables.timings) std::printf("precompute.%s\t%.3f\ts\n", step.name.c_str(), step.seconds);
+  std::printf("precompute.total\t%.3f\ts\n", total);
+  std::fflush(stdout);
+
+  const auto [w, h] = parse_size(size);
+  auto context = atmos::GlContext::create_headless();
+  atmos::Renderer renderer(*context, atmosphere, tables);
+  atmos::Camera camera = make_camera(atmos::observer_position(atmosphere, 2.0), 180.0, 10.0, 60.0,
+                                     atmos::Projection::perspective, w, h);
+  const glm::dvec3 sun = atmos::direction_from_azimuth_elevation(150.0, 20.0);
+  renderer.render(camera, sun);  // warm-up: shader compilation, texture residency
+  std::vector<double> times;
+  for (int i = 0; i < 5; ++i) {
+    renderer.render(camera, sun);
+    times.push_back(renderer.last_frame_ms());
+  }
+  std::sort(times.begin(), times.end());
+  std::printf("render.%dx%d\t%.1f\tms\n", w, h, times[times.size() / 2]);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"atmos: physically based rendering of planetary atmospheres"};
+  app.require_subcommand(1);
+  app.set_help_all_flag("--help-all", "Help for all commands");
+
+  TableOptions table_options;
+  RenderOptions render;
+  auto* render_cmd = app.add_subcommand("render", "Render images; with no arguments, the default gallery");
+  table_options.add(*render_cmd);
+  render_cmd->add_option("--altitude", render.altitude, "Camera altitude above the ground, metres")->capture_default_str();
+  render_cmd->add_option("--position", render.position, "Camera position X,Y,Z in metres from the planet centre");
+  render_cmd->add_option("--look", render.look, "View direction AZ,EL in degrees (azimuth from north towards east)");
+  render_cmd->add_option("--fov", render.fov, "Field of view, degrees (perspective: vertical, default 60; fisheye: default 180)");
+  render_cmd->add_option("--projection", render.projection, "perspective|fisheye|equirect")
+      ->check(CLI::IsMember({"perspective", "fisheye", "equirect"}))
+      ->capture_default_str();
+  render_cmd->add_option("--sun-elevation", render.sun_elevation, "Sun elevation, degrees")->capture_default_str();
+  render_cmd->add_option("--sun-azimuth", render.sun_azimuth, "Sun azimuth, degrees from north towards east")->capture_default_str();
+  render_cmd->add_option("--size", render.size, "Image size WxH")->capture_default_str();
+  render_cmd->add_option("--exposure", render.exposure, "Exposure value EV100 for PNG output")->capture_default_str();
+  render_cmd->add_option("-o,--output", render.outputs, "Output file (.png or .exr), repeatable (default atmos.png)");
+  render_cmd->add_option("--precision", render.precision, "GPU table precision: half|full")
+      ->check(CLI::IsMember({"half", "full"}))
+      ->capture_default_str();
+  render_cmd->add_flag("--cpu", render.cpu, "Render on the CPU with the same functions (no OpenGL)");
+
+  TableOptions precompute_options;
+  auto* precompute_cmd = app.add_subcommand("precompute", "Build or verify the table cache; print sizes and timings");
+  precompute_options.add(*precompute_cmd);
+
+  TableOptions sample_tables;
+  SampleOptions sample;
+  auto* sample_cmd = app.add_subcommand(
+      "sample", "Radiance for directions read as CSV (azimuth_deg,elevation_deg) from stdin or --directions");
+  sample_tables.add(*sample_cmd);
+  sample_cmd->add_option("--altitude", sample.altitude, "Observer altitude above the ground, metres")->capture_default_str();
+  sample_cmd->add_option("--sun-elevation", sample.sun_elevation, "Sun elevation, degrees")->capture_default_str();
+  sample_cmd->add_option("--sun-azimuth", sample.sun_azimuth, "Sun azimuth, degrees from north towards east")->capture_default_str();
+  sample_cmd->add_option("--directions", sample.directions, "CSV file of directions (default: stdin)");
+  sample_cmd->add_flag("--reference", sample.reference, "Use the brute-force Monte Carlo reference instead of the tables");
+  sample_cmd->add_option("--paths", sample.paths, "Monte Carlo paths per direction with --reference")->capture_default_str();
+  sample_cmd->add_flag("--sun-disc", sample.sun_disc, "Include the sun disc in the radiance (tables only)");
+
+  TableOptions bench_options;
+  std::string bench_size = "1920x1080";
+  auto* bench_cmd = app.add_subcommand("bench", "Print precomputation and render timings as name<TAB>value<TAB>unit");
+  bench_options.add(*bench_cmd);
+  bench_cmd->add_option("--size", bench_size, "Render size WxH")->capture_default_str();
+
+  if (argc > 1 && argv[1][0] != '-') {
+    const std::string command = argv[1];
+    if (command != "render" && command != "precompute" && command != "sample" && command != "bench") {
+      std::fprintf(stderr, "atmos: error: unknown command \"%s\" (expected render, precompute, sample or bench)\n",
+                   command.c_str());
+      return 2;
+    }
+  }
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "atmos: error: %s\n", e.what());
+    return 2;
+  }
+
+  try {
+    for (double* v : {&render.altitude, &render.fov, &render.sun_elevation, &render.sun_azimuth, &render.exposure,
+                      &sample.altitude, &sample.sun_elevation, &sample.sun_azimuth})
+      finite(*v, "numeric option");
+    if (*render_cmd) {
+      // Only the table options may be given for the gallery (e.g. --planet mars).
+      bool gallery = true;
+      for (const auto* opt : render_cmd->get_options())
+        if (opt->count() > 0 && opt->get_name() != "--planet" && opt->get_name() != "--orders" &&
+            opt->get_name() != "--tables" && opt->get_name() != "--cache-dir" && opt->get_name() != "--no-cache" &&
+            opt->get_name() != "--precision" && opt->get_name() != "--cpu")
+          gallery = false;
+      return run_render(render, table_options, gallery);
+    }
+    if (*precompute_cmd) return run_precompute(precompute_options);
+    if (*sample_cmd) return run_sample(sample, sample_tables);
+    if (*bench_cmd) return run_bench(bench_options, bench_size);
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "atmos: error: %s\n", e.what());
+    return 2;
+  } catch (const atmos::Error& e) {
+    std::fprintf(stderr, "atmos: error: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "atmos: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,104 @@
+// atmos — the description of a planet's atmosphere.
+//
+// This is the only input of the physics: the precomputed tables, the GPU
+// renderer and the brute-force reference all start from an `Atmosphere`.
+// All quantities are SI: metres, radians, m^-1, W m^-2 nm^-1.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace atmos {
+
+// Every failure the library reports to a caller: bad planet files, impossible
+// parameters, unreadable caches, missing OpenGL. The message is one line that
+// names the offending input.
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// A quantity sampled over wavelength and linearly interpolated between its
+// samples (constant beyond the first and last). Coefficients given as a power
+// law are sampled densely enough at load time for the interpolation to be
+// exact to well below 0.1 %.
+class Spectrum {
+ public:
+  Spectrum() = default;
+  Spectrum(std::vector<double> wavelengths_nm, std::vector<double> values);
+  static Spectrum constant(double value);
+
+  double at(double wavelength_nm) const;
+  bool empty() const { return values_.empty(); }
+  const std::vector<double>& wavelengths_nm() const { return wavelengths_nm_; }
+  const std::vector<double>& values() const { return values_; }
+
+ private:
+  std::vector<double> wavelengths_nm_;
+  std::vector<double> values_;
+};
+
+// Number density of a constituent relative to its reference density (where
+// the coefficients of `Constituent` are given), as a function of altitude.
+struct DensityProfile {
+  enum class Kind { exponential, piecewise_linear };
+  Kind kind = Kind::exponential;
+  double scale_height_m = 8000.0;                  // exponential: exp(-h / H)
+  std::vector<std::pair<double, double>> knots;    // piecewise linear: (altitude m, density), zero outside
+
+  double at(double altitude_m) const;
+};
+
+// Phase function of a constituent's scattering.
+//  - rayleigh: 3/(16π)(1 + ν²), seed 000 eq. 3.2.
+//  - henyey_greenstein: (1 - g²) / (4π (1 + g² - 2gν)^{3/2}).
+//  - cornette_shanks: seed 000 eq. 3.5 (Cornette & Shanks 1992).
+struct PhaseFunction {
+  enum class Kind { rayleigh, henyey_greenstein, cornette_shanks };
+  Kind kind = Kind::rayleigh;
+  double g = 0.0;  // asymmetry parameter, |g| < 1 (unused for rayleigh)
+
+  bool operator==(const PhaseFunction&) const = default;
+};
+
+// One scattering and/or absorbing species (air molecules, an aerosol, ozone).
+struct Constituent {
+  std::string name;
+  DensityProfile density;
+  Spectrum scattering;   // m^-1 at reference density
+  Spectrum absorption;   // m^-1 at reference density
+  PhaseFunction phase;
+};
+
+struct Atmosphere {
+  std::string name;
+  std::string origin;                     // preset name or file path, for messages
+  std::vector<double> wavelengths_nm;     // working wavelengths of the precomputation
+  double bottom_radius_m = 0.0;           // planet surface
+  double top_radius_m = 0.0;              // top of the atmosphere
+  std::vector<Constituent> constituents;
+  Spectrum ground_albedo;                 // Lambertian, dimensionless
+  Spectrum solar_irradiance;              // W m^-2 nm^-1 at the top of the atmosphere, normal incidence
+  double sun_angular_radius_rad = 0.0;
+
+  // Throws Error naming the first impossible parameter (inverted radii, NaN,
+  // negative coefficients, |g| >= 1, an unsupported mixture of phase functions…).
+  void validate() const;
+
+  // The phase function shared by all non-Rayleigh constituents (the tables keep
+  // one aerosol component so that its phase function can be applied per pixel).
+  PhaseFunction aerosol_phase() const;
+};
+
+// Built-in planets: "earth", "mars". Files in data/planets/<name>.json.
+std::vector<std::string> preset_names();
+
+// `name_or_path` is a preset name or the path of a planet JSON file.
+Atmosphere load_atmosphere(const std::string& name_or_path);
+
+// Parses planet JSON text; `origin` names the source in error messages.
+Atmosphere parse_atmosphere(const std::string& json_text, const std::string& origin);
+
+}  // namespace atmos

@@ -1,0 +1,127 @@
+// atmos — an independent, brute-force Monte Carlo reference for the sky.
+//
+// This is the yardstick the precomputed tables are tested against. It shares
+// nothing with the table code: it reads only the description `Atmosphere`
+// (spectra, density profiles, phase functions, radii, albedo, sun) and does
+// its own ray–sphere geometry, optical depth quadrature, phase function
+// evaluation and sampling, all in double precision. It is slow and simple on
+// purpose; every function in src/reference/reference.cpp states the equation
+// it implements.
+//
+// Model (all SI: metres, m^-1, radians):
+//  - spherical planet of radius Rb (bottom_radius_m), atmosphere up to Rt
+//    (top_radius_m); nothing above Rt (density profiles are cut there);
+//  - constituent i: scattering β_s,i(λ)·ρ_i(h), absorption β_a,i(λ)·ρ_i(h),
+//    phase function p_i (Rayleigh, Henyey–Greenstein, Cornette–Shanks);
+//  - Lambertian ground of albedo a(λ);
+//  - sun: uniform disc of angular radius α around direction `sun`, whose
+//    irradiance at normal incidence at the top of the atmosphere is
+//    E_sun(λ) (so its radiance is E_sun / (π sin²α)).
+//
+// Interactions: one atmospheric scattering event or one ground reflection.
+// With `scattering_orders` = K the reference counts the light that underwent
+// at most K interactions between the sun and the eye (order 1 = sun → scatter
+// → eye and sun → ground → eye). The direct view of the sun disc is never
+// included in a radiance.
+//
+// Random numbers: path i of a call uses a stream seeded from (seed, i) only,
+// so results are bitwise repeatable (independent of the number of threads),
+// and calls with the same seed for different directions use common random
+// numbers (their errors are correlated; pass different seeds for independent
+// errors).
+#pragma once
+
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <vector>
+
+#include "atmos/atmosphere.hpp"
+
+namespace atmos {
+
+struct ReferenceOptions {
+  int scattering_orders = 4;  // K >= 1: maximum number of interactions counted
+  int paths = 20000;          // Monte Carlo paths per estimate (>= 2), first dimension stratified
+  std::uint64_t seed = 1;     // the same seed gives bitwise identical results
+};
+
+struct ReferenceResult {
+  // One value per working wavelength (atmosphere.wavelengths_nm, same order).
+  // reference_radiance: spectral radiance, W m^-2 sr^-1 nm^-1.
+  // reference_*irradiance: spectral irradiance, W m^-2 nm^-1 (same field).
+  std::vector<double> radiance;
+  // Monte Carlo standard error of the mean, same units, per wavelength. It is
+  // computed as if the paths were independent, which overestimates the error
+  // of the stratified estimator slightly (conservative).
+  std::vector<double> standard_error;
+};
+
+// Radiance arriving at `observer` (planet-centred position, m) from the view
+// direction `view` (unit vector: the radiance seen "looking along view"), with
+// the sun in direction `sun` (unit vector). The observer may be inside the
+// atmosphere (at or above the ground) or outside it (the ray then starts where
+// it enters the top boundary; a ray missing the atmosphere gives 0). If the
+// view ray hits the ground, the radiance reflected by the ground (lit by sun
+// and sky) attenuated to the observer is included. Throws Error for an
+// invalid atmosphere or options, non-unit directions, or an observer below the
+// ground.
+ReferenceResult reference_radiance(const Atmosphere& atmosphere, const glm::dvec3& observer, const glm::dvec3& view,
+                                   const glm::dvec3& sun, const ReferenceOptions& options);
+
+// Irradiance on a small flat surface at `point` (m) facing `normal` (unit
+// vector): E = ∫_{ω·n>0} L_in(ω) (ω·n) dω, sun disc plus sky, where the light
+// counted underwent at most K-1 interactions, so that a(λ)/π · E is the
+// ground radiance of orders <= K: K = 1 gives the direct sun only (attenuated,
+// with partial visibility of the disc), K = 2 adds single scattered skylight,
+// etc. With normal pointing down at the top of the atmosphere it is the
+// upward flux leaving the atmosphere.
+ReferenceResult reference_irradiance(const Atmosphere& atmosphere, const glm::dvec3& point, const glm::dvec3& normal,
+                                     const glm::dvec3& sun, const ReferenceOptions& options);
+
+// reference_irradiance with the normal = local vertical (point / |point|); at
+// a ground point this is the irradiance that lights the Lambertian ground.
+ReferenceResult reference_horizontal_irradiance(const Atmosphere& atmosphere, const glm::dvec3& point,
+                                                const glm::dvec3& sun, const ReferenceOptions& options);
+
+// Building blocks of the reference, exposed for its unit tests.
+namespace reference_detail {
+
+// Optical depth τ = ∫ Σ_i (β_s,i(λ) + β_a,i(λ)) ρ_i(h(x)) ds along the straight
+// segment from `from` to `to` (m), counting only the part inside the
+// atmosphere (Rb <= |x| <= Rt). Throws Error if the segment passes below the
+// ground by more than 1 mm.
+double optical_depth(const Atmosphere& atmosphere, double wavelength_nm, const glm::dvec3& from,
+                     const glm::dvec3& to);
+
+// Phase function value p(cos θ) in sr^-1, normalised so that ∫ p dω = 1; θ is
+// the angle between the incident and the scattered propagation directions.
+double phase_function(const PhaseFunction& phase, double cos_theta);
+
+// SplitMix64 (Steele, Lea & Flood 2014): a 64-bit counter advanced by the
+// golden-ratio increment and passed through a bijective mixer.
+class Random {
+ public:
+  explicit Random(std::uint64_t seed) : state_(seed) {}
+  std::uint64_t next_u64() {
+    std::uint64_t z = (state_ += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+  }
+  // Uniform in [0, 1), 53 random bits.
+  double uniform() { return double(next_u64() >> 11) * 0x1.0p-53; }
+
+ private:
+  std::uint64_t state_;
+};
+
+// Draws cos θ with density p(cos θ)·2π (the phase function as a density over
+// directions, azimuth uniform), exactly: Rayleigh by inverting its cubic CDF,
+// Henyey–Greenstein by its analytic inverse CDF, Cornette–Shanks by rejection
+// from Henyey–Greenstein.
+double sample_phase_cosine(const PhaseFunction& phase, Random& random);
+
+}  // namespace reference_detail
+
+}  // namespace atmos

@@ -1,0 +1,138 @@
+// atmos — real-time rendering of an atmosphere with OpenGL 4.5, headless,
+// and the same image computed on the CPU.
+//
+// Both paths evaluate the one definition of the physics
+// (src/physics/functions.glsl: radiance_along_view_ray) and of the camera
+// model (src/gpu/camera.glsl), the GPU as GLSL, the CPU as C++, with the same
+// lookup tables. They differ only by floating-point rounding (the GPU's own
+// sin/cos/sqrt, evaluation order): ~1e-5 relative in the sky, up to ~1e-2
+// for ground seen from a few metres, where float32 planet-centred
+// coordinates amplify one-ulp differences of the view ray (see
+// tests/gpu_test.cpp for the measurements).
+//
+// Units: positions in metres relative to the planet centre, angles in degrees,
+// output in linear sRGB on the cd/m² luminance scale (atmos/image.hpp).
+#pragma once
+
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "atmos/atmosphere.hpp"
+#include "atmos/image.hpp"
+#include "atmos/tables.hpp"
+
+namespace atmos {
+
+enum class Projection {
+  perspective,  // pinhole; fov_deg is the vertical field of view
+  fisheye,      // equidistant all-sky: the angle from `forward` grows linearly with the distance from the
+                // image centre, reaching fov_deg / 2 on the largest centred circle; pixels outside it are black
+  equirect,     // whole sphere: x -> azimuth -180..180° (forward at the centre, right at +90°),
+                // y -> elevation +90° (top row, towards `up`) .. -90°; fov_deg is ignored
+};
+
+// Internal format of the scattering and irradiance textures: RGB16F (half
+// the memory and bandwidth, 11 significant bits, rounded on the CPU) or
+// RGB32F. The transmittance texture is RGB32F in both cases: it is small (a
+// few hundred KB, no bandwidth worth saving), functions.glsl divides two of
+// its values for every transmittance along a ray (doubling the relative
+// rounding error), and half floats keep no precision for the long grazing
+// paths: subnormal below 6.1e-5, zero below 6e-8, where the ratio becomes
+// 0/0. Earth's horizontal transmittance at the ground is 1.5e-4 in blue; a
+// hazier or larger atmosphere goes below.
+enum class TexturePrecision { half, full };
+
+struct Camera {
+  glm::dvec3 position{0.0};      // metres, planet-centred
+  glm::dvec3 forward{0, 1, 0};   // view direction (normalised internally)
+  glm::dvec3 up{0, 0, 1};        // up hint: need not be orthogonal to forward, only not parallel
+  double fov_deg = 60.0;         // perspective: vertical fov, in (0, 180); fisheye: full field, in (0, 360]
+                                 // (180 for an all-sky image looking at the zenith); equirect: ignored
+  Projection projection = Projection::perspective;
+  int width = 640;               // pixels, 1..16384
+  int height = 360;
+};
+
+// Throws atmos::Error with one line naming the first problem: non-finite
+// position, zero or non-finite forward/up, up parallel to forward, size
+// outside 1..16384, field of view outside its range.
+void validate_camera(const Camera& camera);
+
+// A desktop OpenGL 4.5 core context without any window or surface (EGL,
+// EGL_KHR_surfaceless_context): Mesa's surfaceless platform first (llvmpipe
+// or a render node), then the EGL devices (EGL_EXT_platform_device, e.g. the
+// NVIDIA driver), then EGL_DEFAULT_DISPLAY. GL functions are resolved by
+// libepoxy. The context is made current on the creating thread; a Renderer
+// makes it current again on the thread that uses it.
+class GlContext {
+ public:
+  // Throws atmos::Error with one line such as
+  // "no OpenGL 4.5 context: eglInitialize failed (EGL_NOT_INITIALIZED)".
+  static std::unique_ptr<GlContext> create_headless();
+  ~GlContext();
+  GlContext(const GlContext&) = delete;
+  GlContext& operator=(const GlContext&) = delete;
+
+  // Makes the context current on the calling thread (no-op when it already is).
+  void make_current();
+  // GL_RENDERER and GL_VERSION, e.g. "llvmpipe (LLVM 15.0.6, 256 bits), OpenGL 4.5 (Core Profile) Mesa 22.3.6".
+  std::string renderer_string();
+
+ private:
+  GlContext(void* display, void* context) : display_(display), context_(context) {}
+  void* display_;  // EGLDisplay
+  void* context_;  // EGLContext
+};
+
+// Renders images of one atmosphere from its tables on the GPU.
+class Renderer {
+ public:
+  // Uploads the tables (tables.sets must hold exactly one wavelength triple,
+  // the atmosphere's first) and compiles the shader with the atmosphere's
+  // parameters built in. Throws atmos::Error on mismatched tables or on
+  // shader compile/link errors (with the first lines of the info log).
+  // `context` must outlive the renderer.
+  Renderer(GlContext& context, const Atmosphere& atmosphere, const Tables& tables,
+           TexturePrecision precision = TexturePrecision::full);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  // `sun_direction`: unit vector from the planet towards the sun (normalised
+  // internally). The camera position is passed to the GPU as float (about
+  // 0.5 m resolution at the Earth's surface, enough for the atmosphere).
+  Image render(const Camera& camera, const glm::dvec3& sun_direction);
+
+  // GPU time of the draw of the last render() in milliseconds (all tiles,
+  // excluding the read-back); 0 before the first render. From GL_TIME_ELAPSED
+  // queries, except on software rasterisers (llvmpipe, softpipe, SwiftShader):
+  // their queries time only the submission of the deferred rasterisation
+  // (llvmpipe reports ~3 % of the real time, and garbage for its first query),
+  // so there it is the wall-clock time of the draw up to glFinish — the time
+  // the "GPU", i.e. the CPU, spent rendering.
+  double last_frame_ms() const { return last_frame_ms_; }
+
+ private:
+  GlContext& context_;
+  std::uint32_t program_ = 0;
+  std::uint32_t vertex_array_ = 0;
+  std::uint32_t textures_[4] = {0, 0, 0, 0};  // transmittance, scattering, single aerosol, irradiance
+  std::uint32_t timer_query_ = 0;
+  std::uint32_t framebuffer_ = 0;             // one RGBA32F tile, reused while large enough
+  std::uint32_t tile_texture_ = 0;
+  int tile_width_ = 0;
+  int tile_height_ = 0;
+  float radiance_to_srgb_[9] = {};            // column-major mat3
+  bool software_rasterizer_ = false;          // time with the wall clock, not timer queries
+  double last_frame_ms_ = 0.0;
+};
+
+// The same image computed on the CPU (all cores, TBB) with the same shared
+// functions and camera model; for tests and as a fallback without OpenGL.
+Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camera& camera,
+                 const glm::dvec3& sun_direction);
+
+}  // namespace atmos

@@ -1,0 +1,44 @@
+// atmos — fragment shader of the renderer (GLSL only, appended by
+// gpu/shader_source.cpp after the shared definitions, the ATMOSPHERE constant,
+// functions.glsl and camera.glsl). One full-screen triangle; each fragment is
+// one pixel of the image: its view ray, the radiance reaching the camera along
+// it, and that radiance converted to linear sRGB (cd/m² scale).
+
+layout(binding = 0) uniform sampler2D transmittance_texture;
+layout(binding = 1) uniform sampler3D scattering_texture;
+layout(binding = 2) uniform sampler3D single_aerosol_texture;
+layout(binding = 3) uniform sampler2D irradiance_texture;
+
+layout(location = 0) uniform vec3 camera;           // m, planet-centred
+layout(location = 1) uniform vec3 camera_right;
+layout(location = 2) uniform vec3 camera_up;
+layout(location = 3) uniform vec3 camera_forward;
+layout(location = 4) uniform float fov_deg;
+layout(location = 5) uniform int projection;        // PROJECTION_* of camera.glsl
+layout(location = 6) uniform vec2 image_size;       // pixels
+layout(location = 7) uniform vec3 sun_direction;    // unit vector towards the sun
+// The image is drawn in tiles: image coordinates (x right, y down from the
+// top-left corner) of the bottom-left corner of the current tile.
+layout(location = 8) uniform vec2 tile_origin;
+// atmos::radiance_to_srgb_matrix; a mat3 takes locations 9 to 11.
+layout(location = 9) uniform mat3 radiance_to_srgb;
+
+layout(location = 0) out vec4 frag_color;
+
+void main() {
+  // gl_FragCoord is the pixel centre in the tile with y up from its bottom
+  // row; the image has y down from its top row (the read-back flips the rows
+  // to match). Exact in float: integers plus 0.5, far below 2^24.
+  vec2 pixel = vec2(tile_origin.x + gl_FragCoord.x, tile_origin.y - gl_FragCoord.y);
+  bool valid;
+  vec3 view_ray = camera_view_ray(pixel, image_size, camera_right, camera_up, camera_forward, fov_deg, projection,
+                                  valid);
+  if (!valid) {
+    frag_color = vec4(0.0, 0.0, 0.0, 1.0);
+    return;
+  }
+  vec3 radiance = radiance_along_view_ray(ATMOSPHERE, transmittance_texture, scattering_texture,
+                                          single_aerosol_texture, irradiance_texture, camera, view_ray,
+                                          sun_direction, true);
+  frag_color = vec4(radiance_to_srgb * radiance, 1.0);
+}

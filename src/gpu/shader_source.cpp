@@ -1,0 +1,124 @@
+#include "gpu/shader_source.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "atmos/atmosphere.hpp"
+#include "io/embedded_files.hpp"
+
+namespace atmos::gpu {
+
+namespace {
+
+// The generator below spells every field of AtmosphereParams in declaration
+// order (GLSL struct constructors are positional). A field added to or
+// removed from definitions.glsl changes the size and stops the build here
+// rather than producing a shader with shifted parameters; a reordering of
+// same-typed fields is caught by the GPU-vs-CPU test.
+static_assert(sizeof(physics::DensityProfile) == 4 * (2 + 2 * MAX_DENSITY_KNOTS),
+              "DensityProfile changed: update atmosphere_params_glsl()");
+static_assert(sizeof(physics::AtmosphereParams) ==
+                  4 * (3 + 2 + 2 * 3 + 2 + 8) + MAX_CONSTITUENTS * (sizeof(physics::DensityProfile) + 4 * (3 + 3 + 1)),
+              "AtmosphereParams changed: update atmosphere_params_glsl()");
+
+std::string glsl_int(int value) { return std::to_string(value); }
+
+std::string glsl_vec3(const physics::vec3& v) {
+  return "vec3(" + glsl_float(v.x) + ", " + glsl_float(v.y) + ", " + glsl_float(v.z) + ")";
+}
+
+// "T[n](a, b, ...)" from n already formatted elements.
+template <typename Format>
+std::string glsl_array(const char* type, int n, Format element) {
+  std::string s = std::string(type) + "[" + std::to_string(n) + "](";
+  for (int i = 0; i < n; ++i) s += (i > 0 ? ", " : "") + element(i);
+  return s + ")";
+}
+
+std::string glsl_density_profile(const physics::DensityProfile& d) {
+  return "DensityProfile(" + glsl_float(d.scale_height) + ", " + glsl_int(d.knot_count) + ", " +
+         glsl_array("float", MAX_DENSITY_KNOTS, [&](int i) { return glsl_float(d.knot_altitude[i]); }) + ", " +
+         glsl_array("float", MAX_DENSITY_KNOTS, [&](int i) { return glsl_float(d.knot_density[i]); }) + ")";
+}
+
+const char* embedded(const char* path) {
+  const char* text = io::embedded_file(path);
+  // Only a build that forgot to embed the file gets here.
+  if (text == nullptr) throw Error(std::string("shader source not embedded in this build: ") + path);
+  return text;
+}
+
+}  // namespace
+
+std::string glsl_float(float value) {
+  if (!std::isfinite(value)) throw Error("atmosphere parameter is not finite (" + std::to_string(value) + ")");
+  char buffer[32];
+  // 9 significant digits identify every float (FLT_DECIMAL_DIG).
+  std::snprintf(buffer, sizeof buffer, "%.9g", double(value));
+  std::string s = buffer;
+  // "6371000" or "-2" would be int literals. GLSL 4.50 converts them where a
+  // float is expected, but GLSL ES and stricter front ends do not: spell
+  // every float as a float.
+  if (s.find_first_of(".e") == std::string::npos) s += ".0";
+  return s;
+}
+
+std::string atmosphere_params_glsl(const physics::AtmosphereParams& p) {
+  const int n = MAX_CONSTITUENTS;
+  std::string s = "const AtmosphereParams ATMOSPHERE = AtmosphereParams(\n";
+  s += "    " + glsl_float(p.bottom_radius) + ", " + glsl_float(p.top_radius) + ", " + glsl_int(p.constituent_count) +
+       ",\n";
+  s += "    " + glsl_array("DensityProfile", n, [&](int i) { return glsl_density_profile(p.density[i]); }) + ",\n";
+  s += "    " + glsl_array("vec3", n, [&](int i) { return glsl_vec3(p.scattering[i]); }) + ",\n";
+  s += "    " + glsl_array("vec3", n, [&](int i) { return glsl_vec3(p.absorption[i]); }) + ",\n";
+  s += "    " + glsl_array("int", n, [&](int i) { return glsl_int(p.is_aerosol[i]); }) + ",\n";
+  s += "    " + glsl_int(p.aerosol_phase_kind) + ", " + glsl_float(p.aerosol_g) + ",\n";
+  s += "    " + glsl_vec3(p.ground_albedo) + ", " + glsl_vec3(p.solar_irradiance) + ",\n";
+  s += "    " + glsl_float(p.sun_angular_radius) + ", " + glsl_float(p.mu_s_min) + ",\n";
+  s += "    " + glsl_int(p.transmittance_mu_size) + ", " + glsl_int(p.transmittance_r_size) + ", " +
+       glsl_int(p.irradiance_mu_s_size) + ", " + glsl_int(p.irradiance_r_size) + ", " +
+       glsl_int(p.scattering_nu_size) + ", " + glsl_int(p.scattering_mu_s_size) + ", " +
+       glsl_int(p.scattering_mu_size) + ", " + glsl_int(p.scattering_r_size) + ");\n";
+  return s;
+}
+
+std::string fullscreen_vertex_shader_source() {
+  return "#version 450 core\n"
+         "// Vertices (-1,-1), (3,-1), (-1,3): one triangle that covers the viewport.\n"
+         "void main() {\n"
+         "  vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));\n"
+         "  gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);\n"
+         "}\n";
+}
+
+void AssembledSource::append(const std::string& name, const std::string& part_text) {
+  const int line = 1 + int(std::count(text.begin(), text.end(), '\n'));
+  parts.push_back({line, name});
+  text += part_text;
+  if (!text.empty() && text.back() != '\n') text += '\n';
+}
+
+std::string AssembledSource::locate(int line) const {
+  for (size_t i = parts.size(); i-- > 0;)
+    if (line >= parts[i].first_line) return parts[i].name + ":" + std::to_string(line - parts[i].first_line + 1);
+  return "line " + std::to_string(line);
+}
+
+// No #line directives: Mesa 22 reports source string 0 whatever "#line 1 N"
+// sets, while drivers agree on counting the lines of the whole string, which
+// locate() maps back to the files.
+AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& params) {
+  AssembledSource s;
+  s.append("header", "#version 450 core\n");
+  // The GLSL meaning of the subset macros (the C++ one is in physics/shader_cpp.hpp).
+  s.append("macros", "#define IN(T) in T\n#define OUT(T) out T\n#define INOUT(T) inout T\n#define INLINE\n");
+  s.append("definitions.glsl", embedded("src/physics/definitions.glsl"));
+  s.append("ATMOSPHERE", atmosphere_params_glsl(params));
+  s.append("functions.glsl", embedded("src/physics/functions.glsl"));
+  s.append("camera.glsl", embedded("src/gpu/camera.glsl"));
+  s.append("render.frag.glsl", embedded("src/gpu/render.frag.glsl"));
+  return s;
+}
+
+}  // namespace atmos::gpu

@@ -1,0 +1,62 @@
+// atmos — definitions shared by the C++ precomputation and the GLSL shaders.
+//
+// This file and functions.glsl are written in the common subset of GLSL 4.50
+// and C++20 + glm (see physics/shader_cpp.hpp for the C++ side and
+// gpu/shader_source.cpp for the GLSL side):
+//  - float literals carry an `f` suffix (valid in both languages),
+//  - parameters are declared with IN(T) / OUT(T) / INOUT(T),
+//  - functions are declared INLINE (C++ `inline`, nothing in GLSL),
+//  - textures are `sampler2D` / `sampler3D`, read only through `texture()`,
+//    which the C++ side implements with the exact GL_LINEAR / CLAMP_TO_EDGE
+//    arithmetic,
+//  - no swizzles, no struct constructors, no recursion.
+//
+// Units: lengths in metres, coefficients in m^-1, angles as cosines, spectral
+// quantities per working wavelength (three at a time, one per vec3 channel).
+
+#define MAX_CONSTITUENTS 4
+#define MAX_DENSITY_KNOTS 8
+
+#define PHASE_HENYEY_GREENSTEIN 0
+#define PHASE_CORNETTE_SHANKS 1
+
+const float PI = 3.14159265358979f;
+
+// Number density of a constituent relative to its reference density, as a
+// function of altitude: exponential (scale_height > 0), else piecewise linear
+// through the knots and zero outside them (ozone-like layers).
+struct DensityProfile {
+  float scale_height;
+  int knot_count;
+  float knot_altitude[MAX_DENSITY_KNOTS];
+  float knot_density[MAX_DENSITY_KNOTS];
+};
+
+// Everything the functions need to know, for one triple of wavelengths:
+// the medium (atmos::Atmosphere resampled at three wavelengths) and the sizes
+// of the lookup tables. Built by physics/parameters.cpp.
+struct AtmosphereParams {
+  float bottom_radius;                          // m, ground
+  float top_radius;                             // m, top of the atmosphere
+  int constituent_count;
+  DensityProfile density[MAX_CONSTITUENTS];
+  vec3 scattering[MAX_CONSTITUENTS];            // m^-1 at reference density
+  vec3 absorption[MAX_CONSTITUENTS];            // m^-1 at reference density
+  int is_aerosol[MAX_CONSTITUENTS];             // 0: Rayleigh phase function, 1: the aerosol phase function
+  int aerosol_phase_kind;                       // PHASE_HENYEY_GREENSTEIN or PHASE_CORNETTE_SHANKS
+  float aerosol_g;                              // asymmetry parameter
+  vec3 ground_albedo;
+  vec3 solar_irradiance;                        // W m^-2 nm^-1 at the top of the atmosphere
+  float sun_angular_radius;                     // rad
+  float mu_s_min;                               // lowest sun zenith cosine kept in the scattering tables
+
+  // Table sizes (texels).
+  int transmittance_mu_size;
+  int transmittance_r_size;
+  int irradiance_mu_s_size;
+  int irradiance_r_size;
+  int scattering_nu_size;
+  int scattering_mu_s_size;
+  int scattering_mu_size;
+  int scattering_r_size;
+};

@@ -1,0 +1,777 @@
+// atmos — the scattering physics, defined once.
+//
+// Compiled as C++ for the CPU precomputation, the CPU lookups of `atmos sample`
+// and the tests (physics/shader_cpp.hpp), and as GLSL for the renderer
+// (gpu/shader_source.cpp). The language subset is described at the top of
+// definitions.glsl.
+//
+// Conventions. A ray starts at a point at distance r from the planet centre
+// and has direction v; mu = cos(v, zenith), mu_s = cos(sun, zenith) at the
+// point, nu = cos(v, sun). "The radiance of a ray" is the radiance arriving at
+// the start point from direction v (looking along v). Radiance in
+// W m^-2 sr^-1 nm^-1 per working wavelength; irradiance in W m^-2 nm^-1.
+//
+// The model is the one of seed 000 §3 (Bruneton & Neyret 2008) with multiple
+// scattering by successive orders (seed 004 §4.2), and the table
+// parameterisation of Bruneton 2017 ("Precomputed Atmospheric Scattering: a
+// New Implementation"): distances to the atmosphere boundaries, with the
+// horizon split of mu into rays that hit the ground and rays that do not.
+
+// ===========================================================================
+// 1. Ray geometry
+// ===========================================================================
+
+INLINE float clamp_cosine(float mu) { return clamp(mu, -1.0f, 1.0f); }
+
+INLINE float safe_sqrt(float a) { return sqrt(max(a, 0.0f)); }
+
+INLINE float clamp_radius(IN(AtmosphereParams) atmosphere, float r) {
+  return clamp(r, atmosphere.bottom_radius, atmosphere.top_radius);
+}
+
+// Distance from radius r along mu to the top-of-atmosphere sphere (exit
+// point). The discriminant r²(mu²-1) + R_top² is written as
+// (r mu)² + (R_top - r)(R_top + r) so that it does not lose its digits to
+// cancellation near the boundary.
+INLINE float distance_to_top_atmosphere_boundary(IN(AtmosphereParams) atmosphere, float r, float mu) {
+  float discriminant = (r * mu) * (r * mu) + (atmosphere.top_radius - r) * (atmosphere.top_radius + r);
+  return max(-r * mu + safe_sqrt(discriminant), 0.0f);
+}
+
+// Distance from radius r along mu to the ground sphere (first hit); only
+// meaningful when ray_intersects_ground().
+INLINE float distance_to_bottom_atmosphere_boundary(IN(AtmosphereParams) atmosphere, float r, float mu) {
+  float discriminant = (r * mu) * (r * mu) - (r - atmosphere.bottom_radius) * (r + atmosphere.bottom_radius);
+  return max(-r * mu - safe_sqrt(discriminant), 0.0f);
+}
+
+INLINE bool ray_intersects_ground(IN(AtmosphereParams) atmosphere, float r, float mu) {
+  return mu < 0.0f &&
+         (r * mu) * (r * mu) - (r - atmosphere.bottom_radius) * (r + atmosphere.bottom_radius) >= 0.0f;
+}
+
+INLINE float distance_to_nearest_atmosphere_boundary(IN(AtmosphereParams) atmosphere, float r, float mu,
+                                                     bool ray_r_mu_intersects_ground) {
+  if (ray_r_mu_intersects_ground) return distance_to_bottom_atmosphere_boundary(atmosphere, r, mu);
+  return distance_to_top_atmosphere_boundary(atmosphere, r, mu);
+}
+
+// Radius and cosines at distance t along the ray (r, mu), for the sun at
+// (mu_s, nu): plain geometry in the plane of the ray (nu is constant along it).
+INLINE float radius_along_ray(float r, float mu, float t) { return sqrt(t * t + 2.0f * r * mu * t + r * r); }
+INLINE float mu_along_ray(float r, float mu, float t, float r_t) { return (r * mu + t) / r_t; }
+INLINE float mu_s_along_ray(float r, float mu_s, float nu, float t, float r_t) { return (r * mu_s + t * nu) / r_t; }
+
+// Cosine of the zenith angle of the geometric horizon seen from radius r.
+INLINE float horizon_mu(IN(AtmosphereParams) atmosphere, float r) {
+  return -safe_sqrt((r - atmosphere.bottom_radius) * (r + atmosphere.bottom_radius)) / r;
+}
+
+// ===========================================================================
+// 2. The medium
+// ===========================================================================
+
+INLINE float profile_density(IN(DensityProfile) profile, float altitude) {
+  if (profile.scale_height > 0.0f) return exp(-altitude / profile.scale_height);
+  for (int i = 1; i < profile.knot_count; ++i) {
+    if (altitude >= profile.knot_altitude[i - 1] && altitude <= profile.knot_altitude[i]) {
+      float t = (altitude - profile.knot_altitude[i - 1]) / (profile.knot_altitude[i] - profile.knot_altitude[i - 1]);
+      return mix(profile.knot_density[i - 1], profile.knot_density[i], t);
+    }
+  }
+  return 0.0f;
+}
+
+// Scattering coefficients of the Rayleigh-phase and aerosol-phase
+// constituents, and the total extinction (scattering + absorption), at radius r.
+INLINE void medium_at(IN(AtmosphereParams) atmosphere, float r, OUT(vec3) rayleigh_scattering,
+                      OUT(vec3) aerosol_scattering, OUT(vec3) extinction) {
+  rayleigh_scattering = vec3(0.0f);
+  aerosol_scattering = vec3(0.0f);
+  extinction = vec3(0.0f);
+  float altitude = r - atmosphere.bottom_radius;
+  for (int i = 0; i < atmosphere.constituent_count; ++i) {
+    float density = profile_density(atmosphere.density[i], altitude);
+    vec3 scattering = atmosphere.scattering[i] * density;
+    if (atmosphere.is_aerosol[i] != 0) {
+      aerosol_scattering += scattering;
+    } else {
+      rayleigh_scattering += scattering;
+    }
+    extinction += scattering + atmosphere.absorption[i] * density;
+  }
+}
+
+INLINE vec3 extinction_at(IN(AtmosphereParams) atmosphere, float r) {
+  vec3 rayleigh;
+  vec3 aerosol;
+  vec3 extinction;
+  medium_at(atmosphere, r, rayleigh, aerosol, extinction);
+  return extinction;
+}
+
+// Optical depth of the segment [t0, t1] of the ray (r, mu): trapezoidal rule
+// with `steps` steps (seed 000 eq. 3.8).
+INLINE vec3 optical_depth_along_ray(IN(AtmosphereParams) atmosphere, float r, float mu, float t0, float t1, int steps) {
+  float dt = (t1 - t0) / float(steps);
+  vec3 result = vec3(0.0f);
+  for (int i = 0; i <= steps; ++i) {
+    float t = t0 + float(i) * dt;
+    float weight = (i == 0 || i == steps) ? 0.5f : 1.0f;
+    result += extinction_at(atmosphere, clamp_radius(atmosphere, radius_along_ray(r, mu, t))) * (weight * dt);
+  }
+  return result;
+}
+
+// ===========================================================================
+// 3. Phase functions (each integrates to 1 over the sphere)
+// ===========================================================================
+
+// Seed 000 eq. 3.2.
+INLINE float rayleigh_phase_function(float nu) { return 3.0f / (16.0f * PI) * (1.0f + nu * nu); }
+
+INLINE float henyey_greenstein_phase_function(float g, float nu) {
+  float k = 1.0f + g * g - 2.0f * g * nu;
+  return (1.0f - g * g) / (4.0f * PI * k * sqrt(k));
+}
+
+// Seed 000 eq. 3.5 (Cornette & Shanks 1992).
+INLINE float cornette_shanks_phase_function(float g, float nu) {
+  float k = 1.0f + g * g - 2.0f * g * nu;
+  return 3.0f / (8.0f * PI) * (1.0f - g * g) * (1.0f + nu * nu) / ((2.0f + g * g) * k * sqrt(k));
+}
+
+INLINE float aerosol_phase_function(IN(AtmosphereParams) atmosphere, float nu) {
+  if (atmosphere.aerosol_phase_kind == PHASE_CORNETTE_SHANKS)
+    return cornette_shanks_phase_function(atmosphere.aerosol_g, nu);
+  return henyey_greenstein_phase_function(atmosphere.aerosol_g, nu);
+}
+
+// ===========================================================================
+// 4. Table coordinates
+// ===========================================================================
+
+// A texture of n texels holds samples at texel centres: the unit range [0, 1]
+// maps to [0.5/n, 1 - 0.5/n] so that the end values are sampled exactly.
+INLINE float texture_coord_from_unit_range(float x, int texture_size) {
+  return 0.5f / float(texture_size) + x * (1.0f - 1.0f / float(texture_size));
+}
+
+INLINE float unit_range_from_texture_coord(float u, int texture_size) {
+  return (u - 0.5f / float(texture_size)) / (1.0f - 1.0f / float(texture_size));
+}
+
+// Distance from the ground to the top along the horizontal at the ground (H)
+// and from the ground to radius r along the horizon (rho).
+INLINE float horizon_length_at_top(IN(AtmosphereParams) atmosphere) {
+  return sqrt((atmosphere.top_radius - atmosphere.bottom_radius) * (atmosphere.top_radius + atmosphere.bottom_radius));
+}
+
+INLINE float horizon_length(IN(AtmosphereParams) atmosphere, float r) {
+  return safe_sqrt((r - atmosphere.bottom_radius) * (r + atmosphere.bottom_radius));
+}
+
+// Transmittance table: (r, mu) of rays that do not hit the ground. x_r = rho / H
+// puts texels densely near the ground; x_mu is the distance to the top,
+// normalised between its minimum (straight up) and maximum (horizon).
+INLINE vec2 transmittance_uv_from_r_mu(IN(AtmosphereParams) atmosphere, float r, float mu) {
+  float H = horizon_length_at_top(atmosphere);
+  float rho = horizon_length(atmosphere, r);
+  float d = distance_to_top_atmosphere_boundary(atmosphere, r, mu);
+  float d_min = atmosphere.top_radius - r;
+  float d_max = rho + H;
+  float x_mu = clamp((d - d_min) / (d_max - d_min), 0.0f, 1.0f);
+  float x_r = rho / H;
+  return vec2(texture_coord_from_unit_range(x_mu, atmosphere.transmittance_mu_size),
+              texture_coord_from_unit_range(x_r, atmosphere.transmittance_r_size));
+}
+
+INLINE void r_mu_from_transmittance_uv(IN(AtmosphereParams) atmosphere, vec2 uv, OUT(float) r, OUT(float) mu) {
+  float x_mu = unit_range_from_texture_coord(uv.x, atmosphere.transmittance_mu_size);
+  float x_r = unit_range_from_texture_coord(uv.y, atmosphere.transmittance_r_size);
+  float H = horizon_length_at_top(atmosphere);
+  float rho = H * x_r;
+  r = sqrt(rho * rho + atmosphere.bottom_radius * atmosphere.bottom_radius);
+  float d_min = atmosphere.top_radius - r;
+  float d_max = rho + H;
+  float d = d_min + x_mu * (d_max - d_min);
+  // d² + 2 r mu d + r² = R_top², and R_top² - r² = H² - rho².
+  mu = d == 0.0f ? 1.0f : clamp_cosine((H * H - rho * rho - d * d) / (2.0f * r * d));
+}
+
+INLINE float scattering_u_r(IN(AtmosphereParams) atmosphere, float r) {
+  return texture_coord_from_unit_range(horizon_length(atmosphere, r) / horizon_length_at_top(atmosphere),
+                                       atmosphere.scattering_r_size);
+}
+
+INLINE float scattering_u_mu(IN(AtmosphereParams) atmosphere, float r, float mu, bool ray_r_mu_intersects_ground) {
+  float H = horizon_length_at_top(atmosphere);
+  float rho = horizon_length(atmosphere, r);
+  float r_mu = r * mu;
+  float discriminant = r_mu * r_mu - rho * rho;
+  int half_mu_size = atmosphere.scattering_mu_size / 2;
+  if (ray_r_mu_intersects_ground) {
+    float d = -r_mu - safe_sqrt(discriminant);
+    float d_min = r - atmosphere.bottom_radius;
+    float d_max = rho;
+    float x = d_max == d_min ? 0.0f : clamp((d - d_min) / (d_max - d_min), 0.0f, 1.0f);
+    return 0.5f - 0.5f * texture_coord_from_unit_range(x, half_mu_size);
+  }
+  float d = -r_mu + safe_sqrt(discriminant + H * H);
+  float d_min = atmosphere.top_radius - r;
+  float d_max = rho + H;
+  float x = clamp((d - d_min) / (d_max - d_min), 0.0f, 1.0f);
+  return 0.5f + 0.5f * texture_coord_from_unit_range(x, half_mu_size);
+}
+
+// mu_s through the distance to the top from the ground, squeezed so that
+// mu_s_min maps to 0 and more texels go to the sun high in the sky.
+INLINE float scattering_u_mu_s(IN(AtmosphereParams) atmosphere, float mu_s) {
+  float H = horizon_length_at_top(atmosphere);
+  float d = distance_to_top_atmosphere_boundary(atmosphere, atmosphere.bottom_radius, mu_s);
+  float d_min = atmosphere.top_radius - atmosphere.bottom_radius;
+  float d_max = H;
+  float a = (d - d_min) / (d_max - d_min);
+  float D = distance_to_top_atmosphere_boundary(atmosphere, atmosphere.bottom_radius, atmosphere.mu_s_min);
+  float A = (D - d_min) / (d_max - d_min);
+  return texture_coord_from_unit_range(max(1.0f - a / A, 0.0f) / (1.0f + a), atmosphere.scattering_mu_s_size);
+}
+
+// Scattering table: (r, mu, mu_s, nu) -> (u_nu, u_mu_s, u_mu, u_r) in the
+// x, y, z, w components. The mu axis is split at the horizon: u_mu < 0.5 for
+// rays that hit the ground, > 0.5 for the others, each half with its own
+// distance normalisation, so that the discontinuity of the radiance at the
+// horizon falls between texels instead of being blurred across them.
+INLINE vec4 scattering_uvwz_from_r_mu_mu_s_nu(IN(AtmosphereParams) atmosphere, float r, float mu, float mu_s,
+                                              float nu, bool ray_r_mu_intersects_ground) {
+  return vec4((nu + 1.0f) / 2.0f, scattering_u_mu_s(atmosphere, mu_s),
+              scattering_u_mu(atmosphere, r, mu, ray_r_mu_intersects_ground), scattering_u_r(atmosphere, r));
+}
+
+INLINE void r_mu_mu_s_nu_from_scattering_uvwz(IN(AtmosphereParams) atmosphere, vec4 uvwz, OUT(float) r, OUT(float) mu,
+                                              OUT(float) mu_s, OUT(float) nu, OUT(bool) ray_r_mu_intersects_ground) {
+  float H = horizon_length_at_top(atmosphere);
+  float rho = H * unit_range_from_texture_coord(uvwz.w, atmosphere.scattering_r_size);
+  r = sqrt(rho * rho + atmosphere.bottom_radius * atmosphere.bottom_radius);
+
+  int half_mu_size = atmosphere.scattering_mu_size / 2;
+  if (uvwz.z < 0.5f) {
+    float d_min = r - atmosphere.bottom_radius;
+    float d_max = rho;
+    float d = d_min + (d_max - d_min) * unit_range_from_texture_coord(1.0f - 2.0f * uvwz.z, half_mu_size);
+    // d² + 2 r mu d + r² = R_bottom², and R_bottom² - r² = -rho².
+    mu = d == 0.0f ? -1.0f : clamp_cosine(-(rho * rho + d * d) / (2.0f * r * d));
+    ray_r_mu_intersects_ground = true;
+  } else {
+    float d_min = atmosphere.top_radius - r;
+    float d_max = rho + H;
+    float d = d_min + (d_max - d_min) * unit_range_from_texture_coord(2.0f * uvwz.z - 1.0f, half_mu_size);
+    mu = d == 0.0f ? 1.0f : clamp_cosine((H * H - rho * rho - d * d) / (2.0f * r * d));
+    ray_r_mu_intersects_ground = false;
+  }
+
+  float x_mu_s = unit_range_from_texture_coord(uvwz.y, atmosphere.scattering_mu_s_size);
+  float d_min = atmosphere.top_radius - atmosphere.bottom_radius;
+  float d_max = H;
+  float D = distance_to_top_atmosphere_boundary(atmosphere, atmosphere.bottom_radius, atmosphere.mu_s_min);
+  float A = (D - d_min) / (d_max - d_min);
+  float a = (A - x_mu_s * A) / (1.0f + x_mu_s * A);
+  float d = d_min + min(a, A) * (d_max - d_min);
+  mu_s = d == 0.0f ? 1.0f : clamp_cosine((H * H - d * d) / (2.0f * atmosphere.bottom_radius * d));
+
+  nu = clamp_cosine(uvwz.x * 2.0f - 1.0f);
+}
+
+// The 4D table is stored as a 3D texture: width = nu_size tiles of mu_s_size
+// texels, height = mu, depth = r (seed 004 §3, "4D table tiled in 3D").
+// `texel` is the texel index (integer part) of a 3D texel centre.
+INLINE vec4 scattering_uvwz_from_texel(IN(AtmosphereParams) atmosphere, vec3 texel) {
+  float nu_index = floor(texel.x / float(atmosphere.scattering_mu_s_size));
+  float mu_s_index = texel.x - nu_index * float(atmosphere.scattering_mu_s_size);
+  return vec4(nu_index / float(atmosphere.scattering_nu_size - 1),
+              (mu_s_index + 0.5f) / float(atmosphere.scattering_mu_s_size),
+              (texel.y + 0.5f) / float(atmosphere.scattering_mu_size),
+              (texel.z + 0.5f) / float(atmosphere.scattering_r_size));
+}
+
+// The nu of a texel's tile, before the clamping below: the abscissa that the
+// linear interpolation between nu tiles assumes.
+INLINE float scattering_texel_tile_nu(IN(AtmosphereParams) atmosphere, vec3 texel) {
+  return scattering_uvwz_from_texel(atmosphere, texel).x * 2.0f - 1.0f;
+}
+
+INLINE void r_mu_mu_s_nu_from_scattering_texel(IN(AtmosphereParams) atmosphere, vec3 texel, OUT(float) r,
+                                               OUT(float) mu, OUT(float) mu_s, OUT(float) nu,
+                                               OUT(bool) ray_r_mu_intersects_ground) {
+  r_mu_mu_s_nu_from_scattering_uvwz(atmosphere, scattering_uvwz_from_texel(atmosphere, texel), r, mu, mu_s, nu,
+                                    ray_r_mu_intersects_ground);
+  // nu is bounded by the angles of the view and sun directions to the zenith:
+  // texels outside the possible range hold the value of the nearest possible
+  // geometry.
+  float spread = safe_sqrt((1.0f - mu * mu) * (1.0f - mu_s * mu_s));
+  nu = clamp(nu, mu * mu_s - spread, mu * mu_s + spread);
+}
+
+// Irradiance table: (r, mu_s), both linear.
+INLINE vec2 irradiance_uv_from_r_mu_s(IN(AtmosphereParams) atmosphere, float r, float mu_s) {
+  float x_r = (r - atmosphere.bottom_radius) / (atmosphere.top_radius - atmosphere.bottom_radius);
+  float x_mu_s = mu_s * 0.5f + 0.5f;
+  return vec2(texture_coord_from_unit_range(x_mu_s, atmosphere.irradiance_mu_s_size),
+              texture_coord_from_unit_range(x_r, atmosphere.irradiance_r_size));
+}
+
+INLINE void r_mu_s_from_irradiance_uv(IN(AtmosphereParams) atmosphere, vec2 uv, OUT(float) r, OUT(float) mu_s) {
+  float x_mu_s = unit_range_from_texture_coord(uv.x, atmosphere.irradiance_mu_s_size);
+  float x_r = unit_range_from_texture_coord(uv.y, atmosphere.irradiance_r_size);
+  r = atmosphere.bottom_radius + x_r * (atmosphere.top_radius - atmosphere.bottom_radius);
+  mu_s = clamp_cosine(2.0f * x_mu_s - 1.0f);
+}
+
+// ===========================================================================
+// 5. Table lookups
+// ===========================================================================
+
+INLINE vec3 transmittance_to_top_atmosphere_boundary(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
+                                                     float r, float mu) {
+  return vec3(texture(transmittance_texture, transmittance_uv_from_r_mu(atmosphere, r, mu)));
+}
+
+// Transmittance between the start of the ray (r, mu) and the point at
+// distance d along it, as a ratio of two table values (transmittance
+// composes multiplicatively). Rays that hit the ground are reversed so that
+// both lookups are of rays that do not.
+INLINE vec3 transmittance_along_ray(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture, float r,
+                                    float mu, float d, bool ray_r_mu_intersects_ground) {
+  float r_d = clamp_radius(atmosphere, radius_along_ray(r, mu, d));
+  float mu_d = clamp_cosine(mu_along_ray(r, mu, d, r_d));
+  if (ray_r_mu_intersects_ground) {
+    return min(transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r_d, -mu_d) /
+                   transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, -mu),
+               vec3(1.0f));
+  }
+  return min(transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, mu) /
+                 transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r_d, mu_d),
+             vec3(1.0f));
+}
+
+// Transmittance between the start of the ray (r, mu) and the ground, for a
+// ray that hits it. The end point's radius is the ground radius itself, not
+// a float recomputation of it: near the ground the table coordinate
+// sqrt(r² - R²) turns the 0.5 m float resolution of r into kilometres.
+INLINE vec3 transmittance_to_ground(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture, float r,
+                                    float mu) {
+  float d = distance_to_bottom_atmosphere_boundary(atmosphere, r, mu);
+  float mu_d = clamp_cosine((r * mu + d) / atmosphere.bottom_radius);
+  return min(transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, atmosphere.bottom_radius,
+                                                      -mu_d) /
+                 transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, -mu),
+             vec3(1.0f));
+}
+
+// Fraction of the solar disc above the horizon seen from radius r: the area
+// of a uniform disc above a straight edge at signed distance x (in disc
+// radii) from its centre, (π/2 + x sqrt(1 - x²) + asin x) / π.
+INLINE float sun_visible_fraction(IN(AtmosphereParams) atmosphere, float r, float mu_s) {
+  float mu_h = horizon_mu(atmosphere, r);
+  // |d mu / d angle| <= 1, so a cosine margin of one angular radius is safe.
+  if (mu_s - mu_h > atmosphere.sun_angular_radius) return 1.0f;
+  if (mu_s - mu_h < -atmosphere.sun_angular_radius) return 0.0f;
+  float elevation_above_horizon = asin(clamp_cosine(mu_s)) - asin(clamp_cosine(mu_h));
+  float x = clamp(elevation_above_horizon / atmosphere.sun_angular_radius, -1.0f, 1.0f);
+  return 0.5f + (x * sqrt(1.0f - x * x) + asin(x)) / PI;
+}
+
+// Transmittance from radius r to the sun, including the planet's shadow.
+INLINE vec3 transmittance_to_sun(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture, float r,
+                                 float mu_s) {
+  float visible = sun_visible_fraction(atmosphere, r, mu_s);
+  if (visible <= 0.0f) return vec3(0.0f);
+  return transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, mu_s) * visible;
+}
+
+// 4D lookup with linear interpolation between the two nearest nu tiles.
+INLINE vec3 scattering_lookup(IN(AtmosphereParams) atmosphere, IN(sampler3D) scattering_texture, float r, float mu,
+                              float mu_s, float nu, bool ray_r_mu_intersects_ground) {
+  vec4 uvwz = scattering_uvwz_from_r_mu_mu_s_nu(atmosphere, r, mu, mu_s, nu, ray_r_mu_intersects_ground);
+  float tex_coord_x = uvwz.x * float(atmosphere.scattering_nu_size - 1);
+  float tex_x = floor(tex_coord_x);
+  float lerp = tex_coord_x - tex_x;
+  vec3 uvw0 = vec3((tex_x + uvwz.y) / float(atmosphere.scattering_nu_size), uvwz.z, uvwz.w);
+  vec3 uvw1 = vec3((tex_x + 1.0f + uvwz.y) / float(atmosphere.scattering_nu_size), uvwz.z, uvwz.w);
+  return vec3(texture(scattering_texture, uvw0)) * (1.0f - lerp) + vec3(texture(scattering_texture, uvw1)) * lerp;
+}
+
+INLINE vec3 irradiance_lookup(IN(AtmosphereParams) atmosphere, IN(sampler2D) irradiance_texture, float r, float mu_s) {
+  return vec3(texture(irradiance_texture, irradiance_uv_from_r_mu_s(atmosphere, r, mu_s)));
+}
+
+// ===========================================================================
+// 6. Precomputation integrands
+// ===========================================================================
+
+// Number of Simpson intervals along a ray for single scattering (whose
+// integrand has the sharp edge of the planet's shadow) and for multiple
+// scattering (smooth), and of trapezoid steps for the optical depth between
+// two nodes.
+#define SINGLE_SCATTERING_INTERVALS 40
+#define MULTIPLE_SCATTERING_INTERVALS 20
+#define MAX_RAY_NODES 41
+#define OPTICAL_DEPTH_SUBSTEPS 4
+// Cells of the piecewise-linear importance density that places the nodes.
+#define RAY_MAP_CELLS 128
+
+// Simpson's rule weight of node i of n intervals of width dt (n even).
+INLINE float simpson_weight(int i, int n, float dt) {
+  float w = (i == 0 || i == n) ? 1.0f : ((i % 2 == 1) ? 4.0f : 2.0f);
+  return w * dt / 3.0f;
+}
+
+// Quadrature nodes of an integral along the ray (r, mu) from its start to
+// the nearest atmosphere boundary, with the transmittance from the start
+// folded into the weights:
+//   ∫ T(x, x + t v) f(t) dt ≈ Σ_i weight_i f(t_i).
+// The scattering medium can be much thinner than the ray (a 1.2 km aerosol
+// layer under a 100 km atmosphere: Simpson's rule on 40 uniform intervals
+// overestimates it by 6 %), so the nodes are placed at equal steps of the
+// cumulative extinction plus a uniform floor (a quarter of its mean):
+// with t = t(s) and dt/ds = W / w(t), the integrand in s is f / w, which is
+// smooth wherever f follows the density. w is piecewise linear on
+// RAY_MAP_CELLS cells, and t(s) inverts its exact (piecewise quadratic)
+// integral, so that dt/ds is the true derivative of the map.
+struct RayNodes {
+  int count;
+  float t[MAX_RAY_NODES];
+  vec3 weight[MAX_RAY_NODES];
+};
+
+INLINE RayNodes ray_integration_nodes(IN(AtmosphereParams) atmosphere, float r, float mu,
+                                      bool ray_r_mu_intersects_ground, int intervals) {
+  RayNodes nodes;
+  nodes.count = intervals + 1;
+  float d = distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ray_r_mu_intersects_ground);
+  if (!(d > 0.0f)) {
+    // A ray of zero length (leaving the top straight away): nothing to integrate.
+    for (int i = 0; i < MAX_RAY_NODES; ++i) {
+      nodes.t[i] = 0.0f;
+      nodes.weight[i] = vec3(0.0f);
+    }
+    return nodes;
+  }
+  float cell = d / float(RAY_MAP_CELLS);
+  float w[RAY_MAP_CELLS + 1];
+  float cumulative[RAY_MAP_CELLS + 1];
+  float mean = 0.0f;
+  for (int k = 0; k <= RAY_MAP_CELLS; ++k) {
+    vec3 e = extinction_at(atmosphere, clamp_radius(atmosphere, radius_along_ray(r, mu, float(k) * cell)));
+    w[k] = e.x + e.y + e.z;
+    mean += w[k] * ((k == 0 || k == RAY_MAP_CELLS) ? 0.5f : 1.0f) / float(RAY_MAP_CELLS);
+  }
+  float floor_density = 0.25f * mean + 1e-30f;
+  cumulative[0] = 0.0f;
+  for (int k = 0; k <= RAY_MAP_CELLS; ++k) {
+    w[k] += floor_density;
+    if (k > 0) cumulative[k] = cumulative[k - 1] + 0.5f * (w[k - 1] + w[k]) * cell;
+  }
+  float total = cumulative[RAY_MAP_CELLS];
+  int k = 0;
+  vec3 optical_depth = vec3(0.0f);
+  for (int i = 0; i <= intervals; ++i) {
+    float target = total * float(i) / float(intervals);
+    while (k < RAY_MAP_CELLS - 1 && cumulative[k + 1] < target) ++k;
+    // Solve cumulative[k] + w_k x + a x² / 2 = target for x in the cell.
+    float a = (w[k + 1] - w[k]) / cell;
+    float c = max(target - cumulative[k], 0.0f);
+    float x = min(2.0f * c / (w[k] + safe_sqrt(w[k] * w[k] + 2.0f * a * c)), cell);
+    float t = i == intervals ? d : float(k) * cell + x;
+    float density = w[k] + a * x;
+    nodes.t[i] = t;
+    if (i > 0) optical_depth += optical_depth_along_ray(atmosphere, r, mu, nodes.t[i - 1], t, OPTICAL_DEPTH_SUBSTEPS);
+    float weight = simpson_weight(i, intervals, 1.0f / float(intervals)) * total / density;
+    nodes.weight[i] = exp(-optical_depth) * weight;
+  }
+  return nodes;
+}
+
+// Direct ground irradiance: the sun's irradiance on a horizontal surface at
+// radius r (order 0 of the ground lighting).
+INLINE vec3 compute_direct_irradiance(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture, float r,
+                                      float mu_s) {
+  return atmosphere.solar_irradiance * transmittance_to_sun(atmosphere, transmittance_texture, r, mu_s) * max(mu_s, 0.0f);
+}
+
+// Single scattering of the ray (r, mu) with the sun at (mu_s, nu), without
+// its phase function (applied per pixel so that the aerosol halo stays sharp):
+// seed 000 eq. 3.13 with j reduced to the direct sunlight,
+//   S = E_sun ∫ T(x, y) beta_s(y) T(y, sun) dy,
+// for the Rayleigh and the aerosol constituents separately. T(x, y) is
+// integrated along the ray itself (ray_integration_nodes), not read from the
+// table.
+INLINE void compute_single_scattering(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture, float r,
+                                      float mu, float mu_s, float nu, bool ray_r_mu_intersects_ground,
+                                      OUT(vec3) rayleigh, OUT(vec3) aerosol) {
+  RayNodes nodes = ray_integration_nodes(atmosphere, r, mu, ray_r_mu_intersects_ground, SINGLE_SCATTERING_INTERVALS);
+  rayleigh = vec3(0.0f);
+  aerosol = vec3(0.0f);
+  for (int i = 0; i < nodes.count; ++i) {
+    float r_t = clamp_radius(atmosphere, radius_along_ray(r, mu, nodes.t[i]));
+    float mu_s_t = clamp_cosine(mu_s_along_ray(r, mu_s, nu, nodes.t[i], r_t));
+    vec3 beta_rayleigh;
+    vec3 beta_aerosol;
+    vec3 extinction;
+    medium_at(atmosphere, r_t, beta_rayleigh, beta_aerosol, extinction);
+    vec3 light = nodes.weight[i] * transmittance_to_sun(atmosphere, transmittance_texture, r_t, mu_s_t);
+    rayleigh += light * beta_rayleigh;
+    aerosol += light * beta_aerosol;
+  }
+  rayleigh *= atmosphere.solar_irradiance;
+  aerosol *= atmosphere.solar_irradiance;
+}
+
+// Multiple scattering of one order along the ray (r, mu): seed 000 eq. 3.13,
+//   L = ∫ T(x, y) J(y, v) dy,
+// with J the scattering density of that order (in `scattering_density_texture`,
+// same layout as the scattering tables), with the nodes of
+// ray_integration_nodes.
+INLINE vec3 compute_multiple_scattering(IN(AtmosphereParams) atmosphere, IN(sampler3D) scattering_density_texture,
+                                        float r, float mu, float mu_s, float nu, bool ray_r_mu_intersects_ground) {
+  RayNodes nodes = ray_integration_nodes(atmosphere, r, mu, ray_r_mu_intersects_ground, MULTIPLE_SCATTERING_INTERVALS);
+  vec3 result = vec3(0.0f);
+  for (int i = 0; i < nodes.count; ++i) {
+    float r_t = clamp_radius(atmosphere, radius_along_ray(r, mu, nodes.t[i]));
+    float mu_t = clamp_cosine(mu_along_ray(r, mu, nodes.t[i], r_t));
+    float mu_s_t = clamp_cosine(mu_s_along_ray(r, mu_s, nu, nodes.t[i], r_t));
+    result += nodes.weight[i] * scattering_lookup(atmosphere, scattering_density_texture, r_t, mu_t, mu_s_t, nu,
+                                                  ray_r_mu_intersects_ground);
+  }
+  return result;
+}
+
+// Radiance of scattering order `order` (>= 1) arriving at radius r from the
+// direction (mu, nu) with the sun at mu_s: in-scattered light of that order
+// along the ray, plus, for a ray that hits the ground, the ground's Lambertian
+// reflection of the irradiance of order - 1 (`irradiance_texture`; order 0 is
+// the direct sunlight) attenuated on the way.
+//  - order 1: the single scattering tables, with their phase functions;
+//  - order > 1: `multiple_scattering_texture`, the radiance of that order.
+INLINE vec3 incident_radiance(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
+                              IN(sampler3D) single_rayleigh_texture, IN(sampler3D) single_aerosol_texture,
+                              IN(sampler3D) multiple_scattering_texture, IN(sampler2D) irradiance_texture, float r,
+                              float mu, float mu_s, float nu, int order) {
+  bool ground = ray_intersects_ground(atmosphere, r, mu);
+  vec3 radiance;
+  if (order == 1) {
+    radiance = scattering_lookup(atmosphere, single_rayleigh_texture, r, mu, mu_s, nu, ground) *
+                   rayleigh_phase_function(nu) +
+               scattering_lookup(atmosphere, single_aerosol_texture, r, mu, mu_s, nu, ground) *
+                   aerosol_phase_function(atmosphere, nu);
+  } else {
+    radiance = scattering_lookup(atmosphere, multiple_scattering_texture, r, mu, mu_s, nu, ground);
+  }
+  if (ground) {
+    float d = distance_to_bottom_atmosphere_boundary(atmosphere, r, mu);
+    // Sun cosine at the ground point x + d v, whose normal is (x + d v) / R.
+    float mu_s_ground = clamp_cosine((r * mu_s + d * nu) / atmosphere.bottom_radius);
+    vec3 irradiance = order == 1 ? compute_direct_irradiance(atmosphere, transmittance_texture,
+                                                             atmosphere.bottom_radius, mu_s_ground)
+                                 : irradiance_lookup(atmosphere, irradiance_texture, atmosphere.bottom_radius,
+                                                     mu_s_ground);
+    radiance += transmittance_to_ground(atmosphere, transmittance_texture, r, mu) * atmosphere.ground_albedo *
+                (1.0f / PI) * irradiance;
+  }
+  return radiance;
+}
+
+// Direction with zenith cosine mu and azimuth phi from the sun's vertical
+// plane, in a frame where the zenith is z and the sun is in the x-z plane.
+INLINE vec3 direction_from_mu_phi(float mu, float phi) {
+  float s = safe_sqrt(1.0f - mu * mu);
+  return vec3(s * cos(phi), s * sin(phi), mu);
+}
+
+// Straightforward scattering density of order `order` + 1 at radius r for the
+// direction (mu, nu) with the sun at mu_s (seed 000 eq. 3.14):
+//   J = sum_i beta_s,i(r) ∫ P_i(v . w) L_order(w) dw,
+// by the midpoint rule over `theta_samples` x 2 `theta_samples` directions.
+// The CPU precomputation computes the same integral through the spherical
+// harmonic structure of the phase functions (precompute/scattering_density.cpp);
+// this form is the definition it is tested against.
+INLINE vec3 compute_scattering_density(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
+                                       IN(sampler3D) single_rayleigh_texture, IN(sampler3D) single_aerosol_texture,
+                                       IN(sampler3D) multiple_scattering_texture, IN(sampler2D) irradiance_texture,
+                                       float r, float mu, float mu_s, float nu, int order, int theta_samples) {
+  vec3 view = direction_from_mu_phi(mu, 0.0f);
+  float sun_x = view.x == 0.0f ? 0.0f : (nu - mu * mu_s) / view.x;
+  vec3 sun = vec3(sun_x, safe_sqrt(1.0f - sun_x * sun_x - mu_s * mu_s), mu_s);
+  vec3 beta_rayleigh;
+  vec3 beta_aerosol;
+  vec3 extinction;
+  medium_at(atmosphere, r, beta_rayleigh, beta_aerosol, extinction);
+  float d_theta = PI / float(theta_samples);
+  float d_phi = PI / float(theta_samples);
+  vec3 result = vec3(0.0f);
+  for (int l = 0; l < theta_samples; ++l) {
+    float theta = (float(l) + 0.5f) * d_theta;
+    float mu_w = cos(theta);
+    float solid_angle = d_theta * d_phi * sin(theta);
+    for (int m = 0; m < 2 * theta_samples; ++m) {
+      vec3 w = direction_from_mu_phi(mu_w, (float(m) + 0.5f) * d_phi);
+      float nu_w = clamp_cosine(dot(w, sun));
+      vec3 radiance = incident_radiance(atmosphere, transmittance_texture, single_rayleigh_texture,
+                                        single_aerosol_texture, multiple_scattering_texture, irradiance_texture, r,
+                                        mu_w, mu_s, nu_w, order);
+      float cos_theta = clamp_cosine(dot(view, w));
+      result += radiance * (beta_rayleigh * rayleigh_phase_function(cos_theta) +
+                            beta_aerosol * aerosol_phase_function(atmosphere, cos_theta)) *
+                solid_angle;
+    }
+  }
+  return result;
+}
+
+// Sky irradiance of order `order` on a horizontal surface at radius r:
+//   E = ∫_{mu > 0} L_order(w) mu dw,
+// Gauss-free midpoint rule over `theta_samples` x 2 `theta_samples` directions
+// of the upper hemisphere (whose rays never hit the ground).
+INLINE vec3 compute_indirect_irradiance(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
+                                        IN(sampler3D) single_rayleigh_texture, IN(sampler3D) single_aerosol_texture,
+                                        IN(sampler3D) multiple_scattering_texture, float r, float mu_s, int order,
+                                        int theta_samples) {
+  vec3 sun = vec3(safe_sqrt(1.0f - mu_s * mu_s), 0.0f, mu_s);
+  float d_theta = PI / 2.0f / float(theta_samples);
+  float d_phi = PI / float(theta_samples);
+  vec3 result = vec3(0.0f);
+  for (int l = 0; l < theta_samples; ++l) {
+    float theta = (float(l) + 0.5f) * d_theta;
+    float mu_w = cos(theta);
+    float weight = d_theta * d_phi * sin(theta) * mu_w;
+    for (int m = 0; m < 2 * theta_samples; ++m) {
+      vec3 w = direction_from_mu_phi(mu_w, (float(m) + 0.5f) * d_phi);
+      float nu_w = clamp_cosine(dot(w, sun));
+      // The upper hemisphere never sees the ground: the irradiance texture is not read.
+      result += incident_radiance(atmosphere, transmittance_texture, single_rayleigh_texture, single_aerosol_texture,
+                                  multiple_scattering_texture, transmittance_texture, r, mu_w, mu_s, nu_w, order) *
+                weight;
+    }
+  }
+  return result;
+}
+
+// ===========================================================================
+// 7. Rendering: radiance reaching a camera
+// ===========================================================================
+
+// The tables a renderer reads:
+//  - transmittance_texture: transmittance to the top of the atmosphere;
+//  - scattering_texture: single Rayleigh scattering plus all multiple
+//    scattering divided by the Rayleigh phase function (so one lookup and one
+//    phase function give both);
+//  - single_aerosol_texture: single aerosol scattering without phase function;
+//  - irradiance_texture: indirect (sky) irradiance on a horizontal surface.
+
+// Moves a camera outside the atmosphere to where its view ray enters it.
+// Returns false when the ray misses the atmosphere. `camera` is relative to
+// the planet centre. The ray-sphere test uses the perpendicular distance of
+// the ray to the centre, which keeps its precision for cameras at hundreds of
+// planet radii.
+INLINE bool enter_atmosphere(IN(AtmosphereParams) atmosphere, INOUT(vec3) camera, vec3 view_ray) {
+  float r = length(camera);
+  if (r <= atmosphere.top_radius) return true;
+  float rmu = dot(camera, view_ray);
+  vec3 closest = camera - view_ray * rmu;
+  float discriminant = atmosphere.top_radius * atmosphere.top_radius - dot(closest, closest);
+  if (rmu >= 0.0f || discriminant < 0.0f) return false;
+  float distance_to_top = -rmu - sqrt(discriminant);
+  camera = camera + view_ray * distance_to_top;
+  return true;
+}
+
+// Radiance scattered towards the camera along the view ray up to the top of
+// the atmosphere or the ground (seed 000 eq. 3.13), and the transmittance of
+// that path. Excludes the sun disc and the light reflected by the ground.
+INLINE vec3 sky_radiance(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
+                         IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture, vec3 camera,
+                         vec3 view_ray, vec3 sun_direction, OUT(vec3) transmittance) {
+  transmittance = vec3(1.0f);
+  vec3 start = camera;
+  if (!enter_atmosphere(atmosphere, start, view_ray)) return vec3(0.0f);
+  float r = clamp_radius(atmosphere, length(start));
+  float mu = clamp_cosine(dot(start, view_ray) / r);
+  float mu_s = clamp_cosine(dot(start, sun_direction) / r);
+  float nu = clamp_cosine(dot(view_ray, sun_direction));
+  bool ground = ray_intersects_ground(atmosphere, r, mu);
+  if (ground) {
+    transmittance = transmittance_to_ground(atmosphere, transmittance_texture, r, mu);
+  } else {
+    transmittance = transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, mu);
+  }
+  vec3 scattering = scattering_lookup(atmosphere, scattering_texture, r, mu, mu_s, nu, ground);
+  vec3 single_aerosol = scattering_lookup(atmosphere, single_aerosol_texture, r, mu, mu_s, nu, ground);
+  return scattering * rayleigh_phase_function(nu) + single_aerosol * aerosol_phase_function(atmosphere, nu);
+}
+
+// Irradiance on a surface at radius r whose local zenith is `up`, with
+// normal `normal`: returns the sun's, and the sky's in `sky_irradiance`
+// (the horizontal sky irradiance scaled by the fraction of the sky the
+// surface sees, (1 + n.up) / 2).
+INLINE vec3 sun_and_sky_irradiance_at(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
+                                      IN(sampler2D) irradiance_texture, float r, vec3 up, vec3 normal,
+                                      vec3 sun_direction, OUT(vec3) sky_irradiance) {
+  r = clamp_radius(atmosphere, r);
+  float mu_s = clamp_cosine(dot(up, sun_direction));
+  sky_irradiance = irradiance_lookup(atmosphere, irradiance_texture, r, mu_s) * (1.0f + dot(normal, up)) * 0.5f;
+  return atmosphere.solar_irradiance * transmittance_to_sun(atmosphere, transmittance_texture, r, mu_s) *
+         max(dot(normal, sun_direction), 0.0f);
+}
+
+// The same for a surface at `point` (relative to the planet centre).
+INLINE vec3 sun_and_sky_irradiance(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
+                                   IN(sampler2D) irradiance_texture, vec3 point, vec3 normal, vec3 sun_direction,
+                                   OUT(vec3) sky_irradiance) {
+  float r = length(point);
+  return sun_and_sky_irradiance_at(atmosphere, transmittance_texture, irradiance_texture, r, point / r, normal,
+                                   sun_direction, sky_irradiance);
+}
+
+// Radiance of the solar disc (uniform, no limb darkening): the solar
+// irradiance spread over the disc's solid angle 2π(1 - cos α) = 4π sin²(α/2).
+INLINE vec3 sun_disc_radiance(IN(AtmosphereParams) atmosphere) {
+  float s = sin(atmosphere.sun_angular_radius * 0.5f);
+  return atmosphere.solar_irradiance / (4.0f * PI * s * s);
+}
+
+// Everything that reaches a camera along a view ray, for a spherical planet:
+// the sky, or the Lambertian ground lit by sun and sky seen through the
+// aerial perspective in front of it, plus (optionally) the sun disc.
+// `camera` is relative to the planet centre; a camera below the ground is
+// treated as standing on it.
+INLINE vec3 radiance_along_view_ray(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
+                                    IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
+                                    IN(sampler2D) irradiance_texture, vec3 camera, vec3 view_ray,
+                                    vec3 sun_direction, bool include_sun_disc) {
+  float camera_r = length(camera);
+  if (camera_r < atmosphere.bottom_radius) camera = camera * (atmosphere.bottom_radius / camera_r);
+  vec3 transmittance;
+  vec3 radiance = sky_radiance(atmosphere, transmittance_texture, scattering_texture, single_aerosol_texture, camera,
+                               view_ray, sun_direction, transmittance);
+  vec3 start = camera;
+  if (!enter_atmosphere(atmosphere, start, view_ray)) {
+    // Outside the atmosphere and missing it: only the sun.
+    if (include_sun_disc && dot(view_ray, sun_direction) > cos(atmosphere.sun_angular_radius))
+      radiance += sun_disc_radiance(atmosphere);
+    return radiance;
+  }
+  float r = clamp_radius(atmosphere, length(start));
+  float mu = clamp_cosine(dot(start, view_ray) / r);
+  if (ray_intersects_ground(atmosphere, r, mu)) {
+    vec3 point = start + view_ray * distance_to_bottom_atmosphere_boundary(atmosphere, r, mu);
+    vec3 normal = point / length(point);
+    vec3 sky_irradiance;
+    vec3 sun_irradiance = sun_and_sky_irradiance_at(atmosphere, transmittance_texture, irradiance_texture,
+                                                    atmosphere.bottom_radius, normal, normal, sun_direction,
+                                                    sky_irradiance);
+    radiance += transmittance * atmosphere.ground_albedo * (1.0f / PI) * (sun_irradiance + sky_irradiance);
+  } else if (include_sun_disc && dot(view_ray, sun_direction) > cos(atmosphere.sun_angular_radius)) {
+    radiance += transmittance * sun_disc_radiance(atmosphere);
+  }
+  return radiance;
+}

@@ -1,0 +1,248 @@
+// Disk cache of precomputed tables.
+//
+// File name: atmos-<key>.tables, where the key hashes every input of the
+// tables: the atmosphere resampled at the working wavelengths, the table
+// sizes, the number of orders, the file format version and the text of the
+// shared physics sources (so that editing the physics invalidates old files).
+// The file repeats the key and the sizes and ends with a checksum of all its
+// bytes; anything that does not match is reported and recomputed.
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "atmos/tables.hpp"
+#include "io/embedded_files.hpp"
+
+namespace atmos {
+namespace {
+
+constexpr char kMagic[8] = {'A', 'T', 'M', 'O', 'S', 'T', 'B', 'L'};
+// Bump when the meaning of the tables changes in code that is not one of the
+// hashed sources (src/precompute/*.cpp).
+constexpr std::uint32_t kFormatVersion = 1;
+
+struct Fnv1a {
+  std::uint64_t h = 1469598103934665603ull;
+  void bytes(const void* data, std::size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) {
+      h ^= p[i];
+      h *= 1099511628211ull;
+    }
+  }
+  template <typename T>
+  void value(const T& v) { bytes(&v, sizeof v); }
+  void text(const std::string& s) {
+    value(s.size());
+    bytes(s.data(), s.size());
+  }
+};
+
+std::string hex(std::uint64_t v) {
+  char buffer[17];
+  std::snprintf(buffer, sizeof buffer, "%016llx", static_cast<unsigned long long>(v));
+  return buffer;
+}
+
+std::size_t set_floats(const TableSizes& s) {
+  const std::size_t t = std::size_t(s.transmittance_mu) * s.transmittance_r;
+  const std::size_t e = std::size_t(s.irradiance_mu_s) * s.irradiance_r;
+  const std::size_t sc = std::size_t(s.scattering_nu) * s.scattering_mu_s * s.scattering_mu * s.scattering_r;
+  return 3 * (t + 2 * e + 2 * sc);
+}
+
+void write_sizes(Fnv1a& h, const TableSizes& s) {
+  for (int v : {s.transmittance_mu, s.transmittance_r, s.irradiance_mu_s, s.irradiance_r, s.scattering_nu,
+                s.scattering_mu_s, s.scattering_mu, s.scattering_r})
+    h.value(std::int32_t(v));
+}
+
+}  // namespace
+
+std::string tables_cache_key(const Atmosphere& a, const PrecomputeOptions& options) {
+  Fnv1a h;
+  h.value(kFormatVersion);
+  for (const char* source : {"src/physics/definitions.glsl", "src/physics/functions.glsl"}) {
+    const char* text = io::embedded_file(source);
+    h.text(text ? text : "");
+  }
+  write_sizes(h, options.sizes);
+  h.value(std::int32_t(options.scattering_orders));
+  h.value(a.bottom_radius_m);
+  h.value(a.top_radius_m);
+  h.value(a.sun_angular_radius_rad);
+  h.value(a.wavelengths_nm.size());
+  for (double w : a.wavelengths_nm) {
+    h.value(w);
+    h.value(a.ground_albedo.at(w));
+    h.value(a.solar_irradiance.at(w));
+    for (const auto& c : a.constituents) {
+      h.value(c.scattering.at(w));
+      h.value(c.absorption.at(w));
+    }
+  }
+  for (const auto& c : a.constituents) {
+    h.value(int(c.density.kind));
+    h.value(c.density.scale_height_m);
+    h.value(c.density.knots.size());
+    for (const auto& [altitude, density] : c.density.knots) {
+      h.value(altitude);
+      h.value(density);
+    }
+    h.value(int(c.phase.kind));
+    h.value(c.phase.g);
+  }
+  return hex(h.h);
+}
+
+std::string default_cache_directory() {
+  if (const char* dir = std::getenv("ATMOS_CACHE_DIR"); dir && *dir) return dir;
+  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return std::string(xdg) + "/atmos";
+  if (const char* home = std::getenv("HOME"); home && *home) return std::string(home) + "/.cache/atmos";
+  return ".atmos-cache";
+}
+
+namespace {
+
+// Reads and checks a cache file. Returns an empty string on success, else why
+// the file is unusable.
+std::string read_cache(const std::string& path, const std::string& key, const PrecomputeOptions& options,
+                       const Atmosphere& atmosphere, Tables& tables) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return "cannot open";
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  const std::string data = buffer.str();
+  const std::size_t header = sizeof kMagic + 4 + 16 + 8 * 4 + 4 + 4 + 4;
+  if (data.size() < header + 8) return "truncated header";
+  std::size_t pos = 0;
+  auto take = [&](void* out, std::size_t n) {
+    std::memcpy(out, data.data() + pos, n);
+    pos += n;
+  };
+  char magic[8];
+  take(magic, 8);
+  if (std::memcmp(magic, kMagic, 8) != 0) return "not an atmos table file";
+  std::uint32_t version;
+  take(&version, 4);
+  if (version != kFormatVersion) return "format version " + std::to_string(version);
+  char file_key[16];
+  take(file_key, 16);
+  if (std::string(file_key, 16) != key) return "key mismatch";
+  std::int32_t sizes[8], orders, sets, wavelengths;
+  take(sizes, sizeof sizes);
+  take(&orders, 4);
+  take(&sets, 4);
+  take(&wavelengths, 4);
+  TableSizes s{sizes[0], sizes[1], sizes[2], sizes[3], sizes[4], sizes[5], sizes[6], sizes[7]};
+  if (!(s == options.sizes) || orders != options.scattering_orders ||
+      wavelengths != std::int32_t(atmosphere.wavelengths_nm.size()) || sets * 3 != wavelengths)
+    return "parameters mismatch";
+  const std::size_t floats = set_floats(s) * std::size_t(sets);
+  const std::size_t expected = header + std::size_t(wavelengths) * 8 + floats * 4 + 8;
+  if (data.size() != expected)
+    return "size " + std::to_string(data.size()) + " bytes, expected " + std::to_string(expected) + " (truncated?)";
+  Fnv1a check;
+  check.bytes(data.data(), data.size() - 8);
+  std::uint64_t stored;
+  std::memcpy(&stored, data.data() + data.size() - 8, 8);
+  if (stored != check.h) return "checksum mismatch (corrupt file)";
+
+  tables = Tables();
+  tables.sizes = s;
+  tables.scattering_orders = orders;
+  tables.wavelengths_nm.resize(std::size_t(wavelengths));
+  take(tables.wavelengths_nm.data(), std::size_t(wavelengths) * 8);
+  auto take_vec3 = [&](std::vector<glm::vec3>& v, std::size_t count) {
+    v.resize(count);
+    take(v.data(), count * sizeof(glm::vec3));
+    for (const auto& x : v)
+      if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z)) return false;
+    return true;
+  };
+  const std::size_t t = std::size_t(s.transmittance_mu) * s.transmittance_r;
+  const std::size_t e = std::size_t(s.irradiance_mu_s) * s.irradiance_r;
+  const std::size_t sc = std::size_t(s.scattering_nu) * s.scattering_mu_s * s.scattering_mu * s.scattering_r;
+  for (int i = 0; i < sets; ++i) {
+    TableSet set;
+    if (!take_vec3(set.transmittance, t) || !take_vec3(set.direct_irradiance, e) ||
+        !take_vec3(set.indirect_irradiance, e) || !take_vec3(set.scattering, sc) || !take_vec3(set.single_aerosol, sc))
+      return "non-finite texels";
+    tables.sets.push_back(std::move(set));
+  }
+  return "";
+}
+
+// Writes atomically: a temporary file renamed over the final name, so that a
+// crash never leaves a half-written file under the cache name.
+std::string write_cache(const std::string& path, const std::string& key, const Tables& tables) {
+  std::string data(kMagic, 8);
+  auto put = [&](const void* p, std::size_t n) { data.append(static_cast<const char*>(p), n); };
+  put(&kFormatVersion, 4);
+  put(key.data(), 16);
+  const TableSizes& s = tables.sizes;
+  const std::int32_t sizes[8] = {s.transmittance_mu, s.transmittance_r, s.irradiance_mu_s, s.irradiance_r,
+                                 s.scattering_nu,    s.scattering_mu_s, s.scattering_mu,   s.scattering_r};
+  put(sizes, sizeof sizes);
+  const std::int32_t orders = tables.scattering_orders, sets = std::int32_t(tables.sets.size()),
+                     wavelengths = std::int32_t(tables.wavelengths_nm.size());
+  put(&orders, 4);
+  put(&sets, 4);
+  put(&wavelengths, 4);
+  put(tables.wavelengths_nm.data(), tables.wavelengths_nm.size() * 8);
+  for (const auto& set : tables.sets)
+    for (const auto* v : {&set.transmittance, &set.direct_irradiance, &set.indirect_irradiance, &set.scattering,
+                          &set.single_aerosol})
+      put(v->data(), v->size() * sizeof(glm::vec3));
+  Fnv1a check;
+  check.bytes(data.data(), data.size());
+  put(&check.h, 8);
+
+  std::error_code ec;
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ec);
+  const std::string temporary = path + ".tmp" + std::to_string(std::rand());
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    if (!out) return "cannot write " + temporary;
+    out.write(data.data(), std::streamsize(data.size()));
+    if (!out) return "write failed for " + temporary;
+  }
+  std::filesystem::rename(temporary, path, ec);
+  if (ec) {
+    std::filesystem::remove(temporary, ec);
+    return "cannot rename into " + path;
+  }
+  return "";
+}
+
+}  // namespace
+
+CacheResult load_or_precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& options,
+                                      const std::string& directory) {
+  atmosphere.validate();
+  options.sizes.validate();
+  CacheResult result;
+  const std::string key = tables_cache_key(atmosphere, options);
+  result.path = (std::filesystem::path(directory) / ("atmos-" + key + ".tables")).string();
+  if (std::filesystem::exists(result.path)) {
+    const std::string problem = read_cache(result.path, key, options, atmosphere, result.tables);
+    if (problem.empty()) {
+      result.status = CacheStatus::hit;
+      return result;
+    }
+    result.status = CacheStatus::recomputed_invalid;
+    result.problem = "cache file " + result.path + " rejected: " + problem;
+  }
+  result.tables = precompute_tables(atmosphere, options);
+  const std::string write_problem = write_cache(result.path, key, result.tables);
+  if (!write_problem.empty())
+    result.problem += (result.problem.empty() ? "" : "; ") + std::string("cache not stored: ") + write_problem;
+  return result;
+}
+
+}  // namespace atmos

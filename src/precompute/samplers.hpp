@@ -1,0 +1,32 @@
+// Read-only sampler views of a TableSet, for evaluating the shared functions
+// on the CPU (atmos sample, the CPU renderer, tests).
+#pragma once
+
+#include "atmos/tables.hpp"
+#include "physics/shader_cpp.hpp"
+
+namespace atmos::precompute {
+
+struct TableSamplers {
+  physics::sampler2D transmittance;
+  physics::sampler2D direct_irradiance;
+  physics::sampler2D indirect_irradiance;
+  physics::sampler3D scattering;
+  physics::sampler3D single_aerosol;
+};
+
+inline TableSamplers make_samplers(const Tables& tables, int set) {
+  const TableSizes& s = tables.sizes;
+  const TableSet& t = tables.sets.at(size_t(set));
+  TableSamplers out;
+  out.transmittance = {s.transmittance_mu, s.transmittance_r, t.transmittance.data()};
+  out.direct_irradiance = {s.irradiance_mu_s, s.irradiance_r, t.direct_irradiance.data()};
+  out.indirect_irradiance = {s.irradiance_mu_s, s.irradiance_r, t.indirect_irradiance.data()};
+  out.scattering = {tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
+                    t.scattering.data()};
+  out.single_aerosol = {tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
+                        t.single_aerosol.data()};
+  return out;
+}
+
+}  // namespace atmos::precompute

@@ -1,0 +1,405 @@
+#include "precompute/steps.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <array>
+#include <cmath>
+
+namespace atmos::precompute {
+
+using namespace atmos::physics;
+
+namespace {
+
+// Trapezoid steps of the transmittance table's optical depth integral.
+constexpr int kTransmittanceSteps = 500;
+// Directions (theta x 2 theta) of the hemisphere integral of the irradiance.
+constexpr int kIrradianceThetaSamples = 16;
+// Gauss-Legendre nodes in mu on each side of the horizon for the density.
+constexpr int kDensityMuNodes = 24;
+
+void parallel_texels_2d(int width, int height, const std::function<void(int, int)>& body) {
+  tbb::parallel_for(tbb::blocked_range<int>(0, width * height, 64), [&](const tbb::blocked_range<int>& range) {
+    for (int i = range.begin(); i != range.end(); ++i) body(i % width, i / width);
+  });
+}
+
+// Runs body(y, z) for every (mu, r) row of a scattering table, one r slice at a
+// time so that progress can be reported from the calling thread.
+void for_each_view_ray(const AtmosphereParams& a, const StepProgress& progress,
+                       const std::function<void(int, int)>& body) {
+  for (int z = 0; z < a.scattering_r_size; ++z) {
+    tbb::parallel_for(tbb::blocked_range<int>(0, a.scattering_mu_size, 4), [&](const tbb::blocked_range<int>& range) {
+      for (int y = range.begin(); y != range.end(); ++y) body(y, z);
+    });
+    if (progress) progress(double(z + 1) / double(a.scattering_r_size));
+  }
+}
+
+// The nodes of the shared ray quadrature (ray_integration_nodes in
+// functions.glsl) for the view ray of row (y, z), with what does not depend
+// on the sun.
+struct ViewRay {
+  float r = 0.0f;
+  float mu = 0.0f;
+  bool ground = false;
+  RayNodes nodes;
+  std::array<float, MAX_RAY_NODES> r_t{};
+  std::array<float, MAX_RAY_NODES> mu_t{};
+};
+
+ViewRay make_view_ray(const AtmosphereParams& a, int y, int z, int intervals) {
+  ViewRay ray;
+  float mu_s, nu;
+  r_mu_mu_s_nu_from_scattering_texel(a, vec3(0.0f, float(y), float(z)), ray.r, ray.mu, mu_s, nu, ray.ground);
+  ray.nodes = ray_integration_nodes(a, ray.r, ray.mu, ray.ground, intervals);
+  for (int i = 0; i < ray.nodes.count; ++i) {
+    ray.r_t[size_t(i)] = clamp_radius(a, radius_along_ray(ray.r, ray.mu, ray.nodes.t[i]));
+    ray.mu_t[size_t(i)] = clamp_cosine(mu_along_ray(ray.r, ray.mu, ray.nodes.t[i], ray.r_t[size_t(i)]));
+  }
+  return ray;
+}
+
+// Normalised associated Legendre functions Λ_lm(mu), l <= L, 0 <= m <= l,
+// such that Y_lm(mu, phi) = Λ_lm(mu) cos(m phi) are orthonormal on the sphere
+// (the real, azimuth-even spherical harmonics). Stored at index l(l+1)/2 + m.
+// Standard stable recurrences in l for fixed m.
+inline int sh_index(int l, int m) { return l * (l + 1) / 2 + m; }
+constexpr int kShCount = (kDensityMaxDegree + 1) * (kDensityMaxDegree + 2) / 2;
+
+void associated_legendre(double mu, std::array<float, kShCount>& out) {
+  const int L = kDensityMaxDegree;
+  const double s = std::sqrt(std::max(0.0, 1.0 - mu * mu));
+  double p_mm = std::sqrt(1.0 / (4.0 * M_PI));  // P̃_00
+  for (int m = 0; m <= L; ++m) {
+    if (m > 0) p_mm *= std::sqrt((2.0 * m + 1.0) / (2.0 * m)) * s;
+    const double scale = m > 0 ? std::sqrt(2.0) : 1.0;
+    out[size_t(sh_index(m, m))] = float(p_mm * scale);
+    if (m == L) break;
+    double p_prev = p_mm;
+    double p_l = std::sqrt(2.0 * m + 3.0) * mu * p_mm;  // P̃_{m+1,m}
+    out[size_t(sh_index(m + 1, m))] = float(p_l * scale);
+    for (int l = m + 2; l <= L; ++l) {
+      const double a = std::sqrt((4.0 * l * l - 1.0) / (double(l * l) - double(m * m)));
+      const double b = std::sqrt((double((l - 1) * (l - 1)) - double(m * m)) / (4.0 * (l - 1) * (l - 1) - 1.0));
+      const double p_next = a * (mu * p_l - b * p_prev);
+      p_prev = p_l;
+      p_l = p_next;
+      out[size_t(sh_index(l, m))] = float(p_l * scale);
+    }
+  }
+}
+
+}  // namespace
+
+void gauss_legendre(int n, double a, double b, std::vector<double>& nodes, std::vector<double>& weights) {
+  nodes.assign(size_t(n), 0.0);
+  weights.assign(size_t(n), 0.0);
+  for (int i = 0; i < n; ++i) {
+    // Newton iteration on P_n from Tricomi's initial guess.
+    double x = std::cos(M_PI * (i + 0.75) / (n + 0.5));
+    double dp = 1.0;
+    for (int iteration = 0; iteration < 100; ++iteration) {
+      double p0 = 1.0, p1 = x;
+      for (int k = 2; k <= n; ++k) {
+        const double p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
+        p0 = p1;
+        p1 = p2;
+      }
+      if (n == 1) { p1 = x; p0 = 1.0; }
+      dp = n * (x * p1 - p0) / (x * x - 1.0);
+      const double dx = p1 / dp;
+      x -= dx;
+      if (std::abs(dx) < 1e-15) break;
+    }
+    nodes[size_t(i)] = 0.5 * (a + b) + 0.5 * (b - a) * (-x);
+    weights[size_t(i)] = (b - a) / ((1.0 - x * x) * dp * dp);
+  }
+}
+
+std::vector<double> legendre_moments(const std::function<double(double)>& phase, int max_degree) {
+  std::vector<double> x, w;
+  gauss_legendre(2048, -1.0, 1.0, x, w);
+  std::vector<double> moments(size_t(max_degree + 1), 0.0);
+  for (size_t k = 0; k < x.size(); ++k) {
+    const double p = phase(x[k]) * w[k] * 2.0 * M_PI;
+    double p0 = 1.0, p1 = x[k];
+    moments[0] += p;
+    if (max_degree >= 1) moments[1] += p * p1;
+    for (int l = 2; l <= max_degree; ++l) {
+      const double p2 = ((2.0 * l - 1.0) * x[k] * p1 - (l - 1.0) * p0) / l;
+      p0 = p1;
+      p1 = p2;
+      moments[size_t(l)] += p * p2;
+    }
+  }
+  return moments;
+}
+
+Table2D compute_transmittance_table(const AtmosphereParams& a) {
+  Table2D table(a.transmittance_mu_size, a.transmittance_r_size);
+  parallel_texels_2d(table.width, table.height, [&](int x, int y) {
+    float r, mu;
+    r_mu_from_transmittance_uv(a, vec2((float(x) + 0.5f) / float(table.width), (float(y) + 0.5f) / float(table.height)),
+                               r, mu);
+    const float d = distance_to_top_atmosphere_boundary(a, r, mu);
+    table.at(x, y) = exp(-optical_depth_along_ray(a, r, mu, 0.0f, d, kTransmittanceSteps));
+  });
+  return table;
+}
+
+Table2D compute_direct_irradiance_table(const AtmosphereParams& a, const Table2D& transmittance) {
+  Table2D table(a.irradiance_mu_s_size, a.irradiance_r_size);
+  const sampler2D t = transmittance.sampler();
+  parallel_texels_2d(table.width, table.height, [&](int x, int y) {
+    float r, mu_s;
+    r_mu_s_from_irradiance_uv(a, vec2((float(x) + 0.5f) / float(table.width), (float(y) + 0.5f) / float(table.height)),
+                              r, mu_s);
+    table.at(x, y) = compute_direct_irradiance(a, t, r, mu_s);
+  });
+  return table;
+}
+
+Table2D compute_indirect_irradiance_table(const AtmosphereParams& a, const Table2D& transmittance,
+                                          const Table3D& single_rayleigh, const Table3D& single_aerosol,
+                                          const Table3D& multiple_scattering, int order) {
+  Table2D table(a.irradiance_mu_s_size, a.irradiance_r_size);
+  const sampler2D t = transmittance.sampler();
+  const sampler3D sr = single_rayleigh.sampler(), sa = single_aerosol.sampler(), ms = multiple_scattering.sampler();
+  parallel_texels_2d(table.width, table.height, [&](int x, int y) {
+    float r, mu_s;
+    r_mu_s_from_irradiance_uv(a, vec2((float(x) + 0.5f) / float(table.width), (float(y) + 0.5f) / float(table.height)),
+                              r, mu_s);
+    table.at(x, y) = compute_indirect_irradiance(a, t, sr, sa, ms, r, mu_s, order, kIrradianceThetaSamples);
+  });
+  return table;
+}
+
+// compute_single_scattering() of functions.glsl for every texel, with the view
+// ray's nodes computed once per (mu, r) row.
+void compute_single_scattering_tables(const AtmosphereParams& a, const Table2D& transmittance, Table3D& rayleigh,
+                                      Table3D& aerosol, const StepProgress& progress) {
+  const int width = a.scattering_nu_size * a.scattering_mu_s_size;
+  rayleigh = Table3D(width, a.scattering_mu_size, a.scattering_r_size);
+  aerosol = Table3D(width, a.scattering_mu_size, a.scattering_r_size);
+  const sampler2D t = transmittance.sampler();
+  for_each_view_ray(a, progress, [&](int y, int z) {
+    const ViewRay ray = make_view_ray(a, y, z, SINGLE_SCATTERING_INTERVALS);
+    std::array<vec3, MAX_RAY_NODES> beta_rayleigh, beta_aerosol;
+    for (int i = 0; i < ray.nodes.count; ++i) {
+      vec3 extinction;
+      medium_at(a, ray.r_t[size_t(i)], beta_rayleigh[size_t(i)], beta_aerosol[size_t(i)], extinction);
+      beta_rayleigh[size_t(i)] *= ray.nodes.weight[i];
+      beta_aerosol[size_t(i)] *= ray.nodes.weight[i];
+    }
+    for (int x = 0; x < width; ++x) {
+      float r, mu, mu_s, nu;
+      bool ground;
+      r_mu_mu_s_nu_from_scattering_texel(a, vec3(float(x), float(y), float(z)), r, mu, mu_s, nu, ground);
+      vec3 sum_rayleigh(0.0f), sum_aerosol(0.0f);
+      for (int i = 0; i < ray.nodes.count; ++i) {
+        const float r_t = ray.r_t[size_t(i)];
+        const float mu_s_t = clamp_cosine(mu_s_along_ray(r, mu_s, nu, ray.nodes.t[i], r_t));
+        const vec3 sun = transmittance_to_sun(a, t, r_t, mu_s_t);
+        sum_rayleigh += sun * beta_rayleigh[size_t(i)];
+        sum_aerosol += sun * beta_aerosol[size_t(i)];
+      }
+      rayleigh.at(x, y, z) = sum_rayleigh * a.solar_irradiance;
+      aerosol.at(x, y, z) = sum_aerosol * a.solar_irradiance;
+    }
+  });
+}
+
+// The scattering density through spherical harmonics. At a point (r, mu_s)
+// the incident radiance L(w) is projected on the real spherical harmonics
+// Y_lm (azimuth-even: the field is symmetric about the sun's vertical plane),
+//   L_lm = ∫ L(w) Y_lm(w) dw,
+// by Gauss-Legendre quadrature in mu split at the horizon (where L is
+// discontinuous) and the trapezoidal rule in azimuth (exact for trigonometric
+// polynomials). By the addition theorem, a phase function with Legendre
+// moments p_l turns this into
+//   ∫ P(v.w) L(w) dw = Σ_lm p_l L_lm Y_lm(v)
+// (Funk-Hecke). The Rayleigh phase function has only p_0 and p_2, so its part
+// is exact; the aerosol part is truncated at degree kDensityMaxDegree, where
+// p_l = g^l for Henyey-Greenstein (0.8^32 ≈ 8e-4). The cost is one set of
+// radiance samples per (r, mu_s) instead of one sphere per 4D texel.
+Table3D compute_scattering_density_table(const AtmosphereParams& a, const Table2D& transmittance,
+                                         const Table3D& single_rayleigh, const Table3D& single_aerosol,
+                                         const Table3D& multiple_scattering, const Table2D& irradiance, int order,
+                                         const StepProgress& progress) {
+  constexpr int L = kDensityMaxDegree;
+  constexpr int kPhiIntervals = L + 1;  // over [0, π]; 2 (L + 1) over the circle
+  const int width = a.scattering_nu_size * a.scattering_mu_s_size;
+  Table3D density(width, a.scattering_mu_size, a.scattering_r_size);
+  const sampler2D t = transmittance.sampler(), e = irradiance.sampler();
+  const sampler3D sr = single_rayleigh.sampler(), sa = single_aerosol.sampler(), ms = multiple_scattering.sampler();
+
+  const std::vector<double> rayleigh_moments =
+      legendre_moments([](double x) { return double(rayleigh_phase_function(float(x))); }, L);
+  const std::vector<double> aerosol_moments =
+      legendre_moments([&](double x) { return double(aerosol_phase_function(a, float(x))); }, L);
+
+  std::array<float, kPhiIntervals + 1> cos_phi{};
+  for (int l = 0; l <= kPhiIntervals; ++l) cos_phi[size_t(l)] = float(std::cos(M_PI * l / kPhiIntervals));
+  // Trapezoid weights of ∫_0^{2π} f(phi) cos(m phi) dphi for an even f sampled on [0, π].
+  std::vector<float> fourier_weight(size_t((L + 1) * (kPhiIntervals + 1)));
+  for (int m = 0; m <= L; ++m)
+    for (int l = 0; l <= kPhiIntervals; ++l)
+      fourier_weight[size_t(m * (kPhiIntervals + 1) + l)] =
+          float((l == 0 || l == kPhiIntervals ? 1.0 : 2.0) * std::cos(M_PI * double(m * l) / kPhiIntervals) * M_PI /
+                kPhiIntervals);
+
+  for (int z = 0; z < a.scattering_r_size; ++z) {
+    // Everything that depends on r only: the quadrature nodes in mu (below
+    // and above the horizon), the harmonics at those nodes and at the mu of
+    // the output texels.
+    float r, mu_unused, mu_s_unused, nu_unused;
+    bool ground_unused;
+    r_mu_mu_s_nu_from_scattering_texel(a, vec3(0.0f, 0.0f, float(z)), r, mu_unused, mu_s_unused, nu_unused,
+                                       ground_unused);
+    const double mu_h = horizon_mu(a, r);
+    std::vector<double> nodes, weights, nodes_up, weights_up;
+    gauss_legendre(kDensityMuNodes, -1.0, mu_h, nodes, weights);
+    gauss_legendre(kDensityMuNodes, mu_h, 1.0, nodes_up, weights_up);
+    nodes.insert(nodes.end(), nodes_up.begin(), nodes_up.end());
+    weights.insert(weights.end(), weights_up.begin(), weights_up.end());
+    std::vector<std::array<float, kShCount>> node_harmonics(nodes.size());
+    for (size_t j = 0; j < nodes.size(); ++j) associated_legendre(nodes[j], node_harmonics[j]);
+    std::vector<float> output_mu(size_t(a.scattering_mu_size));
+    std::vector<std::array<float, kShCount>> output_harmonics(output_mu.size());
+    for (int y = 0; y < a.scattering_mu_size; ++y) {
+      float r_y, mu_s_y, nu_y;
+      bool ground_y;
+      r_mu_mu_s_nu_from_scattering_texel(a, vec3(0.0f, float(y), float(z)), r_y, output_mu[size_t(y)], mu_s_y, nu_y,
+                                         ground_y);
+      associated_legendre(output_mu[size_t(y)], output_harmonics[size_t(y)]);
+    }
+
+    tbb::parallel_for(0, a.scattering_mu_s_size, [&](int mu_s_index) {
+      float r_unused, mu_s, mu_unused2, nu_unused2;
+      bool ground_unused2;
+      r_mu_mu_s_nu_from_scattering_texel(a, vec3(float(mu_s_index), 0.0f, float(z)), r_unused, mu_unused2, mu_s,
+                                         nu_unused2, ground_unused2);
+      const vec3 sun(std::sqrt(std::max(0.0f, 1.0f - mu_s * mu_s)), 0.0f, mu_s);
+
+      // L_lm, accumulated node by node.
+      std::vector<vec3> coefficients(size_t(kShCount), vec3(0.0f));
+      std::array<vec3, kPhiIntervals + 1> radiance{};
+      for (size_t j = 0; j < nodes.size(); ++j) {
+        const float mu_w = float(nodes[j]);
+        const float sin_w = std::sqrt(std::max(0.0f, 1.0f - mu_w * mu_w));
+        for (int l = 0; l <= kPhiIntervals; ++l) {
+          const float nu_w = clamp_cosine(sin_w * cos_phi[size_t(l)] * sun.x + mu_w * sun.z);
+          radiance[size_t(l)] = incident_radiance(a, t, sr, sa, ms, e, r, mu_w, mu_s, nu_w, order);
+        }
+        const std::array<float, kShCount>& legendre = node_harmonics[j];
+        for (int m = 0; m <= L; ++m) {
+          // ∫_0^{2π} L cos(m phi) dphi, trapezoidal rule on the symmetric circle.
+          const float* fw = &fourier_weight[size_t(m * (kPhiIntervals + 1))];
+          vec3 fourier(0.0f);
+          for (int l = 0; l <= kPhiIntervals; ++l) fourier += radiance[size_t(l)] * fw[l];
+          fourier *= float(weights[j]);
+          for (int l = m; l <= L; ++l) coefficients[size_t(sh_index(l, m))] += fourier * legendre[size_t(sh_index(l, m))];
+        }
+      }
+
+      // Scale by beta_s p_l of both phase functions.
+      vec3 beta_rayleigh, beta_aerosol, extinction;
+      medium_at(a, r, beta_rayleigh, beta_aerosol, extinction);
+      for (int l = 0; l <= L; ++l) {
+        const vec3 c = beta_rayleigh * float(rayleigh_moments[size_t(l)]) + beta_aerosol * float(aerosol_moments[size_t(l)]);
+        for (int m = 0; m <= l; ++m) coefficients[size_t(sh_index(l, m))] *= c;
+      }
+
+      // Evaluate at every texel of this (r, mu_s).
+      std::array<vec3, L + 1> azimuthal{};
+      for (int y = 0; y < a.scattering_mu_size; ++y) {
+        float r_v, mu = output_mu[size_t(y)], mu_s_v, nu;
+        bool ground;
+        const std::array<float, kShCount>& legendre = output_harmonics[size_t(y)];
+        for (int m = 0; m <= L; ++m) {
+          vec3 sum(0.0f);
+          for (int l = m; l <= L; ++l) sum += coefficients[size_t(sh_index(l, m))] * legendre[size_t(sh_index(l, m))];
+          azimuthal[size_t(m)] = sum;
+        }
+        const float spread = std::sqrt(std::max(0.0f, (1.0f - mu * mu) * (1.0f - mu_s * mu_s)));
+        for (int nu_index = 0; nu_index < a.scattering_nu_size; ++nu_index) {
+          const int x = nu_index * a.scattering_mu_s_size + mu_s_index;
+          r_mu_mu_s_nu_from_scattering_texel(a, vec3(float(x), float(y), float(z)), r_v, mu, mu_s_v, nu, ground);
+          const float c = spread < 1e-6f ? 1.0f : clamp_cosine((nu - mu * mu_s) / spread);
+          // Σ_m A_m cos(m phi) with the Chebyshev recurrence for cos(m phi).
+          float c_prev = 1.0f, c_m = c;
+          vec3 value = azimuthal[0];
+          for (int m = 1; m <= L; ++m) {
+            value += azimuthal[size_t(m)] * c_m;
+            const float c_next = 2.0f * c * c_m - c_prev;
+            c_prev = c_m;
+            c_m = c_next;
+          }
+          // A truncated expansion can ring slightly below zero next to sharp features.
+          density.at(x, y, z) = max(value, vec3(0.0f));
+        }
+      }
+    });
+    if (progress) progress(double(z + 1) / double(a.scattering_r_size));
+  }
+  return density;
+}
+
+// compute_multiple_scattering() of functions.glsl for every texel. For each
+// node of a view ray, the (mu, r) part of the trilinear lookup of the density
+// is the same for all texels of the row: it is done once, leaving a 1D row of
+// (nu, mu_s) texels to interpolate per texel.
+Table3D compute_multiple_scattering_table(const AtmosphereParams& a, const Table3D& density,
+                                          const StepProgress& progress) {
+  const int width = a.scattering_nu_size * a.scattering_mu_s_size;
+  Table3D result(width, a.scattering_mu_size, a.scattering_r_size);
+  for_each_view_ray(a, progress, [&](int y, int z) {
+    const ViewRay ray = make_view_ray(a, y, z, MULTIPLE_SCATTERING_INTERVALS);
+    std::vector<vec3> rows(size_t(ray.nodes.count) * size_t(width));
+    for (int i = 0; i < ray.nodes.count; ++i) {
+      int y0, y1, z0, z1;
+      float fy, fz;
+      detail::linear_tap(scattering_u_mu(a, ray.r_t[size_t(i)], ray.mu_t[size_t(i)], ray.ground), density.height, y0,
+                         y1, fy);
+      detail::linear_tap(scattering_u_r(a, ray.r_t[size_t(i)]), density.depth, z0, z1, fz);
+      const vec3* c00 = &density.texels[(size_t(z0) * size_t(density.height) + size_t(y0)) * size_t(width)];
+      const vec3* c10 = &density.texels[(size_t(z0) * size_t(density.height) + size_t(y1)) * size_t(width)];
+      const vec3* c01 = &density.texels[(size_t(z1) * size_t(density.height) + size_t(y0)) * size_t(width)];
+      const vec3* c11 = &density.texels[(size_t(z1) * size_t(density.height) + size_t(y1)) * size_t(width)];
+      vec3* row = &rows[size_t(i) * size_t(width)];
+      for (int x = 0; x < width; ++x) {
+        const vec3 c0 = c00[x] * (1.0f - fy) + c10[x] * fy;
+        const vec3 c1 = c01[x] * (1.0f - fy) + c11[x] * fy;
+        row[x] = c0 * (1.0f - fz) + c1 * fz;
+      }
+    }
+    for (int x = 0; x < width; ++x) {
+      float r, mu, mu_s, nu;
+      bool ground;
+      r_mu_mu_s_nu_from_scattering_texel(a, vec3(float(x), float(y), float(z)), r, mu, mu_s, nu, ground);
+      // The nu tiles and weight, as in scattering_lookup().
+      const float tex_coord_x = (nu + 1.0f) / 2.0f * float(a.scattering_nu_size - 1);
+      const float tex_x = std::floor(tex_coord_x);
+      const float lerp = tex_coord_x - tex_x;
+      vec3 sum(0.0f);
+      for (int i = 0; i < ray.nodes.count; ++i) {
+        const float mu_s_t = clamp_cosine(mu_s_along_ray(r, mu_s, nu, ray.nodes.t[i], ray.r_t[size_t(i)]));
+        const float u_mu_s = scattering_u_mu_s(a, mu_s_t);
+        const vec3* row = &rows[size_t(i) * size_t(width)];
+        int x0, x1;
+        float fx;
+        detail::linear_tap((tex_x + u_mu_s) / float(a.scattering_nu_size), width, x0, x1, fx);
+        vec3 value = (row[x0] * (1.0f - fx) + row[x1] * fx) * (1.0f - lerp);
+        detail::linear_tap((tex_x + 1.0f + u_mu_s) / float(a.scattering_nu_size), width, x0, x1, fx);
+        value += (row[x0] * (1.0f - fx) + row[x1] * fx) * lerp;
+        sum += ray.nodes.weight[i] * value;
+      }
+      result.at(x, y, z) = sum;
+    }
+  });
+  return result;
+}
+
+}  // namespace atmos::precompute

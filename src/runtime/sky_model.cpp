@@ -1,0 +1,57 @@
+#include "atmos/sky.hpp"
+
+#include <cmath>
+
+#include "atmos/colour.hpp"
+#include "physics/parameters.hpp"
+#include "precompute/samplers.hpp"
+
+namespace atmos {
+
+struct SkyModel::Impl {
+  physics::AtmosphereParams params;
+  precompute::TableSamplers samplers;
+  glm::dmat3 to_srgb;
+};
+
+SkyModel::SkyModel(const Atmosphere& atmosphere, const Tables& tables) : impl_(std::make_unique<Impl>()) {
+  if (tables.sets.size() != 1 || tables.wavelengths_nm.size() != 3)
+    throw Error("the CPU sky model needs tables of exactly three working wavelengths");
+  impl_->params = physics::make_atmosphere_params(atmosphere, tables.sizes, 0);
+  impl_->samplers = precompute::make_samplers(tables, 0);
+  impl_->to_srgb = glm::dmat3(radiance_to_srgb_matrix(
+      {tables.wavelengths_nm[0], tables.wavelengths_nm[1], tables.wavelengths_nm[2]}));
+}
+
+SkyModel::~SkyModel() = default;
+
+glm::dvec3 SkyModel::radiance(const glm::dvec3& observer, const glm::dvec3& view, const glm::dvec3& sun,
+                              bool include_sun_disc) const {
+  const auto& s = impl_->samplers;
+  return glm::dvec3(physics::radiance_along_view_ray(impl_->params, s.transmittance, s.scattering, s.single_aerosol,
+                                                     s.indirect_irradiance, glm::vec3(observer), glm::vec3(view),
+                                                     glm::vec3(sun), include_sun_disc));
+}
+
+void SkyModel::horizontal_irradiance(const glm::dvec3& point, const glm::dvec3& sun, glm::dvec3& sun_irradiance,
+                                     glm::dvec3& sky_irradiance) const {
+  const auto& s = impl_->samplers;
+  glm::vec3 sky;
+  const glm::vec3 p(point);
+  sun_irradiance = glm::dvec3(physics::sun_and_sky_irradiance(impl_->params, s.transmittance, s.indirect_irradiance,
+                                                              p, glm::normalize(p), glm::vec3(sun), sky));
+  sky_irradiance = glm::dvec3(sky);
+}
+
+glm::dvec3 SkyModel::to_srgb(const glm::dvec3& spectral) const { return impl_->to_srgb * spectral; }
+
+glm::dvec3 observer_position(const Atmosphere& atmosphere, double altitude_m) {
+  return {0.0, 0.0, atmosphere.bottom_radius_m + altitude_m};
+}
+
+glm::dvec3 direction_from_azimuth_elevation(double azimuth_deg, double elevation_deg) {
+  const double az = azimuth_deg * M_PI / 180.0, el = elevation_deg * M_PI / 180.0;
+  return {std::cos(el) * std::sin(az), std::cos(el) * std::cos(az), std::sin(el)};
+}
+
+}  // namespace atmos

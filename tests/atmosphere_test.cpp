@@ -1,0 +1,119 @@
+// Planet files: presets load, and every kind of bad input is a clear error.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "atmos/atmosphere.hpp"
+
+namespace {
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string earth_text() { return read_file(std::string(ATMOS_SOURCE_DIR) + "/data/planets/earth.json"); }
+
+// Expects parse_atmosphere to throw an atmos::Error whose one-line message contains `needle`.
+void expect_error(const std::string& text, const std::string& needle) {
+  try {
+    atmos::parse_atmosphere(text, "test.json");
+    FAIL() << "no error for input containing: " << needle;
+  } catch (const atmos::Error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find(needle), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << "message must be one line: " << message;
+    EXPECT_EQ(message.rfind("test.json", 0), 0u) << "message must name the file: " << message;
+  }
+}
+
+std::string modified(const std::function<void(nlohmann::json&)>& change) {
+  nlohmann::json j = nlohmann::json::parse(earth_text());
+  change(j);
+  return j.dump();
+}
+
+TEST(Presets, EarthAndMarsLoadWithTheirValues) {
+  const atmos::Atmosphere earth = atmos::load_atmosphere("earth");
+  EXPECT_DOUBLE_EQ(earth.bottom_radius_m, 6371e3);
+  EXPECT_DOUBLE_EQ(earth.top_radius_m, 6471e3);
+  ASSERT_EQ(earth.constituents.size(), 3u);
+  EXPECT_NEAR(earth.constituents[0].scattering.at(550.0), 1.1483e-5, 1e-9);
+  EXPECT_EQ(earth.constituents[2].density.kind, atmos::DensityProfile::Kind::piecewise_linear);
+  // A 5778 K Planck spectrum scaled to a total of 1361 W/m² has 1.749 W m^-2 nm^-1
+  // at 550 nm (π B(550 nm, 5778 K) 1361 / (σ T⁴)); measured spectra give ~1.86.
+  EXPECT_NEAR(earth.solar_irradiance.at(550.0), 1.749, 0.002);
+
+  const atmos::Atmosphere mars = atmos::load_atmosphere("mars");
+  EXPECT_DOUBLE_EQ(mars.bottom_radius_m, 3386e3);
+  EXPECT_DOUBLE_EQ(mars.top_radius_m, 3518e3);
+  // Seed 000 §5: betaR = (0.019918, 0.01357, 0.00575) per km at (680, 550, 440) nm.
+  EXPECT_NEAR(mars.constituents[0].scattering.at(680.0), 0.019918e-3, 1e-12);
+  EXPECT_NEAR(mars.constituents[0].scattering.at(550.0), 0.01357e-3, 1e-12);
+  EXPECT_NEAR(mars.constituents[0].scattering.at(440.0), 0.00575e-3, 1e-12);
+  EXPECT_NEAR(mars.constituents[1].scattering.at(550.0), 0.003e-3, 1e-12);
+  EXPECT_DOUBLE_EQ(mars.constituents[0].density.scale_height_m, 11e3);
+  EXPECT_DOUBLE_EQ(mars.constituents[1].density.scale_height_m, 3.2e3);
+}
+
+TEST(Presets, UnknownNameIsAClearError) {
+  try {
+    atmos::load_atmosphere("jupiter");
+    FAIL();
+  } catch (const atmos::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("neither a preset"), std::string::npos);
+  }
+}
+
+TEST(PlanetFile, UserFilesLoadLikePresets) {
+  const atmos::Atmosphere a = atmos::parse_atmosphere(earth_text(), "copy.json");
+  EXPECT_EQ(a.name, "earth");
+  const atmos::Atmosphere b = atmos::load_atmosphere(std::string(ATMOS_SOURCE_DIR) + "/data/planets/mars.json");
+  EXPECT_EQ(b.name, "mars");
+}
+
+TEST(PlanetFile, UnitsAreConverted) {
+  const auto a = atmos::parse_atmosphere(modified([](nlohmann::json& j) {
+    j["bottom_radius"] = {{"value", 6371000}, {"unit", "m"}};
+    j["sun_angular_radius"] = {{"value", 16}, {"unit", "arcmin"}};
+  }), "t.json");
+  EXPECT_DOUBLE_EQ(a.bottom_radius_m, 6371000.0);
+  EXPECT_NEAR(a.sun_angular_radius_rad, 16.0 / 60.0 * M_PI / 180.0, 1e-12);
+}
+
+TEST(PlanetFile, BadInputsAreClearErrors) {
+  expect_error("{ not json", "malformed JSON");
+  expect_error("", "malformed JSON");
+  expect_error(modified([](nlohmann::json& j) { j.erase("bottom_radius"); }), "missing planet.bottom_radius");
+  expect_error(modified([](nlohmann::json& j) { j["bottom_radius"]["value"] = -5; }), "bottom_radius must be positive");
+  expect_error(modified([](nlohmann::json& j) { j["top_radius"]["value"] = 6000; }), "top_radius must be larger");
+  expect_error(modified([](nlohmann::json& j) { j["top_radius"].erase("unit"); }), "needs a \"unit\"");
+  expect_error(modified([](nlohmann::json& j) { j["top_radius"]["unit"] = "furlong"; }), "expected one of");
+  expect_error(modified([](nlohmann::json& j) { j["top_radius"]["value"] = "far"; }), "must be a number");
+  expect_error(modified([](nlohmann::json& j) { j["colour"] = "blue"; }), "unknown key \"colour\"");
+  expect_error(modified([](nlohmann::json& j) { j["constituents"][1]["phase_function"]["g"] = 1.5; }), "g must be in");
+  expect_error(modified([](nlohmann::json& j) { j["constituents"][0]["scattering"]["values"][0] = -1e-5; }),
+               "outside [0");
+  expect_error(modified([](nlohmann::json& j) { j["constituents"][0]["density"]["scale_height"]["value"] = 0; }),
+               "scale_height must be positive");
+  expect_error(modified([](nlohmann::json& j) { j["constituents"] = nlohmann::json::array(); }), "non-empty");
+  expect_error(modified([](nlohmann::json& j) { j["format"] = "v2"; }), "format");
+  expect_error(modified([](nlohmann::json& j) { j["wavelengths"]["values"] = {500, 600}; }), "multiple of 3");
+  expect_error(modified([](nlohmann::json& j) { j["ground_albedo"]["value"] = 2.0; }), "ground_albedo");
+  expect_error(modified([](nlohmann::json& j) {
+    j["constituents"][2]["density"]["points"] = {{25, 1}, {10, 0}};
+  }), "altitudes must increase");
+  expect_error(modified([](nlohmann::json& j) {
+    j["constituents"][2]["phase_function"] = {{"type", "henyey_greenstein"}, {"g", 0.5}};
+    j["constituents"][2]["scattering"] = {{"unit", "1/m"}, {"value", 1e-6}};
+  }), "share one phase function");
+  // JSON has no NaN literal; a NaN written by a program is malformed JSON.
+  expect_error("{\"format\": NaN}", "malformed JSON");
+}
+
+}  // namespace

@@ -1,0 +1,292 @@
+// The `atmos` command line, end to end: exit codes, one-line errors, CSV
+// output, and physically plausible images.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "atmos/colour.hpp"
+#include "atmos/image.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CliRun {
+  int code = -1;
+  std::string out;
+  std::string err;
+};
+
+fs::path scratch() {
+  static const fs::path dir = [] {
+    fs::path d = fs::temp_directory_path() / ("atmos-cli-test-" + std::to_string(::getpid()));
+    fs::create_directories(d);
+    return d;
+  }();
+  return dir;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Runs the CLI with small tables cached in the scratch directory.
+CliRun atmos_cli(const std::string& args, const std::string& stdin_text = "") {
+  const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt", in = scratch() / "stdin.txt";
+  {
+    std::ofstream f(in);
+    f << stdin_text;
+  }
+  const std::string command = "cd '" + scratch().string() + "' && ATMOS_CACHE_DIR='" + (scratch() / "cache").string() +
+                              "' '" + ATMOS_CLI + "' " + args + " < '" + in.string() + "' > '" + out.string() +
+                              "' 2> '" + err.string() + "'";
+  const int status = std::system(command.c_str());
+  CliRun r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+int lines(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+void expect_usage_error(const std::string& args, const std::string& needle) {
+  const CliRun r = atmos_cli(args);
+  EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
+  EXPECT_EQ(lines(r.err), 1) << args << "\n" << r.err;
+  EXPECT_NE(r.err.find(needle), std::string::npos) << args << "\n" << r.err;
+}
+
+void expect_runtime_error(const std::string& args, const std::string& needle) {
+  const CliRun r = atmos_cli(args);
+  EXPECT_EQ(r.code, 1) << args << "\n" << r.err;
+  EXPECT_EQ(lines(r.err), 1) << args << "\n" << r.err;
+  EXPECT_NE(r.err.find(needle), std::string::npos) << args << "\n" << r.err;
+}
+
+const std::string kSmall = " --tables small";
+
+TEST(Cli, HelpEverywhere) {
+  for (const char* cmd : {"--help", "render --help", "precompute --help", "sample --help", "bench --help"}) {
+    const CliRun r = atmos_cli(cmd);
+    EXPECT_EQ(r.code, 0) << cmd;
+    EXPECT_NE(r.out.find("--"), std::string::npos) << cmd;
+  }
+  EXPECT_NE(atmos_cli("sample --help").out.find("--reference"), std::string::npos);
+}
+
+TEST(Cli, UsageErrorsAreOneLineWithExitCode2) {
+  expect_usage_error("render --frobnicate", "frobnicate");
+  expect_usage_error("render --size 100000x10" + kSmall, "--size");
+  expect_usage_error("render --size banana" + kSmall, "--size");
+  expect_usage_error("render --sun-elevation nan" + kSmall, "finite");
+  expect_usage_error("render --sun-elevation 95" + kSmall, "--sun-elevation");
+  expect_usage_error("render --altitude -5" + kSmall, "--altitude");
+  expect_usage_error("render --look 10" + kSmall, "--look");
+  expect_usage_error("render --projection orthographic" + kSmall, "projection");
+  expect_usage_error("render --orders 0" + kSmall, "--orders");
+  expect_usage_error("render --position 0,0,10" + kSmall, "inside the planet");
+  expect_usage_error("sample --sun-elevation abc", "sun-elevation");
+  expect_usage_error("nosuchcommand", "nosuchcommand");
+}
+
+TEST(Cli, BadPlanetFilesAreOneLineErrors) {
+  const fs::path bad = scratch() / "bad.json";
+  {
+    std::ofstream f(bad);
+    f << "{ \"format\": \"atmos-planet-1\", ";
+  }
+  expect_runtime_error("precompute --planet " + bad.string() + kSmall, "malformed JSON");
+  {
+    std::ofstream f(bad);
+    f << "{ \"format\": \"atmos-planet-1\" }";
+  }
+  expect_runtime_error("precompute --planet " + bad.string() + kSmall, "missing");
+  std::string earth = slurp(fs::path(ATMOS_SOURCE_DIR) / "data/planets/earth.json");
+  const std::string from = "\"bottom_radius\": { \"value\": 6371.0";
+  ASSERT_NE(earth.find(from), std::string::npos);
+  earth.replace(earth.find(from), from.size(), "\"bottom_radius\": { \"value\": -6371.0");
+  {
+    std::ofstream f(bad);
+    f << earth;
+  }
+  expect_runtime_error("precompute --planet " + bad.string() + kSmall, "bottom_radius must be positive");
+  expect_runtime_error("precompute --planet /no/such/planet.json" + kSmall, "neither a preset");
+}
+
+TEST(Cli, UnwritableOutputIsAnError) {
+  const CliRun r = atmos_cli("render --cpu --size 8x8 -o /no/such/dir/out.png" + kSmall);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("/no/such/dir/out.png"), std::string::npos) << r.err;
+}
+
+TEST(Cli, PrecomputeReportsSizesTimesAndDetectsACorruptCache) {
+  const fs::path cache = scratch() / "cache-precompute";
+  fs::remove_all(cache);
+  const std::string args = "precompute --orders 2 --cache-dir " + cache.string() + kSmall;
+  CliRun r = atmos_cli(args);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("scattering      4 x 16 x 32 x 8"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("time single_scattering"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("computed, cached"), std::string::npos) << r.out;
+  r = atmos_cli(args);
+  EXPECT_NE(r.out.find("loaded from cache"), std::string::npos) << r.out;
+  for (const auto& entry : fs::directory_iterator(cache)) {
+    std::ofstream f(entry.path(), std::ios::binary | std::ios::trunc);
+    f << "garbage";
+  }
+  r = atmos_cli(args);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("recomputed (invalid cache)"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("rejected"), std::string::npos) << r.err;
+}
+
+std::vector<std::vector<double>> parse_csv(const std::string& text, std::string& header, std::string& trailer) {
+  std::vector<std::vector<double>> rows;
+  std::stringstream ss(text);
+  std::string line;
+  std::getline(ss, header);
+  while (std::getline(ss, line)) {
+    if (line.rfind("#", 0) == 0) {
+      trailer = line;
+      continue;
+    }
+    std::vector<double> row;
+    std::stringstream ls(line);
+    std::string cell;
+    while (std::getline(ls, cell, ',')) row.push_back(std::stod(cell));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+TEST(Cli, SampleWritesCsvWithDocumentedColumns) {
+  const std::string dirs = "azimuth_deg,elevation_deg\n0,90\n180,10\n0,-20\n";
+  const CliRun r = atmos_cli("sample --sun-elevation 30 --sun-azimuth 180" + kSmall, dirs);
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::string header, trailer;
+  const auto rows = parse_csv(r.out, header, trailer);
+  EXPECT_EQ(header.rfind("azimuth_deg,elevation_deg,luminance_cd_m2,red,green,blue", 0), 0u) << header;
+  ASSERT_EQ(rows.size(), 3u);
+  for (const auto& row : rows) {
+    ASSERT_GE(row.size(), 6u);
+    for (double v : row) EXPECT_TRUE(std::isfinite(v));
+    // Luminance is the sRGB-weighted sum of the colour columns.
+    EXPECT_NEAR(row[2], 0.2126 * row[3] + 0.7152 * row[4] + 0.0722 * row[5], 1e-3 * row[2]);
+    EXPECT_GT(row[2], 0.0);
+  }
+  EXPECT_GT(rows[0][5], rows[0][3]) << "zenith: blue above red";
+  EXPECT_NE(trailer.find("horizontal_illuminance_lux="), std::string::npos) << trailer;
+
+  expect_usage_error("sample --directions /dev/null" + kSmall, "header");
+  const CliRun bad = atmos_cli("sample" + kSmall, "azimuth_deg,elevation_deg\n10,abc\n");
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("stdin:2"), std::string::npos) << bad.err;
+}
+
+TEST(Cli, SampleLooksAtTheSunWithTheSunsOwnAngles) {
+  // With --sun-disc, the direction (sun azimuth, sun elevation) sees the disc.
+  const CliRun r = atmos_cli("sample --sun-disc --sun-elevation 40 --sun-azimuth 123" + kSmall,
+                          "azimuth_deg,elevation_deg\n123,40\n123,45\n");
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::string header, trailer;
+  const auto rows = parse_csv(r.out, header, trailer);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_GT(rows[0][2], 1e8) << "the sun's luminance is of the order of 1e9 cd/m²";
+  EXPECT_LT(rows[1][2], 1e6);
+}
+
+struct Pixel {
+  double r, g, b;
+  double luminance() const { return 0.2126 * r + 0.7152 * g + 0.0722 * b; }
+};
+
+Pixel pixel(const atmos::Image& image, int x, int y) {
+  const size_t i = 3 * (size_t(y) * size_t(image.width) + size_t(x));
+  return {image.rgb[i], image.rgb[i + 1], image.rgb[i + 2]};
+}
+
+atmos::Image render(const std::string& args, const std::string& name) {
+  const fs::path out = scratch() / (name + ".exr");
+  const CliRun r = atmos_cli("render " + args + " -o " + out.string() + " -o " + (scratch() / (name + ".png")).string() +
+                          kSmall);
+  EXPECT_EQ(r.code, 0) << args << "\n" << r.err;
+  EXPECT_TRUE(fs::exists(scratch() / (name + ".png")));
+  atmos::Image image = atmos::read_exr(out.string());
+  for (float v : image.rgb) EXPECT_TRUE(std::isfinite(v) && v >= 0.0f);
+  return image;
+}
+
+TEST(Cli, NoonZenithIsBlueAndOfTheRightBrightness) {
+  const atmos::Image image = render("--sun-elevation 80 --look 0,90 --fov 10 --size 16x16", "noon");
+  const Pixel p = pixel(image, 8, 8);
+  std::printf("noon zenith (sun at 80 deg): %.0f cd/m2, rgb %.0f %.0f %.0f\n", p.luminance(), p.r, p.g, p.b);
+  EXPECT_GT(p.b, p.g);
+  EXPECT_GT(p.g, p.r);
+  // Clear-sky zenith luminance with the sun high: of the order of a few
+  // thousand cd/m² (CIE clear sky, turbidity 2-3).
+  EXPECT_GT(p.luminance(), 1000.0);
+  EXPECT_LT(p.luminance(), 10000.0);
+}
+
+TEST(Cli, SunsetTowardsTheSunIsRed) {
+  const atmos::Image image = render("--sun-elevation 0.5 --sun-azimuth 270 --look 270,2 --fov 20 --size 32x16", "sunset");
+  // Beside the sun, above the horizon (the sun itself is at the centre).
+  const Pixel p = pixel(image, 4, 2);
+  std::printf("sunset sky near the sun: rgb %.1f %.1f %.1f\n", p.r, p.g, p.b);
+  EXPECT_GT(p.r, p.b);
+  EXPECT_GT(p.r, p.g);
+}
+
+TEST(Cli, SpaceIsBlackAndTheLitLimbBright) {
+  // From 2.5 planet radii, looking at the planet with the sun to the right.
+  const double d = 2.5 * 6371e3;
+  const std::string position = "--position " + std::to_string(d) + ",0,0";
+  // In the local frame of that position, up = +x, east = +y, north = +z;
+  // the sun at azimuth 90 (east) and elevation 0 lights the planet from the side.
+  const atmos::Image image = render(position + " --look 0,-90 --fov 60 --size 96x96 --sun-azimuth 90 --sun-elevation 0",
+                                    "orbit");
+  // Corners: space.
+  const Pixel corner = pixel(image, 0, 0);
+  EXPECT_EQ(corner.luminance(), 0.0);
+  // Along the horizontal line through the centre, the outer 15 % of the
+  // planet disc (plus the atmosphere's glow beyond it) on each side: the
+  // sun is to the right, so the right limb is lit and the left one is night.
+  const double radius_px = 48.0 / std::tan(30.0 * M_PI / 180.0) * std::tan(std::asin(1.0 / 2.5));
+  double lit_limb = 0.0, dark_limb = 0.0;
+  for (int x = 0; x < 96; ++x) {
+    const double offset = std::abs(x + 0.5 - 48.0);
+    if (offset < 0.85 * radius_px || offset > radius_px + 3.0) continue;
+    const double l = pixel(image, x, 48).luminance();
+    (x >= 48 ? lit_limb : dark_limb) = std::max(x >= 48 ? lit_limb : dark_limb, l);
+  }
+  std::printf("orbit: lit limb %.0f cd/m2, brightest pixel of the dark half %.3f cd/m2\n", lit_limb, dark_limb);
+  EXPECT_GT(lit_limb, 500.0);
+  EXPECT_LT(dark_limb, 0.01 * lit_limb);
+}
+
+TEST(Cli, RenderProjectionsAndCpuPath) {
+  for (const char* projection : {"perspective", "fisheye", "equirect"}) {
+    const atmos::Image image = render(std::string("--projection ") + projection + " --size 32x16", projection);
+    EXPECT_EQ(image.width, 32);
+  }
+  const CliRun r = atmos_cli("render --cpu --size 16x8 -o " + (scratch() / "cpu.exr").string() + kSmall);
+  EXPECT_EQ(r.code, 0) << r.err;
+}
+
+}  // namespace

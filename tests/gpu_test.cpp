@@ -1,0 +1,611 @@
+// The OpenGL renderer against its CPU twin, the headless context, image files
+// and camera validation.
+//
+// The GPU tests FAIL (never skip) when no OpenGL 4.5 context can be created:
+// CI runs them on Mesa llvmpipe, and the GL path must be exercised there.
+#include <gtest/gtest.h>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/packing.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include <unistd.h>
+
+// stb_image decodes the PNGs written by the library (internal linkage).
+#define STB_IMAGE_IMPLEMENTATION
+#define STB_IMAGE_STATIC
+#define STBI_ONLY_PNG
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wconversion"
+#pragma GCC diagnostic ignored "-Wsign-conversion"
+#pragma GCC diagnostic ignored "-Wshadow"
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+#pragma GCC diagnostic ignored "-Wdouble-promotion"
+#include <stb/stb_image.h>
+#pragma GCC diagnostic pop
+
+#include "atmos/atmosphere.hpp"
+#include "atmos/colour.hpp"
+#include "atmos/image.hpp"
+#include "atmos/renderer.hpp"
+#include "atmos/tables.hpp"
+#include "gpu/camera_cpp.hpp"
+#include "gpu/shader_source.hpp"
+
+namespace {
+
+using atmos::Camera;
+using atmos::Image;
+using atmos::Projection;
+using atmos::TexturePrecision;
+
+constexpr double kEarthRadius = 6371e3;
+
+atmos::TableSizes small_sizes() {
+  atmos::TableSizes s;
+  s.transmittance_mu = 64;
+  s.transmittance_r = 16;
+  s.irradiance_mu_s = 32;
+  s.irradiance_r = 8;
+  s.scattering_nu = 4;
+  s.scattering_mu_s = 16;
+  s.scattering_mu = 32;
+  s.scattering_r = 8;
+  return s;
+}
+
+glm::dvec3 sun_at(double elevation_deg, double azimuth_deg) {
+  // Azimuth from +y (the cameras' forward) towards +x (their right).
+  const double e = glm::radians(elevation_deg);
+  const double a = glm::radians(azimuth_deg);
+  return {std::cos(e) * std::sin(a), std::cos(e) * std::cos(a), std::sin(e)};
+}
+
+struct Scene {
+  const char* name;
+  Camera camera;
+  glm::dvec3 sun;
+  bool sees_ground = true;  // see the tolerances below
+};
+
+std::vector<Scene> scenes() {
+  std::vector<Scene> out;
+  Camera ground;
+  ground.position = {0.0, 0.0, kEarthRadius + 2.0};
+  ground.forward = {0.0, 1.0, 0.0};
+  ground.up = {0.0, 0.0, 1.0};
+  ground.fov_deg = 60.0;
+  ground.width = 64;
+  ground.height = 48;
+  // Sun 20° up, just outside the horizontal field (±37.6°): its aerosol halo
+  // is in the picture, its disc (a fraction of a pixel) is not.
+  out.push_back({"ground_horizon", ground, sun_at(20.0, 45.0)});
+
+  Camera high = ground;
+  high.position = {0.0, 0.0, kEarthRadius + 10e3};
+  high.forward = {0.0, 1.0, -0.15};  // the horizon and the ground below it
+  out.push_back({"altitude_10km", high, sun_at(20.0, 45.0)});
+
+  Camera orbit = ground;
+  orbit.position = {0.0, -2.0 * kEarthRadius, 0.0};  // two planet radii from the centre
+  orbit.forward = {0.0, 1.0, 0.0};                    // towards the planet, whose disc spans ±30°
+  orbit.fov_deg = 70.0;
+  out.push_back({"orbit", orbit, glm::normalize(glm::dvec3(1.0, -0.4, 0.5))});
+
+  Camera fisheye = ground;
+  fisheye.forward = {0.0, 0.0, 1.0};  // the zenith
+  fisheye.up = {0.0, 1.0, 0.0};
+  fisheye.projection = Projection::fisheye;
+  fisheye.fov_deg = 180.0;
+  out.push_back({"fisheye_sky", fisheye, sun_at(20.0, 45.0), false});
+
+  Camera panorama = high;
+  panorama.forward = {0.0, 1.0, 0.0};
+  panorama.projection = Projection::equirect;
+  out.push_back({"equirect_10km", panorama, sun_at(20.0, 45.0)});
+  return out;
+}
+
+// The tables rounded to half floats as the renderer rounds them for RGB16F
+// textures (the transmittance stays float, as in the renderer).
+atmos::Tables round_to_half(atmos::Tables tables) {
+  auto round = [](std::vector<glm::vec3>& texels) {
+    for (glm::vec3& t : texels)
+      for (int c = 0; c < 3; ++c) t[c] = glm::unpackHalf1x16(glm::packHalf1x16(t[c]));
+  };
+  for (atmos::TableSet& set : tables.sets) {
+    round(set.scattering);
+    round(set.single_aerosol);
+    round(set.indirect_irradiance);
+  }
+  return tables;
+}
+
+struct Difference {
+  double max_relative = 0.0;  // max over pixels of |gpu - cpu| / scale
+  double rms_relative = 0.0;
+  int worst_x = -1;
+  int worst_y = -1;
+  double worst_cpu = 0.0;
+  double worst_gpu = 0.0;
+};
+
+// Per pixel, the largest channel difference relative to the pixel's CPU
+// luminance. A floor of 1e-4 of the image's mean luminance keeps black pixels
+// (outside the fisheye circle, space) from dividing by zero: there an
+// absolute difference of 1e-4 of the mean level is invisible.
+Difference compare(const Image& gpu, const Image& cpu) {
+  Difference d;
+  double mean = 0.0;
+  const size_t n = size_t(cpu.width) * size_t(cpu.height);
+  for (size_t i = 0; i < n; ++i)
+    mean += std::abs(atmos::srgb_luminance({cpu.rgb[3 * i], cpu.rgb[3 * i + 1], cpu.rgb[3 * i + 2]}));
+  mean /= double(n);
+  double sum_squares = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    const glm::dvec3 c(cpu.rgb[3 * i], cpu.rgb[3 * i + 1], cpu.rgb[3 * i + 2]);
+    const glm::dvec3 g(gpu.rgb[3 * i], gpu.rgb[3 * i + 1], gpu.rgb[3 * i + 2]);
+    const double scale = std::max(std::abs(atmos::srgb_luminance(c)), 1e-4 * mean);
+    const glm::dvec3 delta = glm::abs(g - c);
+    const double relative = std::max({delta.x, delta.y, delta.z}) / scale;
+    sum_squares += relative * relative;
+    if (!(relative <= d.max_relative)) {  // also catches NaN
+      d.max_relative = relative;
+      d.worst_x = int(i % size_t(cpu.width));
+      d.worst_y = int(i / size_t(cpu.width));
+      d.worst_cpu = atmos::srgb_luminance(c);
+      d.worst_gpu = atmos::srgb_luminance(g);
+    }
+  }
+  d.rms_relative = std::sqrt(sum_squares / double(n));
+  return d;
+}
+
+bool all_finite(const Image& image) {
+  return std::all_of(image.rgb.begin(), image.rgb.end(), [](float v) { return std::isfinite(v); });
+}
+
+// One context and one set of tables per test process (ctest runs each test
+// in its own process; the small tables take about a second).
+class Gpu : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    earth_ = std::make_unique<atmos::Atmosphere>(atmos::load_atmosphere("earth"));
+    atmos::PrecomputeOptions options;
+    options.sizes = small_sizes();
+    tables_ = std::make_unique<atmos::Tables>(atmos::precompute_tables(*earth_, options));
+    try {
+      context_ = atmos::GlContext::create_headless();
+    } catch (const atmos::Error& e) {
+      context_error_ = e.what();
+    }
+  }
+  static void TearDownTestSuite() {
+    context_.reset();
+    tables_.reset();
+    earth_.reset();
+  }
+  void SetUp() override {
+    // A failure, not a skip: the GL path must be tested wherever the tests run.
+    ASSERT_TRUE(context_ != nullptr) << context_error_;
+  }
+
+  static std::unique_ptr<atmos::Atmosphere> earth_;
+  static std::unique_ptr<atmos::Tables> tables_;
+  static std::unique_ptr<atmos::GlContext> context_;
+  static std::string context_error_;
+};
+
+std::unique_ptr<atmos::Atmosphere> Gpu::earth_;
+std::unique_ptr<atmos::Tables> Gpu::tables_;
+std::unique_ptr<atmos::GlContext> Gpu::context_;
+std::string Gpu::context_error_;
+
+TEST_F(Gpu, HeadlessContextReportsRenderer) {
+  const std::string renderer = context_->renderer_string();
+  std::printf("OpenGL renderer: %s\n", renderer.c_str());
+  EXPECT_NE(renderer.find("OpenGL 4."), std::string::npos) << renderer;
+}
+
+// Tolerances of the GPU image against the CPU twin. Measured on llvmpipe
+// (Mesa 22.3, LLVM 15) with the small tables above, relative to the pixel
+// luminance (the test prints them):
+//                    full vs CPU        half vs CPU(half tables)   half vs CPU(float tables)
+//   ground_horizon   4e-5 (RMS 4e-6)    4e-5 (RMS 4e-6)            5e-4 (RMS 1.4e-4)
+//   altitude_10km    3e-4 (RMS 3e-5)    3e-4 (RMS 3e-5)            7e-4 (RMS 1.8e-4)
+//   orbit            3e-4 (RMS 4e-5)    3e-4 (RMS 4e-5)            1.5e-3 (RMS 2e-4)
+//   fisheye_sky      9e-6 (RMS 7e-7)    9e-6 (RMS 7e-7)            5e-4 (RMS 1.4e-4)
+//   equirect_10km    8e-4 (RMS 1.1e-4)  8e-4 (RMS 1.1e-4)          7e-4 (RMS 1.8e-4)
+// Where the difference comes from (checked stage by stage, outside the tests):
+//  - not the texture filtering: llvmpipe filters float textures with float
+//    weights (a lookup at weight 0.302656 between texels 0 and 1 returns
+//    0.302656, not an 8-bit 77/256), and the GPU and C++ evaluations of
+//    radiance_along_view_ray for one given ray agree to ~1e-7;
+//  - the view rays differ by 1-2 ulp (~1.5e-7): llvmpipe's sin/cos/tan/sqrt
+//    are not glibc's;
+//  - float32 planet-centred coordinates amplify that where a ray reaches the
+//    ground: the ground point's radius is quantised to 0.5 m (the float ulp
+//    at 6.4e6 m) and the tables' radius coordinate rho = sqrt(r² - R²) turns
+//    r = R + 0.5 m into rho = 2.5 km, 0.2 % of the table's range. A 2-ulp ray
+//    change that moves the ground point across such a step changes the sun's
+//    transmittance by 6e-4 (measured at the equirect_10km worst pixel). The
+//    closer the camera is to the ground, the larger the effect: over 300
+//    random cameras and suns (32x24 pixels, outside the tests) the worst
+//    pixel differed by 1.0e-2 in daylight (camera 1 m above the ground,
+//    looking 4° down at a point 15 m away) and 1.8e-2 at night (1e-3 cd/m²).
+//    Sky-only pixels stay near 1e-5.
+// Bounds: 1e-2 per pixel where the ground is in view (what float32 geometry
+// allows in daylight, as all these scenes are, on any GPU whose sin/cos
+// differ from glibc's by an ulp; not just what llvmpipe happens to reach on
+// these scenes), 1e-4 for the sky-only fisheye; and an RMS of 3e-4 over the
+// image (measured <= 1.1e-4), which a systematic error of 0.1 % over a third
+// of the image would already exceed.
+// Half-precision textures are compared first with the CPU reading the same
+// tables rounded to half (the renderer rounds on the CPU with
+// glm::packHalf1x16, as this test does; the transmittance stays float in
+// both): same bounds. Then with the float tables, which adds the rounding of
+// 11-bit significands (2^-11 = 5e-4 per texel, several lookups per pixel):
+// RMS 1e-3, max 1e-2 as above.
+constexpr double kGroundMaxRelative = 1e-2;
+constexpr double kSkyMaxRelative = 1e-4;
+constexpr double kRmsRelative = 3e-4;
+constexpr double kHalfVsFloatMaxRelative = 1e-2;
+constexpr double kHalfVsFloatRmsRelative = 1e-3;
+
+void report(const char* scene, const char* what, const Difference& d) {
+  std::printf("%-15s %-22s max %.3e at (%d, %d) [cpu %.6g, gpu %.6g cd/m2]  rms %.3e\n", scene, what,
+              d.max_relative, d.worst_x, d.worst_y, d.worst_cpu, d.worst_gpu, d.rms_relative);
+}
+
+TEST_F(Gpu, FullPrecisionMatchesCpu) {
+  atmos::Renderer renderer(*context_, *earth_, *tables_, TexturePrecision::full);
+  for (const Scene& scene : scenes()) {
+    const Image gpu = renderer.render(scene.camera, scene.sun);
+    const Image cpu = atmos::render_cpu(*earth_, *tables_, scene.camera, scene.sun);
+    ASSERT_EQ(gpu.width, cpu.width);
+    ASSERT_EQ(gpu.height, cpu.height);
+    ASSERT_TRUE(all_finite(gpu)) << scene.name;
+    ASSERT_TRUE(all_finite(cpu)) << scene.name;
+    const Difference d = compare(gpu, cpu);
+    report(scene.name, "full vs cpu", d);
+    EXPECT_LE(d.max_relative, scene.sees_ground ? kGroundMaxRelative : kSkyMaxRelative) << scene.name;
+    EXPECT_LE(d.rms_relative, kRmsRelative) << scene.name;
+    EXPECT_GE(renderer.last_frame_ms(), 0.0);
+  }
+}
+
+TEST_F(Gpu, HalfPrecisionMatchesCpu) {
+  atmos::Renderer renderer(*context_, *earth_, *tables_, TexturePrecision::half);
+  const atmos::Tables half_tables = round_to_half(*tables_);
+  for (const Scene& scene : scenes()) {
+    const Image gpu = renderer.render(scene.camera, scene.sun);
+    const Image cpu_half = atmos::render_cpu(*earth_, half_tables, scene.camera, scene.sun);
+    const Image cpu = atmos::render_cpu(*earth_, *tables_, scene.camera, scene.sun);
+    ASSERT_TRUE(all_finite(gpu)) << scene.name;
+    const Difference twin = compare(gpu, cpu_half);
+    const Difference exact = compare(gpu, cpu);
+    report(scene.name, "half vs cpu(half)", twin);
+    report(scene.name, "half vs cpu(float)", exact);
+    EXPECT_LE(twin.max_relative, scene.sees_ground ? kGroundMaxRelative : kSkyMaxRelative) << scene.name;
+    EXPECT_LE(twin.rms_relative, kRmsRelative) << scene.name;
+    EXPECT_LE(exact.max_relative, kHalfVsFloatMaxRelative) << scene.name;
+    EXPECT_LE(exact.rms_relative, kHalfVsFloatRmsRelative) << scene.name;
+  }
+}
+
+TEST_F(Gpu, ImageOrientationAndProjections) {
+  atmos::Renderer renderer(*context_, *earth_, *tables_);
+  // Pixel (0, 0) is the top-left: put the sun's disc (0.27° in radius, a
+  // billion cd/m²) on the centre of pixel (16, 12), up and to the left of
+  // the image centre; its pixels of 1.25° leave the disc in that pixel alone.
+  Camera camera = scenes()[0].camera;  // forward +y, up +z, right +x, 60° over 48 rows
+  const double scale = std::tan(glm::radians(30.0)) / 24.0;
+  const glm::dvec3 sun = glm::normalize(glm::dvec3((16.5 - 32.0) * scale, 1.0, (24.0 - 12.5) * scale));
+  for (const Image& image : {renderer.render(camera, sun), atmos::render_cpu(*earth_, *tables_, camera, sun)}) {
+    size_t brightest = 0;
+    for (size_t i = 0; i < image.rgb.size() / 3; ++i)
+      if (image.rgb[3 * i + 1] > image.rgb[3 * brightest + 1]) brightest = i;
+    EXPECT_EQ(brightest % 64, 16u);
+    EXPECT_EQ(brightest / 64, 12u);
+  }
+
+  // Fisheye: black outside the circle, sky inside.
+  Camera fisheye = scenes()[3].camera;
+  const Image sky = renderer.render(fisheye, sun_at(20.0, 45.0));
+  EXPECT_EQ(sky.rgb[0], 0.0f);
+  EXPECT_GT(sky.rgb[(size_t(24) * 64 + 32) * 3 + 1], 0.0f);
+
+  // A camera in space looking away from the planet and the sun sees black.
+  Camera space;
+  space.position = {0.0, 0.0, 3.0 * kEarthRadius};
+  space.forward = {0.0, 0.0, 1.0};
+  space.up = {0.0, 1.0, 0.0};
+  space.width = 8;
+  space.height = 8;
+  const Image black = renderer.render(space, {1.0, 0.0, 0.0});
+  EXPECT_TRUE(std::all_of(black.rgb.begin(), black.rgb.end(), [](float v) { return v == 0.0f; }));
+}
+
+TEST_F(Gpu, LargeImagesAreTiled) {
+  // Larger than one 2048-pixel tile: the tiles must land in the right place,
+  // i.e. match the CPU twin everywhere. Thin strips keep it fast; each puts a
+  // steep feature in its second tile so that a misplaced tile would show.
+  atmos::Renderer renderer(*context_, *earth_, *tables_);
+  Camera row = scenes()[0].camera;
+  row.width = 2100;
+  row.height = 3;
+  row.fov_deg = 2.0;  // vertical; horizontally ±85°
+  // Just above the strip at azimuth 85° (column ~2070): the steep aerosol
+  // halo around the sun, without its disc.
+  const glm::dvec3 sun_right = sun_at(2.0, 85.0);
+  Camera column = row;
+  std::swap(column.width, column.height);
+  // Tilted up 0.927° so that the horizon (0.045° below the horizontal at 2 m)
+  // falls at row ~2070 of 2100.
+  column.forward = {0.0, 1.0, std::tan(glm::radians(0.927))};
+  for (const auto& [camera, sun, name] : {std::tuple{row, sun_right, "tiled row"},
+                                          std::tuple{column, sun_at(20.0, 45.0), "tiled column"}}) {
+    const Image gpu = renderer.render(camera, sun);
+    const Image cpu = atmos::render_cpu(*earth_, *tables_, camera, sun);
+    const Difference d = compare(gpu, cpu);
+    report(name, "full vs cpu", d);
+    EXPECT_LE(d.max_relative, kGroundMaxRelative) << name;
+  }
+}
+
+TEST_F(Gpu, RejectsTablesOfSeveralTriples) {
+  atmos::Tables two = *tables_;
+  two.sets.push_back(two.sets[0]);
+  EXPECT_THROW(atmos::Renderer(*context_, *earth_, two), atmos::Error);
+  EXPECT_THROW(atmos::render_cpu(*earth_, two, scenes()[0].camera, {0.0, 0.0, 1.0}), atmos::Error);
+}
+
+TEST_F(Gpu, RejectsBadSunDirection) {
+  atmos::Renderer renderer(*context_, *earth_, *tables_);
+  EXPECT_THROW(renderer.render(scenes()[0].camera, {0.0, 0.0, 0.0}), atmos::Error);
+  EXPECT_THROW(renderer.render(scenes()[0].camera, {std::nan(""), 0.0, 1.0}), atmos::Error);
+}
+
+// --- Camera model (gpu/camera.glsl, the same code on both sides) ----------
+
+float angle_between(const glm::vec3& a, const glm::vec3& b) {
+  return std::acos(std::clamp(glm::dot(glm::normalize(a), glm::normalize(b)), -1.0f, 1.0f));
+}
+
+TEST(CameraModel, ProjectionConventions) {
+  using atmos::physics::camera_view_ray;
+  const glm::vec3 right(1, 0, 0), up(0, 0, 1), forward(0, 1, 0);
+  const glm::vec2 size(200.0f, 100.0f);
+  bool valid = false;
+  auto ray = [&](float x, float y, float fov, int projection) {
+    return camera_view_ray(glm::vec2(x, y), size, right, up, forward, fov, projection, valid);
+  };
+  // Perspective: the centre looks forward, the top edge fov/2 up, square pixels.
+  EXPECT_LT(angle_between(ray(100, 50, 60, PROJECTION_PERSPECTIVE), forward), 1e-6f);
+  EXPECT_TRUE(valid);
+  const glm::vec3 top = ray(100, 0, 60, PROJECTION_PERSPECTIVE);
+  EXPECT_NEAR(angle_between(top, forward), glm::radians(30.0f), 1e-6f);
+  EXPECT_GT(top.z, 0.0f);
+  const glm::vec3 right_edge = ray(200, 50, 60, PROJECTION_PERSPECTIVE);
+  EXPECT_NEAR(right_edge.x / right_edge.y, 2.0f * std::tan(glm::radians(30.0f)), 1e-5f);
+  // Fisheye (equidistant): fov/2 on the inscribed circle, invalid outside it.
+  EXPECT_NEAR(angle_between(ray(100, 0, 180, PROJECTION_FISHEYE), forward), glm::radians(90.0f), 1e-5f);
+  EXPECT_TRUE(valid);
+  EXPECT_NEAR(angle_between(ray(125, 50, 180, PROJECTION_FISHEYE), forward), glm::radians(45.0f), 1e-5f);
+  EXPECT_GT(ray(125, 50, 180, PROJECTION_FISHEYE).x, 0.0f);
+  ray(1, 1, 180, PROJECTION_FISHEYE);
+  EXPECT_FALSE(valid);
+  // Equirectangular: forward at the centre, right at 3/4 width, up on the
+  // top edge, backward on the left and right edges.
+  EXPECT_LT(angle_between(ray(100, 50, 0, PROJECTION_EQUIRECT), forward), 1e-6f);
+  EXPECT_TRUE(valid);
+  EXPECT_LT(angle_between(ray(150, 50, 0, PROJECTION_EQUIRECT), right), 1e-6f);
+  EXPECT_LT(angle_between(ray(100, 0, 0, PROJECTION_EQUIRECT), up), 1e-3f);
+  EXPECT_LT(angle_between(ray(0, 50, 0, PROJECTION_EQUIRECT), -forward), 1e-6f);
+}
+
+// --- Shader source --------------------------------------------------------
+
+TEST(ShaderSource, FloatLiteralsAreGlslFloats) {
+  EXPECT_EQ(atmos::gpu::glsl_float(1.0f), "1.0");
+  EXPECT_EQ(atmos::gpu::glsl_float(-2.0f), "-2.0");
+  EXPECT_EQ(atmos::gpu::glsl_float(6371000.0f), "6371000.0");
+  EXPECT_EQ(atmos::gpu::glsl_float(1e-05f), "9.99999975e-06");
+  EXPECT_EQ(atmos::gpu::glsl_float(0.0f), "0.0");
+  EXPECT_EQ(std::stof(atmos::gpu::glsl_float(0.1f)), 0.1f);
+  EXPECT_THROW(atmos::gpu::glsl_float(std::numeric_limits<float>::quiet_NaN()), atmos::Error);
+  EXPECT_THROW(atmos::gpu::glsl_float(std::numeric_limits<float>::infinity()), atmos::Error);
+}
+
+// --- Images ---------------------------------------------------------------
+
+// A directory of this test process, removed when the process exits.
+std::filesystem::path temp_dir() {
+  struct Directory {
+    std::filesystem::path path =
+        std::filesystem::temp_directory_path() / ("atmos_gpu_test_" + std::to_string(::getpid()));
+    Directory() { std::filesystem::create_directories(path); }
+    ~Directory() {
+      std::error_code ignored;
+      std::filesystem::remove_all(path, ignored);
+    }
+  };
+  static const Directory directory;
+  return directory.path;
+}
+
+Image test_image() {
+  Image image;
+  image.width = 37;  // not a multiple of anything, and wider than 16 (tinyexr compresses from 16 up)
+  image.height = 21;
+  image.rgb.resize(size_t(image.width) * size_t(image.height) * 3);
+  for (size_t i = 0; i < image.rgb.size(); ++i)
+    image.rgb[i] = float(std::pow(1.37, double(i % 97) - 40.0)) * (i % 5 == 0 ? -1.0f : 1.0f);
+  return image;
+}
+
+TEST(ImageIo, ExrRoundTripIsExact) {
+  const Image image = test_image();
+  const std::string path = (temp_dir() / "round_trip.exr").string();
+  atmos::write_exr(image, path);
+  const Image back = atmos::read_exr(path);
+  ASSERT_EQ(back.width, image.width);
+  ASSERT_EQ(back.height, image.height);
+  EXPECT_EQ(back.rgb, image.rgb);
+  // Also through write_image, by extension, in any case.
+  const std::string upper = (temp_dir() / "ROUND_TRIP.EXR").string();
+  atmos::write_image(image, upper, 0.0);
+  EXPECT_EQ(atmos::read_exr(upper).rgb, image.rgb);
+}
+
+TEST(ImageIo, PngIsWritten) {
+  Image image;
+  image.width = 4;
+  image.height = 2;
+  // Luminance 0, the saturation luminance at EV 0 (1.2 cd/m²), and far above.
+  image.rgb = {0, 0, 0, 1.2f, 1.2f, 1.2f, 1e6f, 1e6f, 1e6f, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+  const std::string path = (temp_dir() / "tone_mapped.png").string();
+  atmos::write_image(image, path, 0.0);
+  std::ifstream file(path, std::ios::binary);
+  ASSERT_TRUE(file.good());
+  unsigned char signature[8] = {};
+  file.read(reinterpret_cast<char*>(signature), 8);
+  EXPECT_EQ(signature[1], 'P');
+  EXPECT_EQ(signature[2], 'N');
+  EXPECT_EQ(signature[3], 'G');
+  int width = 0;
+  int height = 0;
+  int channels = 0;
+  unsigned char* pixels = stbi_load(path.c_str(), &width, &height, &channels, 3);
+  ASSERT_NE(pixels, nullptr);
+  EXPECT_EQ(width, 4);
+  EXPECT_EQ(height, 2);
+  EXPECT_EQ(pixels[0], 0);  // black
+  // L = L_sat: 1 - 1/e = 0.632 on the display, sRGB-encoded 0.8174 -> 208.
+  EXPECT_EQ(pixels[3], 208);
+  EXPECT_EQ(pixels[6], 255);  // saturated
+  EXPECT_EQ(pixels[9], 0);    // negative (out of gamut) clamps to black
+  stbi_image_free(pixels);
+  // Two stops more exposure value: L_sat = 4.8 cd/m², 1.2 cd/m² is darker.
+  atmos::write_png(image, path, 2.0);
+  pixels = stbi_load(path.c_str(), &width, &height, &channels, 3);
+  ASSERT_NE(pixels, nullptr);
+  EXPECT_EQ(pixels[3], int(std::lround(255.0 * (1.055 * std::pow(1.0 - std::exp(-0.25), 1.0 / 2.4) - 0.055))));
+  stbi_image_free(pixels);
+}
+
+TEST(ImageIo, UnwritablePathThrows) {
+  const Image image = test_image();
+  const std::string missing_dir = (temp_dir() / "no_such_dir" / "image.exr").string();
+  try {
+    atmos::write_exr(image, missing_dir);
+    FAIL() << "no error";
+  } catch (const atmos::Error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find(missing_dir), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  }
+  EXPECT_THROW(atmos::write_png(image, (temp_dir() / "no_such_dir" / "image.png").string(), 0.0), atmos::Error);
+  EXPECT_THROW(atmos::read_exr((temp_dir() / "missing.exr").string()), atmos::Error);
+}
+
+TEST(ImageIo, UnsupportedFormatThrows) {
+  try {
+    atmos::write_image(test_image(), (temp_dir() / "image.jpg").string(), 0.0);
+    FAIL() << "no error";
+  } catch (const atmos::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("unsupported output format"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ImageIo, NonFiniteImagesAreNeverWritten) {
+  for (float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+    Image image = test_image();
+    image.rgb[100] = bad;
+    const auto exr = temp_dir() / "bad.exr";
+    const auto png = temp_dir() / "bad.png";
+    EXPECT_THROW(atmos::write_exr(image, exr.string()), atmos::Error);
+    EXPECT_THROW(atmos::write_png(image, png.string(), 0.0), atmos::Error);
+    EXPECT_FALSE(std::filesystem::exists(exr));
+    EXPECT_FALSE(std::filesystem::exists(png));
+  }
+  Image inconsistent = test_image();
+  inconsistent.rgb.pop_back();
+  EXPECT_THROW(atmos::write_exr(inconsistent, (temp_dir() / "short.exr").string()), atmos::Error);
+}
+
+// --- Cameras --------------------------------------------------------------
+
+void expect_invalid(const Camera& camera, const std::string& expected_words) {
+  try {
+    atmos::validate_camera(camera);
+    ADD_FAILURE() << "accepted a camera that should fail with: " << expected_words;
+  } catch (const atmos::Error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find(expected_words), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  }
+}
+
+TEST(CameraValidation, AcceptsDefaultsAndEdgeCases) {
+  Camera camera;
+  camera.position = {0.0, 0.0, kEarthRadius};
+  EXPECT_NO_THROW(atmos::validate_camera(camera));
+  camera.up = {0.0, 0.3, 1.0};  // not orthogonal to forward: only a hint
+  EXPECT_NO_THROW(atmos::validate_camera(camera));
+  camera.projection = Projection::fisheye;
+  camera.fov_deg = 360.0;
+  EXPECT_NO_THROW(atmos::validate_camera(camera));
+  camera.projection = Projection::equirect;
+  camera.fov_deg = 0.0;  // ignored
+  camera.width = 1;
+  camera.height = 16384;
+  EXPECT_NO_THROW(atmos::validate_camera(camera));
+}
+
+TEST(CameraValidation, RejectsBadCameras) {
+  Camera good;
+  good.position = {0.0, 0.0, kEarthRadius};
+  Camera c = good;
+  c.position.x = std::nan("");
+  expect_invalid(c, "position");
+  c = good;
+  c.forward = {0.0, 0.0, 0.0};
+  expect_invalid(c, "forward");
+  c = good;
+  c.up = {0.0, std::numeric_limits<double>::infinity(), 0.0};
+  expect_invalid(c, "up");
+  c = good;
+  c.up = {0.0, -2.0, 0.0};
+  expect_invalid(c, "parallel");
+  c = good;
+  c.width = 0;
+  expect_invalid(c, "image size");
+  c = good;
+  c.height = 16385;
+  expect_invalid(c, "image size");
+  c = good;
+  c.fov_deg = 180.0;
+  expect_invalid(c, "fov");
+  c.fov_deg = 0.0;
+  expect_invalid(c, "fov");
+  c.fov_deg = std::nan("");
+  expect_invalid(c, "fov");
+  c = good;
+  c.projection = Projection::fisheye;
+  c.fov_deg = 361.0;
+  expect_invalid(c, "fov");
+}
+
+}  // namespace

@@ -1,0 +1,192 @@
+// Invariants of the shared physics (src/physics/functions.glsl compiled as C++).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "physics/parameters.hpp"
+#include "precompute/steps.hpp"
+
+namespace {
+
+using namespace atmos::physics;
+using atmos::precompute::gauss_legendre;
+using atmos::precompute::legendre_moments;
+
+// 2π ∫ P(mu) dmu over [-1, 1] with a Gauss-Legendre rule fine enough for g = 0.9.
+double integrate_over_sphere(const std::function<double(double)>& phase) {
+  std::vector<double> x, w;
+  gauss_legendre(4096, -1.0, 1.0, x, w);
+  double sum = 0.0;
+  for (size_t i = 0; i < x.size(); ++i) sum += phase(x[i]) * w[i];
+  return 2.0 * M_PI * sum;
+}
+
+TEST(PhaseFunctions, IntegrateToOneOverTheSphere) {
+  EXPECT_NEAR(integrate_over_sphere([](double nu) { return rayleigh_phase_function(float(nu)); }), 1.0, 1e-5);
+  for (float g : {0.0f, 0.3f, 0.76f, 0.8f, 0.9f, -0.5f}) {
+    EXPECT_NEAR(integrate_over_sphere([g](double nu) { return henyey_greenstein_phase_function(g, float(nu)); }), 1.0,
+                2e-4)
+        << "Henyey-Greenstein g = " << g;
+    EXPECT_NEAR(integrate_over_sphere([g](double nu) { return cornette_shanks_phase_function(g, float(nu)); }), 1.0,
+                2e-4)
+        << "Cornette-Shanks g = " << g;
+  }
+}
+
+TEST(PhaseFunctions, CornetteShanksWithZeroGIsRayleigh) {
+  // Seed 000, after eq. 3.5: "If g = 0, this function is equal to Rayleigh-Scattering".
+  for (float nu = -1.0f; nu <= 1.0f; nu += 0.125f)
+    EXPECT_NEAR(cornette_shanks_phase_function(0.0f, nu), rayleigh_phase_function(nu), 1e-7f);
+}
+
+TEST(PhaseFunctions, LegendreMoments) {
+  // 1 + nu² = 4/3 P_0 + 2/3 P_2, so the Rayleigh moments are 1, 0, 1/10, 0...
+  const auto rayleigh = legendre_moments([](double nu) { return double(rayleigh_phase_function(float(nu))); }, 6);
+  EXPECT_NEAR(rayleigh[0], 1.0, 1e-6);
+  EXPECT_NEAR(rayleigh[1], 0.0, 1e-6);
+  EXPECT_NEAR(rayleigh[2], 0.1, 1e-6);
+  for (int l = 3; l <= 6; ++l) EXPECT_NEAR(rayleigh[size_t(l)], 0.0, 1e-6);
+  // Henyey-Greenstein: p_l = g^l.
+  const auto hg = legendre_moments([](double nu) { return double(henyey_greenstein_phase_function(0.7f, float(nu))); }, 20);
+  for (int l = 0; l <= 20; ++l) EXPECT_NEAR(hg[size_t(l)], std::pow(0.7, l), 2e-5) << "l = " << l;
+}
+
+TEST(GaussLegendre, IntegratesPolynomialsExactly) {
+  std::vector<double> x, w;
+  gauss_legendre(8, -0.3, 2.0, x, w);
+  double sum = 0.0;
+  for (size_t i = 0; i < x.size(); ++i) sum += std::pow(x[i], 15) * w[i];
+  EXPECT_NEAR(sum, (std::pow(2.0, 16) - std::pow(-0.3, 16)) / 16.0, 1e-9);
+}
+
+class EarthParams : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    atmosphere = atmos::load_atmosphere("earth");
+    params = make_atmosphere_params(atmosphere, atmos::TableSizes{}, 0);
+  }
+  atmos::Atmosphere atmosphere;
+  AtmosphereParams params{};
+};
+
+TEST_F(EarthParams, TransmittanceMappingRoundTrips) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int i = 0; i < 2000; ++i) {
+    const float r = params.bottom_radius + u(rng) * (params.top_radius - params.bottom_radius);
+    const float mu_h = horizon_mu(params, r);
+    const float mu = mu_h + u(rng) * (1.0f - mu_h);  // rays that do not hit the ground
+    const vec2 uv = transmittance_uv_from_r_mu(params, r, mu);
+    float r2, mu2;
+    r_mu_from_transmittance_uv(params, uv, r2, mu2);
+    EXPECT_NEAR(r2, r, 2.0f);
+    // Near straight up mu is flat in d: compare the distances instead.
+    EXPECT_NEAR(distance_to_top_atmosphere_boundary(params, r2, mu2), distance_to_top_atmosphere_boundary(params, r, mu),
+                20.0f)
+        << "r " << r << " mu " << mu;
+  }
+}
+
+TEST_F(EarthParams, ScatteringMappingRoundTrips) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int i = 0; i < 2000; ++i) {
+    const float r = params.bottom_radius + 50.0f + u(rng) * (params.top_radius - params.bottom_radius - 100.0f);
+    const float mu = -1.0f + 2.0f * u(rng);
+    const float mu_s = params.mu_s_min + u(rng) * (1.0f - params.mu_s_min);
+    const float nu = -1.0f + 2.0f * u(rng);
+    const bool ground = ray_intersects_ground(params, r, mu);
+    const vec4 uvwz = scattering_uvwz_from_r_mu_mu_s_nu(params, r, mu, mu_s, nu, ground);
+    float r2, mu2, mu_s2, nu2;
+    bool ground2;
+    r_mu_mu_s_nu_from_scattering_uvwz(params, uvwz, r2, mu2, mu_s2, nu2, ground2);
+    EXPECT_EQ(ground2, ground);
+    EXPECT_NEAR(r2, r, 5.0f);
+    const float d = distance_to_nearest_atmosphere_boundary(params, r, mu, ground);
+    EXPECT_NEAR(distance_to_nearest_atmosphere_boundary(params, r2, mu2, ground2), d, 1e-3f * d + 30.0f);
+    EXPECT_NEAR(mu_s2, mu_s, 2e-4f);
+    EXPECT_NEAR(nu2, nu, 1e-5f);
+  }
+}
+
+TEST_F(EarthParams, IrradianceMappingRoundTrips) {
+  for (float r = params.bottom_radius; r <= params.top_radius; r += 5000.0f)
+    for (float mu_s = -1.0f; mu_s <= 1.0f; mu_s += 0.01f) {
+      float r2, mu_s2;
+      r_mu_s_from_irradiance_uv(params, irradiance_uv_from_r_mu_s(params, r, mu_s), r2, mu_s2);
+      EXPECT_NEAR(r2, r, 1.0f);
+      EXPECT_NEAR(mu_s2, mu_s, 1e-5f);
+    }
+}
+
+TEST_F(EarthParams, TextureCoordinatesSampleTexelCentres) {
+  EXPECT_FLOAT_EQ(texture_coord_from_unit_range(0.0f, 64), 0.5f / 64.0f);
+  EXPECT_FLOAT_EQ(texture_coord_from_unit_range(1.0f, 64), 1.0f - 0.5f / 64.0f);
+  EXPECT_NEAR(unit_range_from_texture_coord(texture_coord_from_unit_range(0.37f, 16), 16), 0.37f, 1e-6f);
+}
+
+TEST_F(EarthParams, OpticalDepthComposes) {
+  // Transmittance along a path equals the product over its pieces.
+  for (float mu : {1.0f, 0.5f, 0.1f, 0.0f, -0.05f}) {
+    const float r = params.bottom_radius + 1500.0f;
+    const float d = distance_to_nearest_atmosphere_boundary(params, r, mu, ray_intersects_ground(params, r, mu));
+    const vec3 whole = optical_depth_along_ray(params, r, mu, 0.0f, d, 4000);
+    const vec3 pieces = optical_depth_along_ray(params, r, mu, 0.0f, 0.3f * d, 2000) +
+                        optical_depth_along_ray(params, r, mu, 0.3f * d, d, 2000);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(pieces[c] / whole[c], 1.0f, 1e-4f) << "mu " << mu;
+  }
+}
+
+TEST_F(EarthParams, VerticalOpticalDepthMatchesTheExponentialProfile) {
+  // Straight up from the ground: the air's optical depth is beta H (1 - exp(-Z/H)).
+  const float d = params.top_radius - params.bottom_radius;
+  AtmosphereParams air_only = params;
+  air_only.constituent_count = 1;
+  const vec3 tau = optical_depth_along_ray(air_only, params.bottom_radius, 1.0f, 0.0f, d, 20000);
+  const float H = params.density[0].scale_height;
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(tau[c], params.scattering[0][c] * H * (1.0f - std::exp(-d / H)), 1e-4f * tau[c]);
+  // The Rayleigh optical depth at 550 nm of the Earth preset is the literature
+  // value 0.0973 (Bodhaine et al. 1999, standard atmosphere) within 1 %.
+  EXPECT_NEAR(tau[1], 0.0973f, 0.001f);
+}
+
+TEST_F(EarthParams, OzoneProfileIsATriangle) {
+  const DensityProfile& ozone = params.density[2];
+  EXPECT_FLOAT_EQ(profile_density(ozone, 5000.0f), 0.0f);
+  EXPECT_FLOAT_EQ(profile_density(ozone, 25000.0f), 1.0f);
+  EXPECT_NEAR(profile_density(ozone, 17500.0f), 0.5f, 1e-6f);
+  EXPECT_NEAR(profile_density(ozone, 32500.0f), 0.5f, 1e-6f);
+  EXPECT_FLOAT_EQ(profile_density(ozone, 45000.0f), 0.0f);
+}
+
+TEST_F(EarthParams, SunVisibleFractionAtTheHorizon) {
+  const float r = params.bottom_radius;  // at the ground the horizon is at mu = 0
+  EXPECT_NEAR(sun_visible_fraction(params, r, 0.0f), 0.5f, 1e-3f);
+  // Higher up the horizon dips below the horizontal: more than half the disc shows.
+  EXPECT_GT(sun_visible_fraction(params, r + 100.0f, 0.0f), 0.6f);
+  EXPECT_FLOAT_EQ(sun_visible_fraction(params, r, 0.1f), 1.0f);
+  EXPECT_FLOAT_EQ(sun_visible_fraction(params, r, -0.1f), 0.0f);
+  // Monotonic through the transition.
+  float previous = 0.0f;
+  for (float mu_s = -0.01f; mu_s <= 0.01f; mu_s += 0.0005f) {
+    const float f = sun_visible_fraction(params, r, mu_s);
+    EXPECT_GE(f, previous);
+    previous = f;
+  }
+}
+
+TEST(Geometry, RaySphereDistances) {
+  AtmosphereParams a{};
+  a.bottom_radius = 6360e3f;
+  a.top_radius = 6420e3f;
+  EXPECT_NEAR(distance_to_top_atmosphere_boundary(a, 6360e3f, 1.0f), 60e3f, 1.0f);
+  EXPECT_NEAR(distance_to_bottom_atmosphere_boundary(a, 6370e3f, -1.0f), 10e3f, 1.0f);
+  EXPECT_TRUE(ray_intersects_ground(a, 6370e3f, -0.5f));
+  EXPECT_FALSE(ray_intersects_ground(a, 6370e3f, 0.0f));
+  // Horizontal ray from the ground to the top: sqrt(R_top² - R²).
+  EXPECT_NEAR(distance_to_top_atmosphere_boundary(a, 6360e3f, 0.0f), std::sqrt(6420e3 * 6420e3 - 6360e3 * 6360e3), 2.0f);
+}
+
+}  // namespace

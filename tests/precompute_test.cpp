@@ -1,0 +1,276 @@
+// The CPU precomputation: its fast paths against the straightforward forms in
+// functions.glsl, finiteness of every table, and the disk cache.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "physics/parameters.hpp"
+#include "precompute/steps.hpp"
+
+namespace {
+
+using namespace atmos::physics;
+using namespace atmos::precompute;
+
+atmos::TableSizes small_sizes() { return atmos::TableSizes{64, 16, 32, 8, 4, 16, 32, 8}; }
+
+// Relative difference, with an absolute floor for values near zero.
+double relative(const vec3& a, const vec3& b, float floor) {
+  double worst = 0.0;
+  for (int c = 0; c < 3; ++c) worst = std::max(worst, double(std::abs(a[c] - b[c]) / std::max(std::abs(b[c]), floor)));
+  return worst;
+}
+
+class EarthSteps : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    atmosphere_ = new atmos::Atmosphere(atmos::load_atmosphere("earth"));
+    params_ = make_atmosphere_params(*atmosphere_, small_sizes(), 0);
+    transmittance_ = new Table2D(compute_transmittance_table(params_));
+    rayleigh_ = new Table3D();
+    aerosol_ = new Table3D();
+    compute_single_scattering_tables(params_, *transmittance_, *rayleigh_, *aerosol_, nullptr);
+    empty_ = new Table3D(rayleigh_->width, rayleigh_->height, rayleigh_->depth);
+  }
+  static void TearDownTestSuite() {
+    delete atmosphere_;
+    delete transmittance_;
+    delete rayleigh_;
+    delete aerosol_;
+    delete empty_;
+  }
+  static atmos::Atmosphere* atmosphere_;
+  static AtmosphereParams params_;
+  static Table2D* transmittance_;
+  static Table3D *rayleigh_, *aerosol_, *empty_;
+};
+atmos::Atmosphere* EarthSteps::atmosphere_ = nullptr;
+AtmosphereParams EarthSteps::params_{};
+Table2D* EarthSteps::transmittance_ = nullptr;
+Table3D *EarthSteps::rayleigh_ = nullptr, *EarthSteps::aerosol_ = nullptr, *EarthSteps::empty_ = nullptr;
+
+TEST_F(EarthSteps, SingleScatteringFastPathEqualsTheSharedDefinition) {
+  std::mt19937 rng(3);
+  for (int k = 0; k < 300; ++k) {
+    const int x = int(rng() % unsigned(rayleigh_->width)), y = int(rng() % unsigned(rayleigh_->height)),
+              z = int(rng() % unsigned(rayleigh_->depth));
+    float r, mu, mu_s, nu;
+    bool ground;
+    r_mu_mu_s_nu_from_scattering_texel(params_, vec3(float(x), float(y), float(z)), r, mu, mu_s, nu, ground);
+    vec3 rayleigh, aerosol;
+    compute_single_scattering(params_, transmittance_->sampler(), r, mu, mu_s, nu, ground, rayleigh, aerosol);
+    EXPECT_LT(relative(rayleigh_->at(x, y, z), rayleigh, 1e-6f), 1e-4) << x << " " << y << " " << z;
+    EXPECT_LT(relative(aerosol_->at(x, y, z), aerosol, 1e-6f), 1e-4) << x << " " << y << " " << z;
+  }
+}
+
+TEST_F(EarthSteps, TransmittanceTableMatchesDirectIntegration) {
+  // At the default size (256 x 64) the interpolation error is below 0.5 %.
+  const AtmosphereParams p = make_atmosphere_params(*atmosphere_, atmos::TableSizes{}, 0);
+  const Table2D table_default = compute_transmittance_table(p);
+  const sampler2D t = table_default.sampler();
+  for (float h : {0.0f, 1000.0f, 10000.0f, 50000.0f})
+    for (float mu : {1.0f, 0.6f, 0.2f, 0.05f}) {
+      const float r = params_.bottom_radius + h;
+      const vec3 direct = exp(-optical_depth_along_ray(params_, r, mu, 0.0f,
+                                                       distance_to_top_atmosphere_boundary(params_, r, mu), 4000));
+      const vec3 table = transmittance_to_top_atmosphere_boundary(p, t, r, mu);
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(table[c], direct[c], 0.005f * direct[c] + 1e-5f) << h << " " << mu;
+    }
+}
+
+// The spherical-harmonic density against the direct sphere quadrature of
+// compute_scattering_density(), for orders 1 (from single scattering, with
+// the direct ground irradiance) and 2.
+TEST_F(EarthSteps, ScatteringDensityMatchesTheSphereQuadrature) {
+  const Table2D no_irradiance;
+  const Table3D density1 =
+      compute_scattering_density_table(params_, *transmittance_, *rayleigh_, *aerosol_, *empty_, no_irradiance, 1, nullptr);
+  std::mt19937 rng(5);
+  double sum_sq = 0.0;
+  int n = 0;
+  double worst = 0.0;
+  for (int k = 0; k < 120; ++k) {
+    const int x = int(rng() % unsigned(density1.width)), y = int(rng() % unsigned(density1.height)),
+              z = int(rng() % unsigned(density1.depth));
+    float r, mu, mu_s, nu;
+    bool ground;
+    r_mu_mu_s_nu_from_scattering_texel(params_, vec3(float(x), float(y), float(z)), r, mu, mu_s, nu, ground);
+    const vec3 direct = compute_scattering_density(params_, transmittance_->sampler(), rayleigh_->sampler(),
+                                                   aerosol_->sampler(), empty_->sampler(), no_irradiance.sampler(), r,
+                                                   mu, mu_s, nu, 1, 128);
+    const vec3 fast = const_cast<Table3D&>(density1).at(x, y, z);
+    // Compare on the green channel, relative to the density's scale at this altitude.
+    const double scale = std::max(double(direct.y), 1e-3 * double(compute_scattering_density(
+        params_, transmittance_->sampler(), rayleigh_->sampler(), aerosol_->sampler(), empty_->sampler(),
+        no_irradiance.sampler(), r, 1.0f, 1.0f, 1.0f, 1, 32).y));
+    const double e = std::abs(double(fast.y) - double(direct.y)) / scale;
+    sum_sq += e * e;
+    worst = std::max(worst, e);
+    ++n;
+  }
+  const double rms = std::sqrt(sum_sq / n);
+  std::printf("scattering density, SH vs sphere quadrature: RMS %.3f %%, max %.3f %%\n", 100 * rms, 100 * worst);
+  EXPECT_LT(rms, 0.02);
+  EXPECT_LT(worst, 0.10);
+}
+
+TEST_F(EarthSteps, MultipleScatteringFastPathEqualsTheSharedDefinition) {
+  const Table2D no_irradiance;
+  const Table3D density =
+      compute_scattering_density_table(params_, *transmittance_, *rayleigh_, *aerosol_, *empty_, no_irradiance, 1, nullptr);
+  const Table3D multiple = compute_multiple_scattering_table(params_, density, nullptr);
+  std::mt19937 rng(9);
+  for (int k = 0; k < 300; ++k) {
+    const int x = int(rng() % unsigned(multiple.width)), y = int(rng() % unsigned(multiple.height)),
+              z = int(rng() % unsigned(multiple.depth));
+    float r, mu, mu_s, nu;
+    bool ground;
+    r_mu_mu_s_nu_from_scattering_texel(params_, vec3(float(x), float(y), float(z)), r, mu, mu_s, nu, ground);
+    const vec3 direct = compute_multiple_scattering(params_, density.sampler(), r, mu, mu_s, nu, ground);
+    EXPECT_LT(relative(const_cast<Table3D&>(multiple).at(x, y, z), direct, 1e-7f), 2e-3) << x << " " << y << " " << z;
+  }
+}
+
+void expect_finite(const std::vector<vec3>& texels, const char* name) {
+  for (const auto& t : texels)
+    ASSERT_TRUE(std::isfinite(t.x) && std::isfinite(t.y) && std::isfinite(t.z) && t.x >= 0 && t.y >= 0 && t.z >= 0)
+        << name;
+}
+
+TEST(Tables, AllTablesFiniteAndNonNegative) {
+  for (const char* planet : {"earth", "mars"}) {
+    atmos::PrecomputeOptions options;
+    options.sizes = small_sizes();
+    options.scattering_orders = 4;
+    const atmos::Tables tables = atmos::precompute_tables(atmos::load_atmosphere(planet), options);
+    ASSERT_EQ(tables.sets.size(), 1u);
+    const auto& s = tables.sets[0];
+    expect_finite(s.transmittance, "transmittance");
+    expect_finite(s.direct_irradiance, "direct_irradiance");
+    expect_finite(s.indirect_irradiance, "indirect_irradiance");
+    expect_finite(s.scattering, "scattering");
+    expect_finite(s.single_aerosol, "single_aerosol");
+    for (const auto& t : s.transmittance) EXPECT_LE(t.x, 1.0f);
+  }
+}
+
+TEST(Tables, MoreOrdersAddLight) {
+  const atmos::Atmosphere earth = atmos::load_atmosphere("earth");
+  atmos::PrecomputeOptions options;
+  options.sizes = small_sizes();
+  double previous = -1.0;
+  for (int k : {1, 2, 4}) {
+    options.scattering_orders = k;
+    const atmos::Tables t = atmos::precompute_tables(earth, options);
+    double sum = 0.0;
+    for (const auto& v : t.sets[0].scattering) sum += v.y;
+    EXPECT_GT(sum, previous) << "K = " << k;
+    previous = sum;
+    double irradiance = 0.0;
+    for (const auto& v : t.sets[0].indirect_irradiance) irradiance += v.y;
+    if (k == 1) EXPECT_EQ(irradiance, 0.0);  // one order: no sky light on the ground yet
+    else EXPECT_GT(irradiance, 0.0);
+  }
+}
+
+TEST(Tables, RejectsBadOptions) {
+  const atmos::Atmosphere earth = atmos::load_atmosphere("earth");
+  atmos::PrecomputeOptions options;
+  options.sizes = small_sizes();
+  options.scattering_orders = 0;
+  EXPECT_THROW(atmos::precompute_tables(earth, options), atmos::Error);
+  options.scattering_orders = 2;
+  options.sizes.scattering_mu = 33;
+  EXPECT_THROW(atmos::precompute_tables(earth, options), atmos::Error);
+  options.sizes = small_sizes();
+  options.sizes.transmittance_mu = 1;
+  EXPECT_THROW(atmos::precompute_tables(earth, options), atmos::Error);
+}
+
+class Cache : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir = std::filesystem::temp_directory_path() /
+          ("atmos-cache-test-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "-" +
+           ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(dir);
+    options.sizes = small_sizes();
+    options.scattering_orders = 2;
+    earth = atmos::load_atmosphere("earth");
+  }
+  void TearDown() override { std::filesystem::remove_all(dir); }
+  std::filesystem::path dir;
+  atmos::PrecomputeOptions options;
+  atmos::Atmosphere earth;
+};
+
+TEST_F(Cache, ComputesThenHits) {
+  const auto first = atmos::load_or_precompute_tables(earth, options, dir.string());
+  EXPECT_EQ(first.status, atmos::CacheStatus::computed);
+  EXPECT_TRUE(std::filesystem::exists(first.path));
+  const auto second = atmos::load_or_precompute_tables(earth, options, dir.string());
+  EXPECT_EQ(second.status, atmos::CacheStatus::hit);
+  EXPECT_EQ(second.tables.sets[0].scattering, first.tables.sets[0].scattering);
+  EXPECT_EQ(second.tables.sets[0].indirect_irradiance, first.tables.sets[0].indirect_irradiance);
+}
+
+TEST_F(Cache, KeyChangesWithEveryInput) {
+  const std::string key = atmos::tables_cache_key(earth, options);
+  auto other = earth;
+  other.constituents[1].phase.g = 0.7;
+  EXPECT_NE(atmos::tables_cache_key(other, options), key);
+  other = earth;
+  other.top_radius_m += 1.0;
+  EXPECT_NE(atmos::tables_cache_key(other, options), key);
+  auto o2 = options;
+  o2.scattering_orders = 3;
+  EXPECT_NE(atmos::tables_cache_key(earth, o2), key);
+  o2 = options;
+  o2.sizes.scattering_r = 10;
+  EXPECT_NE(atmos::tables_cache_key(earth, o2), key);
+}
+
+TEST_F(Cache, CorruptAndTruncatedFilesAreRecomputed) {
+  const auto first = atmos::load_or_precompute_tables(earth, options, dir.string());
+  const auto size = std::filesystem::file_size(first.path);
+  {  // Flip one byte in the middle.
+    std::fstream f(first.path, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(std::streamoff(size / 2));
+    char c;
+    f.read(&c, 1);
+    f.seekp(std::streamoff(size / 2));
+    c = char(c ^ 0x5a);
+    f.write(&c, 1);
+  }
+  auto again = atmos::load_or_precompute_tables(earth, options, dir.string());
+  EXPECT_EQ(again.status, atmos::CacheStatus::recomputed_invalid);
+  EXPECT_NE(again.problem.find("checksum"), std::string::npos) << again.problem;
+  EXPECT_EQ(again.tables.sets[0].scattering, first.tables.sets[0].scattering);
+  // Truncate.
+  std::filesystem::resize_file(first.path, size - 100);
+  again = atmos::load_or_precompute_tables(earth, options, dir.string());
+  EXPECT_EQ(again.status, atmos::CacheStatus::recomputed_invalid);
+  EXPECT_NE(again.problem.find("truncated"), std::string::npos) << again.problem;
+  // Garbage.
+  {
+    std::ofstream f(first.path, std::ios::binary | std::ios::trunc);
+    f << "not a table";
+  }
+  again = atmos::load_or_precompute_tables(earth, options, dir.string());
+  EXPECT_EQ(again.status, atmos::CacheStatus::recomputed_invalid);
+  // And the rewritten file is good again.
+  EXPECT_EQ(atmos::load_or_precompute_tables(earth, options, dir.string()).status, atmos::CacheStatus::hit);
+}
+
+TEST_F(Cache, UnwritableDirectoryStillReturnsTables) {
+  const auto result = atmos::load_or_precompute_tables(earth, options, "/proc/atmos-cannot-write-here");
+  EXPECT_EQ(result.status, atmos::CacheStatus::computed);
+  EXPECT_FALSE(result.problem.empty());
+  EXPECT_EQ(result.tables.sets.size(), 1u);
+}
+
+}  // namespace

@@ -1,0 +1,547 @@
+// Unit tests of the brute-force reference (src/reference/reference.cpp)
+// against closed forms: optically thin plane-parallel slabs, optical depths of
+// exponential layers, phase function normalisation and sampling, energy
+// conservation, partial visibility of the sun disc; plus plausibility of the
+// Earth preset. Monte Carlo comparisons allow a few standard errors (all runs
+// are seeded, hence repeatable) plus a stated deterministic margin.
+#include <gtest/gtest.h>
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "atmos/reference.hpp"
+
+namespace {
+
+using atmos::Atmosphere;
+using atmos::PhaseFunction;
+using atmos::ReferenceOptions;
+using atmos::ReferenceResult;
+using glm::dvec3;
+namespace detail = atmos::reference_detail;
+
+constexpr double kPi = 3.14159265358979323846;
+
+Atmosphere earth() {
+  std::ifstream in(std::string(ATMOS_SOURCE_DIR) + "/data/planets/earth.json", std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return atmos::parse_atmosphere(ss.str(), "earth.json");
+}
+
+// Unit vector at zenith angle `zenith_deg` from +z, azimuth `azimuth_deg` from +x.
+dvec3 direction(double zenith_deg, double azimuth_deg) {
+  const double t = zenith_deg * kPi / 180.0, p = azimuth_deg * kPi / 180.0;
+  return dvec3(std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
+}
+
+// A horizontally homogeneous slab of constant density (exponential profile
+// with a scale height of 1e12 m: ρ = 1 - O(1e-9)) of thickness `thickness` on a
+// planet of radius 1e8 m, thin enough and flat enough to be plane-parallel
+// to ~1e-5 over the paths that matter. Per working wavelength (680, 550,
+// 440 nm) scattering `bs` and absorption `ba` in m^-1.
+Atmosphere slab(double thickness, std::vector<double> bs, std::vector<double> ba, PhaseFunction phase, double albedo) {
+  Atmosphere a;
+  a.name = "slab";
+  a.origin = "test slab";
+  a.wavelengths_nm = {680.0, 550.0, 440.0};
+  a.bottom_radius_m = 1e8;
+  a.top_radius_m = 1e8 + thickness;
+  atmos::Constituent c;
+  c.name = "gas";
+  c.density.kind = atmos::DensityProfile::Kind::exponential;
+  c.density.scale_height_m = 1e12;
+  c.scattering = atmos::Spectrum({440.0, 550.0, 680.0}, {bs[2], bs[1], bs[0]});
+  c.absorption = atmos::Spectrum({440.0, 550.0, 680.0}, {ba[2], ba[1], ba[0]});
+  c.phase = phase;
+  a.constituents.push_back(c);
+  a.ground_albedo = atmos::Spectrum::constant(albedo);
+  a.solar_irradiance = atmos::Spectrum({440.0, 550.0, 680.0}, {1.8, 1.9, 1.5});
+  a.sun_angular_radius_rad = 0.00465;
+  a.validate();
+  return a;
+}
+
+double sun_irradiance(const Atmosphere& a, size_t l) { return a.solar_irradiance.at(a.wavelengths_nm[l]); }
+
+// |x - expected| within k standard errors plus a relative margin.
+void expect_close(double x, double expected, double standard_error, double k, double relative_margin,
+                  const std::string& what) {
+  EXPECT_NEAR(x, expected, k * standard_error + relative_margin * std::abs(expected))
+      << what << ": got " << x << " +- " << standard_error << ", expected " << expected << " (deviation "
+      << (x - expected) / std::max(standard_error, 1e-300) << " sigma)";
+}
+
+// ---------------------------------------------------------------------------
+// 1. Single scattering in a plane-parallel slab (K = 1).
+//
+// Observer at the bottom looking up at zenith angle acos μv, sun at zenith
+// angle acos μs, slab of optical thickness τ0 = σ_ext Z, single-scattering
+// albedo ω0 = σ_s / σ_ext. A point at vertical optical depth τ above the
+// observer is seen through τ/μv and lit through (τ0 - τ)/μs, so
+//   L = ω0 E p(Θ) ∫_0^τ0 e^{-τ/μv} e^{-(τ0-τ)/μs} dτ/μv
+//     = ω0 E p(Θ) μs (e^{-τ0/μv} - e^{-τ0/μs}) / (μv - μs),   cos Θ = v·s.
+// Observer above the slab looking down at μv = |v_z|: scattering at depth τ
+// below the top, seen through τ/μv, lit through τ/μs, plus the Lambertian
+// ground (K = 1: lit by the attenuated sun only):
+//   L = ω0 E p(Θ) μs (1 - e^{-τ0(1/μv + 1/μs)}) / (μs + μv)
+//     + a/π E μs e^{-τ0/μs} e^{-τ0/μv}.
+// Deterministic margin 2e-4: the sun disc (α = 4.65 mrad) changes p and the
+// slant paths by O(α²) ~ 2e-5, curvature by ~1e-5.
+
+double single_up(double w0, double e, double p, double mu_s, double mu_v, double tau0) {
+  return w0 * e * p * mu_s * (std::exp(-tau0 / mu_v) - std::exp(-tau0 / mu_s)) / (mu_v - mu_s);
+}
+
+double single_down(double w0, double e, double p, double mu_s, double mu_v, double tau0, double albedo) {
+  return w0 * e * p * mu_s * (1.0 - std::exp(-tau0 * (1.0 / mu_v + 1.0 / mu_s))) / (mu_s + mu_v) +
+         albedo / kPi * e * mu_s * std::exp(-tau0 / mu_s) * std::exp(-tau0 / mu_v);
+}
+
+void check_slab_single_scattering(const PhaseFunction& phase) {
+  const double z = 1000.0;
+  const std::vector<double> bs = {2e-5, 5e-5, 1.5e-4}, ba = {1e-5, 0.0, 5e-5};
+  const double albedo = 0.3;
+  const Atmosphere a = slab(z, bs, ba, phase, albedo);
+  ReferenceOptions o;
+  o.scattering_orders = 1;
+  o.paths = 20000;
+  const dvec3 sun = direction(60.0, 0.0);
+  const double mu_s = sun.z;
+  // From the ground, looking up at two zenith angles (the ground is not seen
+  // and, with K = 1, ground-reflected skylight is excluded although a > 0).
+  for (double view_zenith : {0.0, 35.0}) {
+    const dvec3 v = direction(view_zenith, 150.0);
+    const ReferenceResult r = atmos::reference_radiance(a, dvec3(0.0, 0.0, a.bottom_radius_m), v, sun, o);
+    for (size_t l = 0; l < 3; ++l) {
+      const double tau0 = (bs[l] + ba[l]) * z, w0 = bs[l] / (bs[l] + ba[l]);
+      const double expected = single_up(w0, sun_irradiance(a, l), detail::phase_function(phase, glm::dot(v, sun)),
+                                        mu_s, v.z, tau0);
+      expect_close(r.radiance[l], expected, r.standard_error[l], 4.0, 2e-4,
+                   "up, view zenith " + std::to_string(view_zenith) + ", wavelength " + std::to_string(l));
+      EXPECT_LT(r.standard_error[l], 0.01 * expected);
+    }
+  }
+  // From above the atmosphere (the ray enters at the top), looking down.
+  for (double view_zenith : {180.0, 140.0}) {
+    const dvec3 v = direction(view_zenith, 30.0);
+    const ReferenceResult r = atmos::reference_radiance(a, dvec3(0.0, 0.0, a.top_radius_m + 500.0), v, sun, o);
+    for (size_t l = 0; l < 3; ++l) {
+      const double tau0 = (bs[l] + ba[l]) * z, w0 = bs[l] / (bs[l] + ba[l]);
+      const double expected = single_down(w0, sun_irradiance(a, l), detail::phase_function(phase, glm::dot(v, sun)),
+                                          mu_s, -v.z, tau0, albedo);
+      expect_close(r.radiance[l], expected, r.standard_error[l], 4.0, 2e-4,
+                   "down, view zenith " + std::to_string(view_zenith) + ", wavelength " + std::to_string(l));
+    }
+  }
+}
+
+TEST(Reference, SlabSingleScatteringRayleigh) {
+  check_slab_single_scattering(PhaseFunction{PhaseFunction::Kind::rayleigh, 0.0});
+}
+
+TEST(Reference, SlabSingleScatteringHenyeyGreenstein) {
+  check_slab_single_scattering(PhaseFunction{PhaseFunction::Kind::henyey_greenstein, 0.7});
+}
+
+TEST(Reference, SlabSingleScatteringCornetteShanks) {
+  check_slab_single_scattering(PhaseFunction{PhaseFunction::Kind::cornette_shanks, -0.4});
+}
+
+// K = 1 irradiance is the attenuated direct sun: E μs e^{-τ0/μs}.
+TEST(Reference, DirectIrradianceIsAttenuatedSun) {
+  const std::vector<double> bs = {2e-5, 5e-5, 1.5e-4}, ba = {1e-5, 0.0, 5e-5};
+  const Atmosphere a = slab(1000.0, bs, ba, PhaseFunction{}, 0.3);
+  ReferenceOptions o;
+  o.scattering_orders = 1;
+  o.paths = 2000;
+  const dvec3 sun = direction(70.0, 0.0);
+  const ReferenceResult r = atmos::reference_horizontal_irradiance(a, dvec3(0.0, 0.0, a.bottom_radius_m), sun, o);
+  for (size_t l = 0; l < 3; ++l) {
+    const double expected = sun_irradiance(a, l) * sun.z * std::exp(-(bs[l] + ba[l]) * 1000.0 / sun.z);
+    // The disc samples see cos θ vary by ±α tan θ0 = ±1.3 % (noise), and the
+    // mean deviates by O(α²) ~ 1e-5.
+    expect_close(r.radiance[l], expected, r.standard_error[l], 4.0, 5e-5, "direct, wavelength " + std::to_string(l));
+    EXPECT_LT(r.standard_error[l], 1e-3 * expected);
+  }
+}
+
+// ---------------------------------------------------------------------------
+// 2. Optical depth.
+
+Atmosphere exponential_layer(double scale_height, double beta) {
+  Atmosphere a;
+  a.name = a.origin = "exponential layer";
+  a.wavelengths_nm = {680.0, 550.0, 440.0};
+  a.bottom_radius_m = 6371e3;
+  a.top_radius_m = 6471e3;
+  atmos::Constituent c;
+  c.name = "layer";
+  c.density.scale_height_m = scale_height;
+  c.scattering = atmos::Spectrum::constant(beta);
+  c.absorption = atmos::Spectrum::constant(0.0);
+  a.constituents.push_back(c);
+  a.ground_albedo = atmos::Spectrum::constant(0.0);
+  a.solar_irradiance = atmos::Spectrum::constant(1.0);
+  a.sun_angular_radius_rad = 0.00465;
+  return a;
+}
+
+// Composite Simpson rule with 2·10^6 steps over the part of the segment
+// inside the atmosphere, evaluating the density exactly (no table, no grid).
+double brute_force_optical_depth(const Atmosphere& a, double wavelength, const dvec3& p, const dvec3& q) {
+  const int n = 2000000;
+  const double length = glm::length(q - p), h = length / n;
+  const dvec3 d = (q - p) / length;
+  double sum = 0.0;
+  for (int i = 0; i <= n; ++i) {
+    const double r = glm::length(p + d * (i * h));
+    double sigma = 0.0;
+    if (r <= a.top_radius_m)
+      for (const auto& c : a.constituents)
+        sigma += (c.scattering.at(wavelength) + c.absorption.at(wavelength)) *
+                 c.density.at(std::max(r - a.bottom_radius_m, 0.0));
+    sum += (i == 0 || i == n ? 1.0 : (i % 2 ? 4.0 : 2.0)) * sigma;
+  }
+  return sum * h / 3.0;
+}
+
+// Distance from p along d to the ground if the ray hits it, else to the top.
+dvec3 ray_end(const Atmosphere& a, const dvec3& p, const dvec3& d) {
+  const double b = glm::dot(p, d), r2 = glm::dot(p, p);
+  const double disc_ground = b * b - (r2 - a.bottom_radius_m * a.bottom_radius_m);
+  if (b < 0.0 && disc_ground >= 0.0) return p + (-b - std::sqrt(disc_ground)) * d;
+  return p + (-b + std::sqrt(b * b - (r2 - a.top_radius_m * a.top_radius_m))) * d;
+}
+
+TEST(Reference, VerticalOpticalDepthOfExponentialLayer) {
+  for (double scale_height : {1200.0, 8000.0, 30000.0}) {
+    const double beta = 1e-5;
+    const Atmosphere a = exponential_layer(scale_height, beta);
+    const dvec3 ground(0.0, a.bottom_radius_m, 0.0), top(0.0, a.top_radius_m, 0.0);
+    // τ = ∫_0^{Rt-Rb} β e^{-h/H} dh = β H (1 - e^{-(Rt-Rb)/H}).
+    const double expected = beta * scale_height * -std::expm1(-(a.top_radius_m - a.bottom_radius_m) / scale_height);
+    EXPECT_NEAR(detail::optical_depth(a, 550.0, ground, top), expected, 1e-6 * expected) << scale_height;
+    EXPECT_NEAR(detail::optical_depth(a, 550.0, top, ground), expected, 1e-6 * expected) << scale_height;
+    // Beyond the top there is nothing.
+    EXPECT_NEAR(detail::optical_depth(a, 550.0, ground, 2.0 * top), expected, 1e-6 * expected) << scale_height;
+  }
+}
+
+TEST(Reference, SlantOpticalDepthMatchesFineIntegration) {
+  const Atmosphere a = earth();  // air, aerosol (H = 1.2 km), piecewise-linear ozone
+  struct Case {
+    double altitude, elevation_deg;
+  };
+  // Horizontal from the ground (the grazing path of the sunset), slightly
+  // downward from 500 m (to the ground), grazing through the ozone kinks
+  // from 20 km, steep, and a long downward path from 60 km.
+  for (const Case& c : {Case{0.0, 0.0}, Case{500.0, -0.5}, Case{20000.0, -1.0}, Case{0.0, 20.0}, Case{60000.0, -3.0}}) {
+    const dvec3 p(0.0, 0.0, a.bottom_radius_m + c.altitude);
+    const double e = c.elevation_deg * kPi / 180.0;
+    const dvec3 q = ray_end(a, p, dvec3(std::cos(e), 0.0, std::sin(e)));
+    for (double wavelength : {440.0, 680.0}) {
+      const double expected = brute_force_optical_depth(a, wavelength, p, q);
+      EXPECT_NEAR(detail::optical_depth(a, wavelength, p, q), expected, 2e-6 * expected)
+          << "altitude " << c.altitude << " elevation " << c.elevation_deg << " wavelength " << wavelength;
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------
+// 3. Transmittance composes: T(a→c) = T(a→b) T(b→c), i.e. τ adds, for points
+// along a ray that passes its perigee between a and c.
+TEST(Reference, TransmittanceComposes) {
+  const Atmosphere a = earth();
+  const dvec3 start(0.0, 0.0, a.bottom_radius_m + 3000.0);
+  const dvec3 d = glm::normalize(dvec3(1.0, 0.0, -0.01));  // perigee 64 km ahead at 2.7 km
+  const dvec3 end = start + 700e3 * d;
+  for (double f : {0.05, 0.1, 0.5, 0.83}) {
+    const dvec3 mid = start + f * 700e3 * d;
+    for (double wavelength : {440.0, 550.0, 680.0}) {
+      const double whole = detail::optical_depth(a, wavelength, start, end);
+      const double parts =
+          detail::optical_depth(a, wavelength, start, mid) + detail::optical_depth(a, wavelength, mid, end);
+      EXPECT_NEAR(std::exp(-whole), std::exp(-parts), 1e-7) << f << " " << wavelength;
+      EXPECT_NEAR(whole, parts, 1e-6 * whole) << f << " " << wavelength;
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------
+// 4. Phase functions.
+
+// ∫_{4π} p dω = 2π ∫_{-1}^{1} p(μ) dμ (Simpson, 2·10^5 steps) = 1; and the
+// mean cosine 2π ∫ μ p dμ: 0 (Rayleigh), g (HG), 3g(4 + g²)/(5(2 + g²)) (CS).
+TEST(Reference, PhaseFunctionsAreNormalised) {
+  const std::vector<PhaseFunction> phases = {
+      {PhaseFunction::Kind::rayleigh, 0.0},         {PhaseFunction::Kind::henyey_greenstein, 0.0},
+      {PhaseFunction::Kind::henyey_greenstein, 0.8}, {PhaseFunction::Kind::henyey_greenstein, -0.5},
+      {PhaseFunction::Kind::cornette_shanks, 0.8},   {PhaseFunction::Kind::cornette_shanks, 0.3},
+      {PhaseFunction::Kind::cornette_shanks, -0.6}};
+  for (const PhaseFunction& p : phases) {
+    const int n = 200000;
+    double norm = 0.0, mean = 0.0;
+    for (int i = 0; i <= n; ++i) {
+      const double mu = -1.0 + 2.0 * i / n;
+      const double w = (i == 0 || i == n ? 1.0 : (i % 2 ? 4.0 : 2.0)) * (2.0 / n) / 3.0 * 2.0 * kPi;
+      norm += w * detail::phase_function(p, mu);
+      mean += w * mu * detail::phase_function(p, mu);
+    }
+    EXPECT_NEAR(norm, 1.0, 1e-8) << int(p.kind) << " g " << p.g;
+    const double g = p.g;
+    const double expected_mean = p.kind == PhaseFunction::Kind::rayleigh            ? 0.0
+                                 : p.kind == PhaseFunction::Kind::henyey_greenstein ? g
+                                                                                    : 3.0 * g * (4.0 + g * g) / (5.0 * (2.0 + g * g));
+    EXPECT_NEAR(mean, expected_mean, 1e-8) << int(p.kind) << " g " << p.g;
+  }
+  // Spot values: Rayleigh 3/(16π)(1 + μ²), HG forward peak (1 + g)/(4π(1 - g)²).
+  EXPECT_NEAR(detail::phase_function({PhaseFunction::Kind::rayleigh, 0.0}, 1.0), 3.0 / (8.0 * kPi), 1e-15);
+  EXPECT_NEAR(detail::phase_function({PhaseFunction::Kind::henyey_greenstein, 0.5}, 1.0), 1.5 / (4.0 * kPi * 0.25),
+              1e-12);
+}
+
+// Sampled cos θ: histogram in 20 bins of μ against the bin probabilities
+// 2π ∫_bin p(μ) dμ (chi-square, 19 degrees of freedom: the 99.99 % quantile
+// is 49), and mean cosine within 5 standard errors.
+TEST(Reference, PhaseFunctionSamplingMatchesDensity) {
+  const std::vector<PhaseFunction> phases = {{PhaseFunction::Kind::rayleigh, 0.0},
+                                             {PhaseFunction::Kind::henyey_greenstein, 0.76},
+                                             {PhaseFunction::Kind::henyey_greenstein, -0.3},
+                                             {PhaseFunction::Kind::henyey_greenstein, 0.0},
+                                             {PhaseFunction::Kind::cornette_shanks, 0.8},
+                                             {PhaseFunction::Kind::cornette_shanks, -0.5}};
+  for (const PhaseFunction& p : phases) {
+    detail::Random random(12345);
+    const int n = 400000, bins = 20;
+    std::vector<double> count(bins, 0.0);
+    double sum = 0.0, sum2 = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const double mu = detail::sample_phase_cosine(p, random);
+      ASSERT_GE(mu, -1.0);
+      ASSERT_LE(mu, 1.0);
+      count[size_t(std::min(bins - 1, int((mu + 1.0) / 2.0 * bins)))] += 1.0;
+      sum += mu;
+      sum2 += mu * mu;
+    }
+    double chi2 = 0.0, mean_exact = 0.0;
+    for (int b = 0; b < bins; ++b) {
+      double prob = 0.0;
+      const int m = 2000;
+      for (int j = 0; j <= m; ++j) {
+        const double mu = -1.0 + (b + double(j) / m) * 2.0 / bins;
+        const double w = (j == 0 || j == m ? 1.0 : (j % 2 ? 4.0 : 2.0)) * (2.0 / bins / m) / 3.0 * 2.0 * kPi;
+        prob += w * detail::phase_function(p, mu);
+        mean_exact += w * mu * detail::phase_function(p, mu);
+      }
+      const double expected = prob * n;
+      chi2 += (count[size_t(b)] - expected) * (count[size_t(b)] - expected) / expected;
+    }
+    EXPECT_LT(chi2, 49.0) << int(p.kind) << " g " << p.g;
+    const double mean = sum / n, se = std::sqrt((sum2 / n - mean * mean) / n);
+    EXPECT_NEAR(mean, mean_exact, 5.0 * se) << int(p.kind) << " g " << p.g;
+    if (p.kind == PhaseFunction::Kind::henyey_greenstein) {
+      EXPECT_NEAR(mean, p.g, 5.0 * se) << p.g;
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------
+// 5. Energy conservation in a non-absorbing plane-parallel slab (τ0 = 0.2,
+// 0.5, 1.0 at the three wavelengths), Rayleigh or forward HG scattering:
+// what enters at the top (E μs per unit area) either leaves through the top
+// (upward flux F_up, the irradiance on a downward-facing surface at the top)
+// or is absorbed by the ground ((1 - a) E_down, E_down the irradiance on the
+// ground: direct + sky). With K = 40 the missing orders are < 1e-8 of the
+// total. Tolerance: 4 combined standard errors + 0.3 % (plane-parallel
+// approximation of a slab 10 km thick on a 1e8 m planet: < 1e-3).
+void check_energy(const PhaseFunction& phase, double albedo, double sun_zenith) {
+  const double z = 10000.0;
+  const std::vector<double> bs = {0.2 / z, 0.5 / z, 1.0 / z}, ba = {0.0, 0.0, 0.0};
+  const Atmosphere a = slab(z, bs, ba, phase, albedo);
+  ReferenceOptions o;
+  o.scattering_orders = 40;
+  o.paths = 20000;
+  const dvec3 sun = direction(sun_zenith, 0.0);
+  const ReferenceResult down = atmos::reference_horizontal_irradiance(a, dvec3(0.0, 0.0, a.bottom_radius_m), sun, o);
+  o.seed = 2;
+  const ReferenceResult up =
+      atmos::reference_irradiance(a, dvec3(0.0, 0.0, a.top_radius_m), dvec3(0.0, 0.0, -1.0), sun, o);
+  for (size_t l = 0; l < 3; ++l) {
+    const double incoming = sun_irradiance(a, l) * sun.z;
+    const double balance = (1.0 - albedo) * down.radiance[l] + up.radiance[l];
+    const double se = std::hypot((1.0 - albedo) * down.standard_error[l], up.standard_error[l]);
+    expect_close(balance, incoming, se, 4.0, 3e-3,
+                 "energy, albedo " + std::to_string(albedo) + ", sun zenith " + std::to_string(sun_zenith) +
+                     ", wavelength " + std::to_string(l) + " (down " + std::to_string(down.radiance[l]) + ", up " +
+                     std::to_string(up.radiance[l]) + ")");
+    // The sky part is a real contribution (not just the direct beam).
+    EXPECT_GT(up.radiance[l], 0.02 * incoming);
+  }
+}
+
+TEST(Reference, EnergyConservationBlackGround) {
+  check_energy(PhaseFunction{PhaseFunction::Kind::rayleigh, 0.0}, 0.0, 0.0);
+  check_energy(PhaseFunction{PhaseFunction::Kind::henyey_greenstein, 0.6}, 0.0, 60.0);
+}
+
+TEST(Reference, EnergyConservationBrightGround) {
+  check_energy(PhaseFunction{PhaseFunction::Kind::rayleigh, 0.0}, 0.6, 30.0);
+}
+
+// ---------------------------------------------------------------------------
+// Sun disc partially below the horizon: in an empty atmosphere (no
+// extinction), the irradiance on a surface at the ground facing the sun is
+// E_sun times the visible fraction of the disc (to O(α²) = 1e-4). With the
+// disc centre at height d·α above the horizon, the hidden circular segment
+// is (acos d - d √(1 - d²))/π of the disc: 1 at d = -1, 1/2 at d = 0,
+// 0.1955 at d = 1/2, 0 at d = 1. The visibility of a disc sample is 0 or 1:
+// standard error √(f(1 - f)/N) <= 0.5/√N.
+TEST(Reference, SunDiscPartiallyBelowHorizon) {
+  Atmosphere a = slab(1000.0, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, PhaseFunction{}, 0.0);
+  a.sun_angular_radius_rad = 0.01;
+  ReferenceOptions o;
+  o.scattering_orders = 1;
+  o.paths = 100000;
+  const dvec3 x(0.0, 0.0, a.bottom_radius_m);
+  for (double d : {-1.0, -0.3, 0.0, 0.5, 1.0}) {
+    const dvec3 sun = direction(90.0 - d * a.sun_angular_radius_rad * 180.0 / kPi, 0.0);
+    const ReferenceResult r = atmos::reference_irradiance(a, x, sun, sun, o);
+    const double visible = 1.0 - (std::acos(d) - d * std::sqrt(1.0 - d * d)) / kPi;
+    for (size_t l = 0; l < 3; ++l)
+      EXPECT_NEAR(r.radiance[l] / sun_irradiance(a, l), visible, 4.0 * 0.5 / std::sqrt(o.paths) + 3e-4) << d;
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Consistency between the two estimators: looking straight down from 1 m
+// above a Lambertian ground, L ≈ a/π E_horizontal (E with orders <= K - 1, so
+// L has orders <= K), up to the scattering and extinction in 1 m (~1e-5).
+TEST(Reference, GroundRadianceMatchesIrradiance) {
+  const Atmosphere a = earth();
+  ReferenceOptions o;
+  o.scattering_orders = 3;
+  o.paths = 8000;
+  const dvec3 sun = direction(50.0, 0.0);
+  const dvec3 ground(0.0, 0.0, a.bottom_radius_m);
+  const ReferenceResult e = atmos::reference_horizontal_irradiance(a, ground, sun, o);
+  o.seed = 7;
+  const ReferenceResult l = atmos::reference_radiance(a, ground + dvec3(0.0, 0.0, 1.0), dvec3(0.0, 0.0, -1.0), sun, o);
+  for (size_t i = 0; i < 3; ++i) {
+    const double albedo = a.ground_albedo.at(a.wavelengths_nm[i]);
+    expect_close(l.radiance[i], albedo / kPi * e.radiance[i],
+                 std::hypot(l.standard_error[i], albedo / kPi * e.standard_error[i]), 4.0, 1e-4, "wavelength " + std::to_string(i));
+  }
+}
+
+// Outside the atmosphere: a ray missing it sees nothing; a ray entering it
+// sees what an observer at the entry point sees.
+TEST(Reference, ObserverInSpace) {
+  const Atmosphere a = earth();
+  ReferenceOptions o;
+  o.paths = 2000;
+  const dvec3 sun = direction(30.0, 0.0);
+  const dvec3 far(0.0, 0.0, 2.0 * a.top_radius_m);
+  const ReferenceResult miss = atmos::reference_radiance(a, far, direction(45.0, 0.0), sun, o);
+  for (double v : miss.radiance) EXPECT_EQ(v, 0.0);
+  // Down through the atmosphere just inside the limb.
+  const double s = (a.top_radius_m - 20e3) / glm::length(far);
+  const dvec3 v = glm::normalize(dvec3(s, 0.0, -std::sqrt(1.0 - s * s)));
+  const ReferenceResult from_far = atmos::reference_radiance(a, far, v, sun, o);
+  const double b = glm::dot(far, v);
+  const double t_enter = -b - std::sqrt(b * b - (glm::dot(far, far) - a.top_radius_m * a.top_radius_m));
+  const ReferenceResult from_entry = atmos::reference_radiance(a, far + t_enter * v, v, sun, o);
+  for (size_t l = 0; l < 3; ++l) {
+    EXPECT_GT(from_far.radiance[l], 0.0);
+    // Same random numbers, same geometry up to rounding.
+    EXPECT_NEAR(from_far.radiance[l], from_entry.radiance[l], 1e-6 * from_entry.radiance[l]) << l;
+  }
+}
+
+// The radiance grows with K and converges; the direct sun is never counted.
+TEST(Reference, OrdersAccumulateAndSunDiscExcluded) {
+  const Atmosphere a = earth();
+  ReferenceOptions o;
+  o.paths = 4000;
+  const dvec3 sun = direction(40.0, 0.0), x(0.0, 0.0, a.bottom_radius_m);
+  std::vector<ReferenceResult> by_order;
+  for (int k : {1, 2, 6}) {
+    o.scattering_orders = k;
+    by_order.push_back(atmos::reference_radiance(a, x, direction(30.0, 120.0), sun, o));
+  }
+  for (size_t l = 0; l < 3; ++l) {
+    // Common random numbers: each order adds a non-negative contribution.
+    EXPECT_LE(by_order[0].radiance[l], by_order[1].radiance[l]);
+    EXPECT_LE(by_order[1].radiance[l], by_order[2].radiance[l]);
+    // Multiple scattering (and the ground, albedo 0.1) add 5-100 % to the
+    // single scattering of a clear Earth sky (most in the blue).
+    EXPECT_GT(by_order[2].radiance[l], 1.05 * by_order[0].radiance[l]);
+    EXPECT_LT(by_order[2].radiance[l], 2.0 * by_order[0].radiance[l]);
+  }
+  // Looking at the sun: the aureole is bright but far below the disc
+  // radiance E / (π sin²α) ~ 3e4 W m^-2 sr^-1 nm^-1.
+  o.scattering_orders = 2;
+  const ReferenceResult at_sun = atmos::reference_radiance(a, x, sun, sun, o);
+  for (size_t l = 0; l < 3; ++l) {
+    const double disc = sun_irradiance(a, l) / (kPi * std::pow(std::sin(a.sun_angular_radius_rad), 2));
+    EXPECT_LT(at_sun.radiance[l], 1e-3 * disc);
+    EXPECT_GT(at_sun.radiance[l], 0.0);
+  }
+}
+
+// ---------------------------------------------------------------------------
+// 6. Earth preset: zenith radiance with the sun 60° high.
+//
+// Bounds at 550 nm: single Rayleigh scattering alone (scattering angle
+// Θ = 30° between sun and zenith), optically thin, gives
+// E p_R(cos Θ) τ_R T = 1.86 · 0.1045 · 0.097 · e^{-0.13 (1 + 1/0.866)}
+// ≈ 0.014 W m^-2 sr^-1 nm^-1 (E from the 5778 K blackbody scaled to
+// 1361 W m^-2, τ 0.13 = air + aerosol + ozone), a lower bound; the
+// aerosol (τ 0.005), multiple scattering (+10-30 %) and ground (albedo 0.1)
+// add to it. With the clear-sky spectrum the luminance is ≈ 65 000 × L(550 nm)
+// cd/m² (683 lm/W × ~95 nm effective width), and a clear-sky zenith at this
+// sun elevation is 1 000–6 000 cd/m²: plausible range 0.015 – 0.1. The blue
+// sky: λ^-4 with the solar spectrum makes L(440)/L(680) ≈ 7; accept 4–12.
+TEST(Reference, EarthZenithRadianceIsPlausible) {
+  const Atmosphere a = earth();
+  ASSERT_EQ(a.wavelengths_nm.size(), 3u);
+  ASSERT_EQ(a.wavelengths_nm[1], 550.0);
+  const ReferenceOptions o;  // defaults: K = 4, 20000 paths
+  const dvec3 sun = direction(30.0, 0.0);
+  const ReferenceResult r = atmos::reference_radiance(a, dvec3(0.0, 0.0, a.bottom_radius_m), dvec3(0.0, 0.0, 1.0), sun, o);
+  EXPECT_GT(r.radiance[1], 0.015);
+  EXPECT_LT(r.radiance[1], 0.1);
+  const double blue_red = r.radiance[2] / r.radiance[0];
+  EXPECT_GT(blue_red, 4.0);
+  EXPECT_LT(blue_red, 12.0);
+  for (size_t l = 0; l < 3; ++l) EXPECT_LT(r.standard_error[l], 0.01 * r.radiance[l]) << l;
+  std::printf("Earth zenith, sun 60 deg: %.5g %.5g %.5g W m^-2 sr^-1 nm^-1 at 680/550/440 nm (+- %.2f %% %.2f %% %.2f %%)\n",
+              r.radiance[0], r.radiance[1], r.radiance[2], 100.0 * r.standard_error[0] / r.radiance[0],
+              100.0 * r.standard_error[1] / r.radiance[1], 100.0 * r.standard_error[2] / r.radiance[2]);
+}
+
+// Repeatability: the same seed gives identical results; options are checked.
+TEST(Reference, DeterministicAndValidated) {
+  const Atmosphere a = earth();
+  ReferenceOptions o;
+  o.paths = 500;
+  const dvec3 sun = direction(30.0, 0.0), x(0.0, 0.0, a.bottom_radius_m + 10.0), v = direction(60.0, 90.0);
+  const ReferenceResult r1 = atmos::reference_radiance(a, x, v, sun, o);
+  const ReferenceResult r2 = atmos::reference_radiance(a, x, v, sun, o);
+  EXPECT_EQ(r1.radiance, r2.radiance);
+  EXPECT_EQ(r1.standard_error, r2.standard_error);
+  o.seed = 99;
+  EXPECT_NE(atmos::reference_radiance(a, x, v, sun, o).radiance, r1.radiance);
+  o.scattering_orders = 0;
+  EXPECT_THROW(atmos::reference_radiance(a, x, v, sun, o), atmos::Error);
+  o.scattering_orders = 2;
+  EXPECT_THROW(atmos::reference_radiance(a, x, 2.0 * v, sun, o), atmos::Error);
+  EXPECT_THROW(atmos::reference_radiance(a, dvec3(0.0, 0.0, a.bottom_radius_m - 10.0), v, sun, o), atmos::Error);
+}
+
+}  // namespace
