@@ -178,9 +178,10 @@ atmos::Camera make_camera(const glm::dvec3& position, double azimuth, double ele
   atmos::Camera c;
   c.position = position;
   c.forward = atmos::direction_from_azimuth_elevation(azimuth, elevation);
-  // Straight up or down: keep north at the top of the image.
-  c.up = std::abs(elevation) > 89.9 ? atmos::direction_from_azimuth_elevation(azimuth, 0.0) * (elevation > 0 ? -1.0 : 1.0)
-                                    : glm::dvec3(0, 0, 1);
+  // Straight up or down: the look azimuth is at the top of the image (north
+  // for azimuth 0; looking up, east is then on the left, as on all-sky
+  // cameras; looking down, on the right, as on maps).
+  c.up = std::abs(elevation) > 89.9 ? atmos::direction_from_azimuth_elevation(azimuth, 0.0) : glm::dvec3(0, 0, 1);
   c.projection = projection;
   c.fov_deg = fov > 0.0 ? fov : (projection == atmos::Projection::fisheye ? 180.0 : 60.0);
   c.width = width;
@@ -197,13 +198,16 @@ void write_outputs(const atmos::Image& image, const std::vector<std::string>& ou
 
 std::vector<Shot> gallery(const atmos::Atmosphere& a) {
   const glm::dvec3 ground = atmos::observer_position(a, 2.0);
+  // Exposures are set for Earth's sunlight (1.75 W m^-2 nm^-1 at 550 nm) and
+  // shifted by the planet's: Mars' sun is 1.3 stops dimmer.
+  const double ev_shift = std::log2(a.solar_irradiance.at(550.0) / 1.749);
   std::vector<Shot> shots;
   shots.push_back({"noon", make_camera(ground, 0.0, 12.0, 75.0, atmos::Projection::perspective, 960, 540),
-                   atmos::direction_from_azimuth_elevation(180.0, 70.0), 13.5});
+                   atmos::direction_from_azimuth_elevation(180.0, 70.0), 13.5 + ev_shift});
   shots.push_back({"sunset", make_camera(ground, 270.0, 8.0, 75.0, atmos::Projection::perspective, 960, 540),
-                   atmos::direction_from_azimuth_elevation(270.0, 1.0), 10.5});
+                   atmos::direction_from_azimuth_elevation(270.0, 1.0), 10.5 + ev_shift});
   shots.push_back({"allsky", make_camera(ground, 0.0, 90.0, 180.0, atmos::Projection::fisheye, 540, 540),
-                   atmos::direction_from_azimuth_elevation(135.0, 20.0), 13.0});
+                   atmos::direction_from_azimuth_elevation(135.0, 20.0), 13.0 + ev_shift});
   // The planet from 2.5 radii, looking at the centre, sun from the side.
   const double d = 2.5 * a.bottom_radius_m;
   atmos::Camera orbit;
@@ -213,7 +217,7 @@ std::vector<Shot> gallery(const atmos::Atmosphere& a) {
   orbit.fov_deg = 50.0;
   orbit.width = 960;
   orbit.height = 540;
-  shots.push_back({"orbit", orbit, glm::normalize(glm::dvec3(0.35, 1.0, 0.25)), 13.0});
+  shots.push_back({"orbit", orbit, glm::normalize(glm::dvec3(0.35, 1.0, 0.25)), 13.0 + ev_shift});
   return shots;
 }
 

@@ -300,16 +300,20 @@ INLINE float scattering_texel_tile_nu(IN(AtmosphereParams) atmosphere, vec3 texe
   return scattering_uvwz_from_texel(atmosphere, texel).x * 2.0f - 1.0f;
 }
 
+// nu is bounded by the angles of the view and sun directions to the zenith:
+// texels outside the possible range hold the value of the nearest possible
+// geometry.
+INLINE float clamp_nu(float mu, float mu_s, float nu) {
+  float spread = safe_sqrt((1.0f - mu * mu) * (1.0f - mu_s * mu_s));
+  return clamp(nu, mu * mu_s - spread, mu * mu_s + spread);
+}
+
 INLINE void r_mu_mu_s_nu_from_scattering_texel(IN(AtmosphereParams) atmosphere, vec3 texel, OUT(float) r,
                                                OUT(float) mu, OUT(float) mu_s, OUT(float) nu,
                                                OUT(bool) ray_r_mu_intersects_ground) {
   r_mu_mu_s_nu_from_scattering_uvwz(atmosphere, scattering_uvwz_from_texel(atmosphere, texel), r, mu, mu_s, nu,
                                     ray_r_mu_intersects_ground);
-  // nu is bounded by the angles of the view and sun directions to the zenith:
-  // texels outside the possible range hold the value of the nearest possible
-  // geometry.
-  float spread = safe_sqrt((1.0f - mu * mu) * (1.0f - mu_s * mu_s));
-  nu = clamp(nu, mu * mu_s - spread, mu * mu_s + spread);
+  nu = clamp_nu(mu, mu_s, nu);
 }
 
 // Irradiance table: (r, mu_s), both linear.

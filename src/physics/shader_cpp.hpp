@@ -40,14 +40,16 @@ struct sampler3D {
 
 namespace detail {
 // Index and weight of the lower texel for coordinate u over n texels, clamped
-// to the edges as GL_CLAMP_TO_EDGE does.
+// to the edges as GL_CLAMP_TO_EDGE does (clamping u to [0, 1] first gives the
+// same taps, and keeps x > -1 so that truncation is a floor: std::floor is a
+// library call on baseline x86-64).
 inline void linear_tap(float u, int n, int& i0, int& i1, float& w1) {
-  float x = u * float(n) - 0.5f;
-  float f = std::floor(x);
-  int i = int(f);
-  w1 = x - f;
-  i0 = i < 0 ? 0 : (i >= n ? n - 1 : i);
-  i1 = i + 1 < 0 ? 0 : (i + 1 >= n ? n - 1 : i + 1);
+  u = u < 0.0f ? 0.0f : (u > 1.0f ? 1.0f : u);
+  const float x = u * float(n) - 0.5f;
+  const int i = int(x + 1.0f) - 1;
+  w1 = x - float(i);
+  i0 = i < 0 ? 0 : i;
+  i1 = i + 1 >= n ? n - 1 : i + 1;
 }
 }  // namespace detail
 

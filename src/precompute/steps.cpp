@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -13,7 +14,7 @@ using namespace atmos::physics;
 namespace {
 
 // Trapezoid steps of the transmittance table's optical depth integral.
-constexpr int kTransmittanceSteps = 500;
+constexpr int kTransmittanceSteps = 250;
 // Directions (theta x 2 theta) of the hemisphere integral of the irradiance.
 constexpr int kIrradianceThetaSamples = 16;
 // Gauss-Legendre nodes in mu on each side of the horizon for the density.
@@ -36,6 +37,93 @@ void for_each_view_ray(const AtmosphereParams& a, const StepProgress& progress,
     if (progress) progress(double(z + 1) / double(a.scattering_r_size));
   }
 }
+
+// The (mu_s, tile nu) of each column x of a scattering table: they depend on
+// x only (the clamping of nu, which depends on mu, is left to clamp_nu()).
+struct TexelColumns {
+  std::vector<float> mu_s;
+  std::vector<float> tile_nu;
+};
+
+TexelColumns make_texel_columns(const AtmosphereParams& a) {
+  TexelColumns c;
+  const int width = a.scattering_nu_size * a.scattering_mu_s_size;
+  for (int x = 0; x < width; ++x) {
+    const vec4 uvwz = scattering_uvwz_from_texel(a, vec3(float(x), 0.0f, 0.0f));
+    float r, mu, mu_s, nu;
+    bool ground;
+    r_mu_mu_s_nu_from_scattering_uvwz(a, uvwz, r, mu, mu_s, nu, ground);
+    c.mu_s.push_back(mu_s);
+    c.tile_nu.push_back(scattering_texel_tile_nu(a, vec3(float(x), 0.0f, 0.0f)));
+  }
+  return c;
+}
+
+// scattering_u_mu_s() tabulated finely over [mu_s_min, 1] (constant below,
+// where the mapping clamps): it costs three square roots and four divisions,
+// and the multiple scattering evaluates it for every texel and ray node.
+// Linear interpolation between 8192 samples of this smooth function is exact
+// to ~1e-7 of the coordinate; the kink at mu_s_min is a sample, not crossed.
+class MuSCoordinate {
+ public:
+  explicit MuSCoordinate(const AtmosphereParams& a) : low_(a.mu_s_min), u_(kSamples + 1) {
+    scale_ = float(kSamples) / (1.0f - low_);
+    for (int i = 0; i <= kSamples; ++i)
+      u_[size_t(i)] = scattering_u_mu_s(a, low_ + (1.0f - low_) * float(i) / float(kSamples));
+  }
+  float operator()(float mu_s) const {
+    const float x = std::max(mu_s - low_, 0.0f) * scale_;
+    const int i = std::min(int(x), kSamples - 1);
+    const float f = std::min(x - float(i), 1.0f);
+    return u_[size_t(i)] + (u_[size_t(i) + 1] - u_[size_t(i)]) * f;
+  }
+
+ private:
+  static constexpr int kSamples = 8192;
+  float low_;
+  float scale_ = 1.0f;
+  std::vector<float> u_;
+};
+
+// transmittance_to_sun(a, t, r, mu_s) for one radius and many mu_s: the
+// row of the transmittance table at r (its v coordinate) and the horizon are
+// computed once.
+class SunTransmittanceAtRadius {
+ public:
+  SunTransmittanceAtRadius(const AtmosphereParams& a, const sampler2D& t, float r)
+      : a_(a), r_(r), row_(size_t(t.width)) {
+    const vec2 uv = transmittance_uv_from_r_mu(a, r, 1.0f);
+    int y0, y1;
+    float fy;
+    detail::linear_tap(uv.y, t.height, y0, y1, fy);
+    for (int x = 0; x < t.width; ++x)
+      row_[size_t(x)] = t.texels[size_t(y0) * size_t(t.width) + size_t(x)] * (1.0f - fy) +
+                        t.texels[size_t(y1) * size_t(t.width) + size_t(x)] * fy;
+    mu_h_ = horizon_mu(a, r);
+    d_min_ = a.top_radius - r;
+    d_max_ = horizon_length(a, r) + horizon_length_at_top(a);
+  }
+  vec3 operator()(float mu_s) const {
+    float visible = 1.0f;
+    if (mu_s - mu_h_ < a_.sun_angular_radius) {
+      visible = sun_visible_fraction(a_, r_, mu_s);
+      if (visible <= 0.0f) return vec3(0.0f);
+    }
+    // transmittance_uv_from_r_mu(a, r, mu_s).x
+    const float d = distance_to_top_atmosphere_boundary(a_, r_, mu_s);
+    const float x_mu = clamp((d - d_min_) / (d_max_ - d_min_), 0.0f, 1.0f);
+    int x0, x1;
+    float fx;
+    detail::linear_tap(texture_coord_from_unit_range(x_mu, a_.transmittance_mu_size), int(row_.size()), x0, x1, fx);
+    return (row_[size_t(x0)] * (1.0f - fx) + row_[size_t(x1)] * fx) * visible;
+  }
+
+ private:
+  const AtmosphereParams& a_;
+  float r_;
+  std::vector<vec3> row_;
+  float mu_h_ = 0.0f, d_min_ = 0.0f, d_max_ = 0.0f;
+};
 
 // The nodes of the shared ray quadrature (ray_integration_nodes in
 // functions.glsl) for the view ray of row (y, z), with what does not depend
@@ -119,8 +207,13 @@ void gauss_legendre(int n, double a, double b, std::vector<double>& nodes, std::
 }
 
 std::vector<double> legendre_moments(const std::function<double(double)>& phase, int max_degree) {
-  std::vector<double> x, w;
-  gauss_legendre(2048, -1.0, 1.0, x, w);
+  static const std::pair<std::vector<double>, std::vector<double>> rule = [] {
+    std::pair<std::vector<double>, std::vector<double>> r;
+    gauss_legendre(2048, -1.0, 1.0, r.first, r.second);
+    return r;
+  }();
+  const std::vector<double>& x = rule.first;
+  const std::vector<double>& w = rule.second;
   std::vector<double> moments(size_t(max_degree + 1), 0.0);
   for (size_t k = 0; k < x.size(); ++k) {
     const double p = phase(x[k]) * w[k] * 2.0 * M_PI;
@@ -184,26 +277,29 @@ void compute_single_scattering_tables(const AtmosphereParams& a, const Table2D& 
   rayleigh = Table3D(width, a.scattering_mu_size, a.scattering_r_size);
   aerosol = Table3D(width, a.scattering_mu_size, a.scattering_r_size);
   const sampler2D t = transmittance.sampler();
+  const TexelColumns columns = make_texel_columns(a);
   for_each_view_ray(a, progress, [&](int y, int z) {
     const ViewRay ray = make_view_ray(a, y, z, SINGLE_SCATTERING_INTERVALS);
     std::array<vec3, MAX_RAY_NODES> beta_rayleigh, beta_aerosol;
+    std::vector<SunTransmittanceAtRadius> sun;
+    std::array<float, MAX_RAY_NODES> inverse_r_t{};
     for (int i = 0; i < ray.nodes.count; ++i) {
       vec3 extinction;
       medium_at(a, ray.r_t[size_t(i)], beta_rayleigh[size_t(i)], beta_aerosol[size_t(i)], extinction);
       beta_rayleigh[size_t(i)] *= ray.nodes.weight[i];
       beta_aerosol[size_t(i)] *= ray.nodes.weight[i];
+      sun.emplace_back(a, t, ray.r_t[size_t(i)]);
+      inverse_r_t[size_t(i)] = 1.0f / ray.r_t[size_t(i)];
     }
     for (int x = 0; x < width; ++x) {
-      float r, mu, mu_s, nu;
-      bool ground;
-      r_mu_mu_s_nu_from_scattering_texel(a, vec3(float(x), float(y), float(z)), r, mu, mu_s, nu, ground);
+      const float mu_s = columns.mu_s[size_t(x)];
+      const float nu = clamp_nu(ray.mu, mu_s, columns.tile_nu[size_t(x)]);
       vec3 sum_rayleigh(0.0f), sum_aerosol(0.0f);
       for (int i = 0; i < ray.nodes.count; ++i) {
-        const float r_t = ray.r_t[size_t(i)];
-        const float mu_s_t = clamp_cosine(mu_s_along_ray(r, mu_s, nu, ray.nodes.t[i], r_t));
-        const vec3 sun = transmittance_to_sun(a, t, r_t, mu_s_t);
-        sum_rayleigh += sun * beta_rayleigh[size_t(i)];
-        sum_aerosol += sun * beta_aerosol[size_t(i)];
+        const float mu_s_t = clamp_cosine((ray.r * mu_s + ray.nodes.t[i] * nu) * inverse_r_t[size_t(i)]);
+        const vec3 sun_transmittance = sun[size_t(i)](mu_s_t);
+        sum_rayleigh += sun_transmittance * beta_rayleigh[size_t(i)];
+        sum_aerosol += sun_transmittance * beta_aerosol[size_t(i)];
       }
       rayleigh.at(x, y, z) = sum_rayleigh * a.solar_irradiance;
       aerosol.at(x, y, z) = sum_aerosol * a.solar_irradiance;
@@ -233,7 +329,6 @@ Table3D compute_scattering_density_table(const AtmosphereParams& a, const Table2
   const int width = a.scattering_nu_size * a.scattering_mu_s_size;
   Table3D density(width, a.scattering_mu_size, a.scattering_r_size);
   const sampler2D t = transmittance.sampler(), e = irradiance.sampler();
-  const sampler3D sr = single_rayleigh.sampler(), sa = single_aerosol.sampler(), ms = multiple_scattering.sampler();
 
   const std::vector<double> rayleigh_moments =
       legendre_moments([](double x) { return double(rayleigh_phase_function(float(x))); }, L);
@@ -276,6 +371,44 @@ Table3D compute_scattering_density_table(const AtmosphereParams& a, const Table2
       associated_legendre(output_mu[size_t(y)], output_harmonics[size_t(y)]);
     }
 
+    // incident_radiance() for all directions of node j shares the (mu, r)
+    // part of its table lookups and the transmittance to the ground: do the
+    // (mu, r) interpolation once, leaving rows of (nu, mu_s) texels whose
+    // mu_s columns are exactly those of this step's output.
+    struct NodeRows {
+      std::vector<vec3> first, second;  // order 1: single Rayleigh, single aerosol; else: multiple scattering
+      bool ground = false;
+      float ground_distance = 0.0f;
+      vec3 ground_transmittance{0.0f};
+    };
+    std::vector<NodeRows> node_rows(nodes.size());
+    tbb::parallel_for(size_t(0), nodes.size(), [&](size_t j) {
+      NodeRows& n = node_rows[j];
+      const float mu_w = float(nodes[j]);
+      n.ground = ray_intersects_ground(a, r, mu_w);
+      int y0, y1, z0, z1;
+      float fy, fz;
+      detail::linear_tap(scattering_u_mu(a, r, mu_w, n.ground), a.scattering_mu_size, y0, y1, fy);
+      detail::linear_tap(scattering_u_r(a, r), a.scattering_r_size, z0, z1, fz);
+      auto blend = [&](const Table3D& table, std::vector<vec3>& row) {
+        row.resize(size_t(width));
+        auto at = [&](int yy, int zz) { return &table.texels[(size_t(zz) * size_t(table.height) + size_t(yy)) * size_t(width)]; };
+        const vec3 *c00 = at(y0, z0), *c10 = at(y1, z0), *c01 = at(y0, z1), *c11 = at(y1, z1);
+        for (int x = 0; x < width; ++x)
+          row[size_t(x)] = (c00[x] * (1.0f - fy) + c10[x] * fy) * (1.0f - fz) + (c01[x] * (1.0f - fy) + c11[x] * fy) * fz;
+      };
+      if (order == 1) {
+        blend(single_rayleigh, n.first);
+        blend(single_aerosol, n.second);
+      } else {
+        blend(multiple_scattering, n.first);
+      }
+      if (n.ground) {
+        n.ground_distance = distance_to_bottom_atmosphere_boundary(a, r, mu_w);
+        n.ground_transmittance = transmittance_to_ground(a, t, r, mu_w);
+      }
+    });
+
     tbb::parallel_for(0, a.scattering_mu_s_size, [&](int mu_s_index) {
       float r_unused, mu_s, mu_unused2, nu_unused2;
       bool ground_unused2;
@@ -289,9 +422,26 @@ Table3D compute_scattering_density_table(const AtmosphereParams& a, const Table2
       for (size_t j = 0; j < nodes.size(); ++j) {
         const float mu_w = float(nodes[j]);
         const float sin_w = std::sqrt(std::max(0.0f, 1.0f - mu_w * mu_w));
+        const NodeRows& n = node_rows[j];
         for (int l = 0; l <= kPhiIntervals; ++l) {
+          // incident_radiance(a, t, sr, sa, ms, e, r, mu_w, mu_s, nu_w, order), with the lookups hoisted.
           const float nu_w = clamp_cosine(sin_w * cos_phi[size_t(l)] * sun.x + mu_w * sun.z);
-          radiance[size_t(l)] = incident_radiance(a, t, sr, sa, ms, e, r, mu_w, mu_s, nu_w, order);
+          const float tex_coord_x = (nu_w + 1.0f) / 2.0f * float(a.scattering_nu_size - 1);
+          const int tile = std::min(int(std::floor(tex_coord_x)), a.scattering_nu_size - 1);
+          const float f = tex_coord_x - float(tile);
+          const size_t x0 = size_t(tile * a.scattering_mu_s_size + mu_s_index);
+          const size_t x1 = size_t(std::min(tile + 1, a.scattering_nu_size - 1) * a.scattering_mu_s_size + mu_s_index);
+          vec3 value = n.first[x0] * (1.0f - f) + n.first[x1] * f;
+          if (order == 1)
+            value = value * rayleigh_phase_function(nu_w) +
+                    (n.second[x0] * (1.0f - f) + n.second[x1] * f) * aerosol_phase_function(a, nu_w);
+          if (n.ground) {
+            const float mu_s_ground = clamp_cosine((r * mu_s + n.ground_distance * nu_w) / a.bottom_radius);
+            const vec3 ground_irradiance = order == 1 ? compute_direct_irradiance(a, t, a.bottom_radius, mu_s_ground)
+                                                      : irradiance_lookup(a, e, a.bottom_radius, mu_s_ground);
+            value += n.ground_transmittance * a.ground_albedo * (1.0f / PI) * ground_irradiance;
+          }
+          radiance[size_t(l)] = value;
         }
         const std::array<float, kShCount>& legendre = node_harmonics[j];
         for (int m = 0; m <= L; ++m) {
@@ -355,6 +505,8 @@ Table3D compute_multiple_scattering_table(const AtmosphereParams& a, const Table
                                           const StepProgress& progress) {
   const int width = a.scattering_nu_size * a.scattering_mu_s_size;
   Table3D result(width, a.scattering_mu_size, a.scattering_r_size);
+  const TexelColumns columns = make_texel_columns(a);
+  const MuSCoordinate u_of_mu_s(a);
   for_each_view_ray(a, progress, [&](int y, int z) {
     const ViewRay ray = make_view_ray(a, y, z, MULTIPLE_SCATTERING_INTERVALS);
     std::vector<vec3> rows(size_t(ray.nodes.count) * size_t(width));
@@ -375,18 +527,19 @@ Table3D compute_multiple_scattering_table(const AtmosphereParams& a, const Table
         row[x] = c0 * (1.0f - fz) + c1 * fz;
       }
     }
+    std::array<float, MAX_RAY_NODES> inverse_r_t{};
+    for (int i = 0; i < ray.nodes.count; ++i) inverse_r_t[size_t(i)] = 1.0f / ray.r_t[size_t(i)];
     for (int x = 0; x < width; ++x) {
-      float r, mu, mu_s, nu;
-      bool ground;
-      r_mu_mu_s_nu_from_scattering_texel(a, vec3(float(x), float(y), float(z)), r, mu, mu_s, nu, ground);
+      const float mu_s = columns.mu_s[size_t(x)];
+      const float nu = clamp_nu(ray.mu, mu_s, columns.tile_nu[size_t(x)]);
       // The nu tiles and weight, as in scattering_lookup().
       const float tex_coord_x = (nu + 1.0f) / 2.0f * float(a.scattering_nu_size - 1);
       const float tex_x = std::floor(tex_coord_x);
       const float lerp = tex_coord_x - tex_x;
       vec3 sum(0.0f);
       for (int i = 0; i < ray.nodes.count; ++i) {
-        const float mu_s_t = clamp_cosine(mu_s_along_ray(r, mu_s, nu, ray.nodes.t[i], ray.r_t[size_t(i)]));
-        const float u_mu_s = scattering_u_mu_s(a, mu_s_t);
+        const float mu_s_t = clamp_cosine((ray.r * mu_s + ray.nodes.t[i] * nu) * inverse_r_t[size_t(i)]);
+        const float u_mu_s = u_of_mu_s(mu_s_t);
         const vec3* row = &rows[size_t(i) * size_t(width)];
         int x0, x1;
         float fx;

@@ -159,6 +159,8 @@ struct Model {
   size_t table_rows = 0;
   std::vector<double> table;
   std::vector<size_t> linear;
+  // Radius of the "effective shadow" used to steer samples (shadow_plan).
+  double shadow_radius = 0.0;
 };
 
 // Altitude grid: h_0 = 0, h_{k+1} = h_k + max(1.5 H_min, h_k / 2), capped at
@@ -263,6 +265,17 @@ Spec extinction(const Model& m, double h) {
   return out;
 }
 
+Spec optical_depth_spec(const Model& m, const struct Ray& ray, double t0, double t1);
+
+// Radius Rb + h_s of the cylinder behind the planet in which sunlight is
+// strongly dimmed (used only to steer samples, see shadow_plan): h_s is the
+// tangent altitude at which the half tangent ray (from its tangent point
+// to the top) transmits, on average over the wavelengths, kShadowT = 0.6
+// (the value that gave the lowest twilight variance for Earth among 0.25,
+// 0.6, 0.8, 0.95). Found by bisection on h in [0, Rt - Rb]; Rb if even the
+// ground-grazing ray transmits more.
+double effective_shadow_radius(const Model& m);
+
 Model make_model(const Atmosphere& a) {
   a.validate();
   Model m;
@@ -295,6 +308,7 @@ Model make_model(const Atmosphere& a) {
   }
   m.grid = altitude_grid(a);
   build_table(m);
+  m.shadow_radius = effective_shadow_radius(m);
   return m;
 }
 
@@ -369,6 +383,25 @@ Spec optical_depth_spec(const Model& m, const Ray& ray, double t0, double t1) {
   Spec tau{};
   for_each_interval(m, ray, t0, t1, [&](double ta, double tb) { integrate_interval(m, ray, ta, tb, tau); });
   return tau;
+}
+
+double effective_shadow_radius(const Model& m) {
+  const auto mean_transmittance = [&](double h) {
+    const double r = m.rb + h;
+    const Ray ray(dvec3(r, 0.0, 0.0), dvec3(0.0, 1.0, 0.0));
+    const Spec tau = optical_depth_spec(m, ray, 0.0, std::sqrt((m.rt - r) * (m.rt + r)));
+    double t = 0.0;
+    for (int l = 0; l < m.n; ++l) t += std::exp(-tau[size_t(l)]) / m.n;
+    return t;
+  };
+  constexpr double kShadowT = 0.6;
+  if (mean_transmittance(0.0) >= kShadowT) return m.rb;
+  double lo = 0.0, hi = m.rt - m.rb;
+  for (int i = 0; i < 40; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (mean_transmittance(mid) < kShadowT ? lo : hi) = mid;
+  }
+  return m.rb + 0.5 * (lo + hi);
 }
 
 // Where a ray from o along d is inside the atmosphere: t in [t_begin, t_end]
@@ -519,34 +552,156 @@ bool any_positive(const Model& m, const Spec& s) {
   return false;
 }
 
-// Forced distance sampling on a segment: picks a wavelength l uniformly among
-// those with τ_l(d) > 0 (set A) and t with density
-//   p_l(t) = σ_l(t) T_l(t) / (1 - T_l(d)),  via τ* = -ln(1 - ξ (1 - T_l(d))),
-// and multiplies β_λ by T_λ(t) / p(t), p(t) = (1/|A|) Σ_{l∈A} p_l(t), so
-// that β_λ J_λ(t) estimates ∫_0^d T_λ(t) J_λ(t) dt without bias (wavelengths
-// outside A have σ_ext = 0, hence J = 0, on the whole segment). u is the
-// (stratified) uniform variable that picks l and ξ.
-// Returns false if no wavelength can scatter on the segment.
-bool sample_forced(const Model& m, const Segment& s, double u, Spec& beta, Vertex& v) {
+// τ(t) from the start of the segment, for all wavelengths: τ(t_k) of the
+// interval containing t plus ∫_{t_k}^t σ_ext (Gauss–Legendre).
+Spec tau_at(const Model& m, const Segment& s, double t) {
+  if (s.t.size() < 2) return s.tau[0];
+  // The interval [t_k, t_k+1] holding t.
+  const size_t first_after = size_t(std::upper_bound(s.t.begin(), s.t.end(), t) - s.t.begin());
+  const size_t k = std::clamp(first_after, size_t(1), s.t.size() - 1) - 1;
+  Spec acc = s.tau[k];
+  integrate_interval(m, s.ray, s.t[k], std::clamp(t, s.t[k], s.t[k + 1]), acc);
+  return acc;
+}
+
+// A partition of a segment into at most 5 consecutive pieces [a, b], with
+// the optical depths at their ends and the probability of drawing the first
+// interaction in each. Any partition and any probabilities > 0 (where the
+// integrand can be non-zero) give an unbiased estimate; they only steer the
+// samples.
+struct Piece {
+  double a = 0.0, b = 0.0;
+  Spec tau_a{}, tau_b{};
+  double probability = 0.0;
+};
+struct Plan {
+  int count = 0;
+  std::array<Piece, 5> piece;
+};
+
+// The whole segment as one piece (used for all segments after the first).
+Plan whole_plan(const Segment& s) {
+  Plan p;
+  p.count = 1;
+  p.piece[0].a = s.t_begin;
+  p.piece[0].b = s.t_end;
+  p.piece[0].tau_b = s.total();
+  p.piece[0].probability = 1.0;
+  return p;
+}
+
+// The interval of t where the ray o + t d is inside the half cylinder behind
+// the planet {y : y·s < 0, |y - (y·s)s| < R} (s: sun direction): the
+// cylinder is |o⊥ + t d⊥|² < R² (⊥: component normal to s), a quadratic
+// inequality in t, the half space (o·s) + t (d·s) < 0. False if empty.
+bool cylinder_interval(const dvec3& o, const dvec3& d, const dvec3& sun, double radius, double& lo, double& hi) {
+  const dvec3 o_perp = o - glm::dot(o, sun) * sun, d_perp = d - glm::dot(d, sun) * sun;
+  lo = -INFINITY;
+  hi = INFINITY;
+  const double qa = glm::dot(d_perp, d_perp), qb = glm::dot(o_perp, d_perp);
+  const double qc = (glm::length(o_perp) - radius) * (glm::length(o_perp) + radius);
+  if (qa > 1e-15) {
+    const double disc = qb * qb - qa * qc;
+    if (disc <= 0.0) return false;
+    lo = (-qb - std::sqrt(disc)) / qa;
+    hi = (-qb + std::sqrt(disc)) / qa;
+  } else if (qc >= 0.0) {
+    return false;
+  }
+  const double os = glm::dot(o, sun), ds = glm::dot(d, sun);
+  if (ds > 0.0) hi = std::min(hi, -os / ds);
+  else if (ds < 0.0) lo = std::max(lo, -os / ds);
+  else if (os >= 0.0) return false;
+  return hi > lo;
+}
+
+// A segment split where it enters or leaves the planet's shadow: the half
+// cylinders of radius Rb (geometric shadow of a point sun) and of the
+// effective shadow radius (sunlight mostly extinct), giving up to 5 pieces.
+// With the sun low, most of a ray's optical depth may be in the shadow,
+// where only multiple scattering contributes, and a small part in the light:
+// a defensive mixture P_j = ½ w_j/Σw + ½ [w_j > 0]/(number of such pieces),
+// w_j = mean_λ T_λ(0, a_j)(1 - T_λ(a_j, b_j)) (the natural probability of an
+// interaction in piece j), keeps at least half the natural share of every
+// piece and lifts rare ones. Without shadow: one piece, plain forced sampling.
+Plan shadow_plan(const Model& m, const Segment& s, const dvec3& sun) {
+  if (!s.inside || !(s.t_end > s.t_begin)) return whole_plan(s);
+  std::array<double, 6> cut{};
+  int cuts = 0;
+  cut[size_t(cuts++)] = s.t_begin;
+  const int radii = m.shadow_radius > m.rb ? 2 : 1;
+  for (int k = 0; k < radii; ++k) {
+    double lo, hi;
+    if (!cylinder_interval(s.ray.o, s.ray.d, sun, k == 0 ? m.rb : m.shadow_radius, lo, hi)) continue;
+    for (double t : {lo, hi})
+      if (t > s.t_begin && t < s.t_end) cut[size_t(cuts++)] = t;
+  }
+  if (cuts == 1) return whole_plan(s);
+  cut[size_t(cuts++)] = s.t_end;
+  std::sort(cut.data(), cut.data() + cuts);
+  Plan p;
+  double w[5] = {0.0, 0.0, 0.0, 0.0, 0.0}, w_all = 0.0;
+  int nonzero = 0;
+  for (int q = 0; q + 1 < cuts && p.count < 5; ++q) {
+    if (!(cut[size_t(q + 1)] > cut[size_t(q)])) continue;
+    Piece& piece = p.piece[size_t(p.count)];
+    piece.a = cut[size_t(q)];
+    piece.b = cut[size_t(q + 1)];
+    piece.tau_a = q == 0 ? Spec{} : tau_at(m, s, piece.a);
+    piece.tau_b = q + 2 == cuts ? s.total() : tau_at(m, s, piece.b);
+    for (int l = 0; l < m.n; ++l)
+      w[p.count] += std::exp(-piece.tau_a[size_t(l)]) * -std::expm1(-(piece.tau_b[size_t(l)] - piece.tau_a[size_t(l)]));
+    w_all += w[p.count];
+    if (w[p.count] > 0.0) ++nonzero;
+    ++p.count;
+  }
+  if (!(w_all > 0.0)) return whole_plan(s);
+  for (int j = 0; j < p.count; ++j)
+    p.piece[size_t(j)].probability = w[j] > 0.0 ? 0.5 * w[j] / w_all + 0.5 / nonzero : 0.0;
+  return p;
+}
+
+// Forced distance sampling on a segment: picks piece j of the plan with
+// probability P_j, then a wavelength l uniformly among those with
+// τ_l(a_j, b_j) > 0 (set A_j), then t in [a_j, b_j] with density
+//   p_l(t) = σ_l(t) T_l(a_j, t) / (1 - T_l(a_j, b_j)),
+// via τ_l(a_j, t) = -ln(1 - ξ (1 - T_l(a_j, b_j))), and multiplies β_λ by
+// T_λ(0, t) / p(t), p(t) = P_j (1/|A_j|) Σ_{l∈A_j} p_l(t), so that
+// β_λ J_λ(t) estimates ∫_0^d T_λ(0, t) J_λ(t) dt without bias (wavelengths
+// outside A_j have σ_ext = 0, hence J = 0, on the piece). u is the
+// (stratified) uniform variable that picks j, l and ξ.
+// Returns false if nothing can scatter on the segment.
+bool sample_forced(const Model& m, const Segment& s, const Plan& plan, double u, Spec& beta, Vertex& v) {
+  int j = 0;
+  double below = 0.0;
+  while (j + 1 < plan.count && (plan.piece[size_t(j)].probability <= 0.0 ||
+                                u >= below + plan.piece[size_t(j)].probability)) {
+    below += plan.piece[size_t(j)].probability;
+    ++j;
+  }
+  const Piece& piece = plan.piece[size_t(j)];
+  if (!(piece.probability > 0.0)) return false;
+  const double uj = std::clamp((u - below) / piece.probability, 0.0, 1.0);
   int active[kMaxWavelengths];
   int count = 0;
   for (int l = 0; l < m.n; ++l)
-    if (s.total()[size_t(l)] > 0.0) active[count++] = l;
+    if (piece.tau_b[size_t(l)] > piece.tau_a[size_t(l)]) active[count++] = l;
   if (count == 0) return false;
-  const double scaled = u * count;
+  const double scaled = uj * count;
   const int pick = std::min(int(scaled), count - 1);
-  const double xi = std::min(scaled - pick, 1.0 - 0x1.0p-53);
+  const double xi = std::clamp(scaled - pick, 0.0, 1.0 - 0x1.0p-53);
   const int l = active[pick];
-  const double one_minus_td = -std::expm1(-s.total()[size_t(l)]);
-  const double target = -std::log1p(-xi * one_minus_td);
+  const size_t li = size_t(l);
+  const double target =
+      piece.tau_a[li] - std::log1p(-xi * -std::expm1(-(piece.tau_b[li] - piece.tau_a[li])));
   Spec tau_t{}, sigma_t{};
   const double t = invert_optical_depth(m, s, l, target, tau_t, sigma_t);
   double pdf = 0.0;
   for (int a = 0; a < count; ++a) {
     const size_t la = size_t(active[a]);
-    pdf += sigma_t[la] * std::exp(-tau_t[la]) / -std::expm1(-s.total()[la]);
+    pdf += sigma_t[la] * std::exp(-(tau_t[la] - piece.tau_a[la])) / -std::expm1(-(piece.tau_b[la] - piece.tau_a[la]));
   }
-  pdf /= count;
+  pdf *= piece.probability / count;
   if (!(pdf > 0.0)) return false;
   for (int x = 0; x < m.n; ++x) beta[size_t(x)] *= std::exp(-tau_t[size_t(x)]) / pdf;
   v.p = s.ray.o + t * s.ray.d;
@@ -677,7 +832,7 @@ void follow_path(const Context& ctx, Vertex v, Spec beta, int order, reference_d
     if (!seg.inside) return;
     Vertex next;
     const bool ok = seg.hits_ground ? sample_analog(m, seg, rnd, beta, next)
-                                    : sample_forced(m, seg, rnd.uniform(), beta, next);
+                                    : sample_forced(m, seg, shadow_plan(m, seg, ctx.sun), rnd.uniform(), beta, next);
     if (!ok) return;
     v = next;
     ++order;
@@ -685,16 +840,17 @@ void follow_path(const Context& ctx, Vertex v, Spec beta, int order, reference_d
 }
 
 // One sample of the radiance (1) along a prepared view segment with at most
-// max_order interactions: a forced first interaction (stratified variable u)
-// plus, if the segment ends on the ground, the ground term T(0,d) L_ground.
-Spec radiance_sample(const Context& ctx, const Segment& view, double u, reference_detail::Random& rnd,
-                     Segment& scratch) {
+// max_order interactions: a forced first interaction (stratified variable u,
+// pieces of `plan`) plus, if the segment ends on the ground, the ground term
+// T(0,d) L_ground.
+Spec radiance_sample(const Context& ctx, const Segment& view, const Plan& plan, double u,
+                     reference_detail::Random& rnd, Segment& scratch) {
   Spec out{};
   if (!view.inside || ctx.max_order < 1) return out;
   Spec beta;
   beta.fill(1.0);
   Vertex v;
-  if (sample_forced(ctx.m, view, u, beta, v)) follow_path(ctx, v, beta, 1, rnd, scratch, out);
+  if (sample_forced(ctx.m, view, plan, u, beta, v)) follow_path(ctx, v, beta, 1, rnd, scratch, out);
   if (view.hits_ground) {
     beta.fill(0.0);
     for (int l = 0; l < ctx.m.n; ++l) beta[size_t(l)] = std::exp(-view.total()[size_t(l)]);
@@ -829,8 +985,9 @@ ReferenceResult reference_radiance(const Atmosphere& atmosphere, const glm::dvec
   const Context ctx{m, check_unit(sun, "sun"), options.scattering_orders};
   Segment view_segment;
   build_segment(m, x, check_unit(view, "view"), view_segment);
+  const Plan plan = shadow_plan(m, view_segment, ctx.sun);
   return estimate(m, options, [&](double u, reference_detail::Random& rnd, Workspace& ws) {
-    return radiance_sample(ctx, view_segment, u, rnd, ws.path);
+    return radiance_sample(ctx, view_segment, plan, u, rnd, ws.path);
   });
 }
 
@@ -857,7 +1014,7 @@ ReferenceResult reference_irradiance(const Atmosphere& atmosphere, const glm::dv
     const double mu = std::sqrt(u);
     const dvec3 d = direction_around(n, mu, 2.0 * kPi * rnd.uniform());
     build_segment(m, x, d, ws.first);
-    const Spec l_sky = radiance_sample(ctx, ws.first, rnd.uniform(), rnd, ws.path);
+    const Spec l_sky = radiance_sample(ctx, ws.first, shadow_plan(m, ws.first, ctx.sun), rnd.uniform(), rnd, ws.path);
     for (int l = 0; l < m.n; ++l) out[size_t(l)] += kPi * l_sky[size_t(l)];
     return out;
   });
