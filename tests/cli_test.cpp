@@ -41,14 +41,14 @@ std::string slurp(const fs::path& p) {
 }
 
 // Runs the CLI with small tables cached in the scratch directory.
-CliRun atmos_cli(const std::string& args, const std::string& stdin_text = "") {
+CliRun atmos_cli(const std::string& args, const std::string& stdin_text = "", const std::string& environment = "") {
   const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt", in = scratch() / "stdin.txt";
   {
     std::ofstream f(in);
     f << stdin_text;
   }
   const std::string command = "cd '" + scratch().string() + "' && ATMOS_CACHE_DIR='" + (scratch() / "cache").string() +
-                              "' '" + ATMOS_CLI + "' " + args + " < '" + in.string() + "' > '" + out.string() +
+                              "' " + environment + " '" + ATMOS_CLI + "' " + args + " < '" + in.string() + "' > '" + out.string() +
                               "' 2> '" + err.string() + "'";
   const int status = std::system(command.c_str());
   CliRun r;
@@ -133,6 +133,17 @@ TEST(Cli, UnwritableOutputIsAnError) {
   EXPECT_EQ(r.code, 1) << r.err;
   EXPECT_EQ(lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("/no/such/dir/out.png"), std::string::npos) << r.err;
+}
+
+TEST(Cli, NoOpenGlIsOneClearError) {
+  // Without an EGL vendor library (glvnd) no OpenGL 4.5 context can be had:
+  // one line, exit 1.
+  const CliRun r = atmos_cli("render --size 8x8 -o " + (scratch() / "nogl.png").string() + kSmall, "",
+                             "__EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json LIBGL_DRIVERS_PATH=/nonexistent");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("OpenGL"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(scratch() / "nogl.png"));
 }
 
 TEST(Cli, PrecomputeReportsSizesTimesAndDetectsACorruptCache) {

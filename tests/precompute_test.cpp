@@ -80,6 +80,24 @@ TEST_F(EarthSteps, TransmittanceTableMatchesDirectIntegration) {
       const vec3 table = transmittance_to_top_atmosphere_boundary(p, t, r, mu);
       for (int c = 0; c < 3; ++c) EXPECT_NEAR(table[c], direct[c], 0.005f * direct[c] + 1e-5f) << h << " " << mu;
     }
+  // Transmittance to a point inside the atmosphere, as a ratio of two table
+  // values (it composes multiplicatively), for rays up and rays to the ground.
+  for (float h : {0.0f, 2000.0f, 20000.0f})
+    for (float mu : {0.8f, 0.3f, -0.3f, -0.9f}) {
+      const float r = params_.bottom_radius + h;
+      const bool ground = ray_intersects_ground(p, r, mu);
+      if (h == 0.0f && ground) continue;
+      const float d = 0.6f * distance_to_nearest_atmosphere_boundary(p, r, mu, ground);
+      const vec3 direct = exp(-optical_depth_along_ray(p, r, mu, 0.0f, d, 4000));
+      const vec3 table = transmittance_along_ray(p, t, r, mu, d, ground);
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(table[c], direct[c], 0.005f * direct[c] + 1e-5f) << h << " " << mu;
+      if (ground) {
+        const vec3 to_ground = transmittance_to_ground(p, t, r, mu);
+        const vec3 direct_ground = exp(-optical_depth_along_ray(
+            p, r, mu, 0.0f, distance_to_bottom_atmosphere_boundary(p, r, mu), 4000));
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(to_ground[c], direct_ground[c], 0.005f * direct_ground[c] + 1e-5f);
+      }
+    }
 }
 
 // The spherical-harmonic density against the direct sphere quadrature of

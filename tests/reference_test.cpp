@@ -494,6 +494,50 @@ TEST(Reference, OrdersAccumulateAndSunDiscExcluded) {
   }
 }
 
+// Single scattering at twilight (the view ray crosses the planet's shadow,
+// where the reference steers samples into the sunlit pieces) against a
+// deterministic quadrature of
+//   L1 = ∫_0^d T(0,t) Σ_i σ_s,i(t) p_i(v·s) E T_sun(t) V(t) dt
+// (trapezoid, 3000 steps; T_sun through optical_depth; point sun, so the
+// penumbra is sharp: 1 % margin, plus 4 standard errors).
+TEST(Reference, TwilightSingleScatteringMatchesQuadrature) {
+  const Atmosphere a = earth();
+  const dvec3 x(0.0, 0.0, a.bottom_radius_m + 100.0);
+  const dvec3 sun = direction(93.0, 0.0);  // 3° below the horizon
+  ReferenceOptions o;
+  o.scattering_orders = 1;
+  o.paths = 20000;
+  for (const dvec3& v : {direction(85.0, 10.0), direction(60.0, 180.0)}) {
+    const ReferenceResult r = atmos::reference_radiance(a, x, v, sun, o);
+    const dvec3 end = ray_end(a, x, v);
+    const double length = glm::length(end - x);
+    const int n = 3000;
+    for (size_t l = 0; l < 3; ++l) {
+      const double w = a.wavelengths_nm[l];
+      double sum = 0.0, tau_view = 0.0;
+      dvec3 previous = x;
+      for (int k = 0; k <= n; ++k) {
+        const dvec3 y = x + v * (length * k / n);
+        if (k > 0) tau_view += detail::optical_depth(a, w, previous, y);
+        previous = y;
+        const double b = glm::dot(y, sun), r2 = glm::dot(y, y);
+        const bool blocked = b < 0.0 && b * b - (r2 - a.bottom_radius_m * a.bottom_radius_m) >= 0.0;
+        if (blocked) continue;
+        const dvec3 top = y + (-b + std::sqrt(b * b - (r2 - a.top_radius_m * a.top_radius_m))) * sun;
+        const double t_sun = std::exp(-detail::optical_depth(a, w, y, top));
+        const double h = std::sqrt(r2) - a.bottom_radius_m;
+        double j = 0.0;
+        for (const auto& c : a.constituents)
+          j += c.scattering.at(w) * c.density.at(h) * detail::phase_function(c.phase, glm::dot(v, sun));
+        sum += (k == 0 || k == n ? 0.5 : 1.0) * std::exp(-tau_view) * j * sun_irradiance(a, l) * t_sun;
+      }
+      const double expected = sum * length / n;
+      expect_close(r.radiance[l], expected, r.standard_error[l], 4.0, 0.01,
+                   "twilight view " + std::to_string(v.z) + ", wavelength " + std::to_string(l));
+    }
+  }
+}
+
 // ---------------------------------------------------------------------------
 // 6. Earth preset: zenith radiance with the sun 60° high.
 //

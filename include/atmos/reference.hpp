@@ -24,6 +24,11 @@
 // → eye and sun → ground → eye). The direct view of the sun disc is never
 // included in a radiance.
 //
+// Cost (Earth preset, defaults K = 4 and 20000 paths, on the 2-core CI
+// machine): about 0.3 core-seconds per radiance direction, with relative
+// standard errors of 0.2–0.8 % by day, ~1–3 % with the sun 2.5° below the
+// horizon and ~2–8 % at 5° below (the error scales as 1/√paths).
+//
 // Random numbers: path i of a call uses a stream seeded from (seed, i) only,
 // so results are bitwise repeatable (independent of the number of threads),
 // and calls with the same seed for different directions use common random

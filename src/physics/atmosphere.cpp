@@ -109,7 +109,8 @@ Spectrum parse_spectrum(const json& q, const std::string& kind, const std::vecto
     const double total = scalar(b, "total_irradiance", "irradiance", origin, path + ".blackbody");
     if (t <= 0.0 || total <= 0.0) fail(origin, path + ".blackbody needs a positive temperature and total");
     std::vector<double> l, v;
-    for (double w = 300.0; w <= 900.0; w += 2.0) {
+    // Sampled over the whole range validate() accepts for working wavelengths.
+    for (double w = 200.0; w <= 2000.0; w += 2.0) {
       l.push_back(w);
       v.push_back(blackbody_irradiance(w, t, total));
     }
@@ -132,7 +133,7 @@ Spectrum parse_spectrum(const json& q, const std::string& kind, const std::vecto
     const double e = finite_or_fail(require(p, "exponent", origin, path + ".power_law"), origin, path);
     if (ref <= 0.0) fail(origin, path + ".power_law.reference_nm must be positive");
     std::vector<double> l, v;
-    for (double w = 300.0; w <= 900.0; w += 1.0) {
+    for (double w = 200.0; w <= 2000.0; w += 1.0) {
       l.push_back(w);
       v.push_back(value * std::pow(w / ref, e));
     }
@@ -211,6 +212,12 @@ Spectrum::Spectrum(std::vector<double> wavelengths_nm, std::vector<double> value
     : wavelengths_nm_(std::move(wavelengths_nm)), values_(std::move(values)) {
   if (wavelengths_nm_.size() != values_.size() || values_.empty())
     throw Error("spectrum needs as many values as wavelengths");
+  for (size_t i = 0; i < values_.size(); ++i) {
+    if (!std::isfinite(wavelengths_nm_[i]) || !std::isfinite(values_[i]))
+      throw Error("spectrum samples must be finite");
+    if (i > 0 && !(wavelengths_nm_[i] > wavelengths_nm_[i - 1]))
+      throw Error("spectrum wavelengths must increase");
+  }
 }
 
 Spectrum Spectrum::constant(double value) { return Spectrum({550.0}, {value}); }
@@ -242,8 +249,11 @@ double DensityProfile::at(double altitude_m) const {
 }
 
 PhaseFunction Atmosphere::aerosol_phase() const {
-  for (const auto& c : constituents)
-    if (c.phase.kind != PhaseFunction::Kind::rayleigh && !c.scattering.empty()) return c.phase;
+  for (const auto& c : constituents) {
+    if (c.phase.kind == PhaseFunction::Kind::rayleigh) continue;
+    for (double v : c.scattering.values())
+      if (v > 0.0) return c.phase;
+  }
   return PhaseFunction{PhaseFunction::Kind::henyey_greenstein, 0.0};
 }
 
@@ -291,7 +301,9 @@ void Atmosphere::validate() const {
     } else {
       if (c.density.knots.size() < 2 || c.density.knots.size() > 8) bad(n + " needs 2 to 8 density points");
       for (size_t i = 0; i < c.density.knots.size(); ++i) {
-        if (c.density.knots[i].second < 0.0) bad(n + " density must not be negative");
+        if (!std::isfinite(c.density.knots[i].first) || !std::isfinite(c.density.knots[i].second) ||
+            c.density.knots[i].second < 0.0)
+          bad(n + " density points must be finite and not negative");
         if (i > 0 && !(c.density.knots[i].first > c.density.knots[i - 1].first))
           bad(n + " density altitudes must increase");
       }

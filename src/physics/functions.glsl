@@ -418,7 +418,7 @@ INLINE vec3 irradiance_lookup(IN(AtmosphereParams) atmosphere, IN(sampler2D) irr
 // scattering (smooth), and of trapezoid steps for the optical depth between
 // two nodes.
 #define SINGLE_SCATTERING_INTERVALS 40
-#define MULTIPLE_SCATTERING_INTERVALS 20
+#define MULTIPLE_SCATTERING_INTERVALS 16
 #define MAX_RAY_NODES 41
 #define OPTICAL_DEPTH_SUBSTEPS 4
 // Cells of the piecewise-linear importance density that places the nodes.

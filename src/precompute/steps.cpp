@@ -280,29 +280,30 @@ void compute_single_scattering_tables(const AtmosphereParams& a, const Table2D& 
   const TexelColumns columns = make_texel_columns(a);
   for_each_view_ray(a, progress, [&](int y, int z) {
     const ViewRay ray = make_view_ray(a, y, z, SINGLE_SCATTERING_INTERVALS);
-    std::array<vec3, MAX_RAY_NODES> beta_rayleigh, beta_aerosol;
-    std::vector<SunTransmittanceAtRadius> sun;
-    std::array<float, MAX_RAY_NODES> inverse_r_t{};
+    // Node by node (outer loop), so that the transmittance row of the node
+    // stays in the L1 cache while all texels of the view ray use it.
+    std::vector<float> nu(static_cast<size_t>(width));
+    for (int x = 0; x < width; ++x)
+      nu[size_t(x)] = clamp_nu(ray.mu, columns.mu_s[size_t(x)], columns.tile_nu[size_t(x)]);
+    std::vector<vec3> sum_rayleigh(size_t(width), vec3(0.0f)), sum_aerosol(size_t(width), vec3(0.0f));
     for (int i = 0; i < ray.nodes.count; ++i) {
-      vec3 extinction;
-      medium_at(a, ray.r_t[size_t(i)], beta_rayleigh[size_t(i)], beta_aerosol[size_t(i)], extinction);
-      beta_rayleigh[size_t(i)] *= ray.nodes.weight[i];
-      beta_aerosol[size_t(i)] *= ray.nodes.weight[i];
-      sun.emplace_back(a, t, ray.r_t[size_t(i)]);
-      inverse_r_t[size_t(i)] = 1.0f / ray.r_t[size_t(i)];
+      vec3 beta_rayleigh, beta_aerosol, extinction;
+      medium_at(a, ray.r_t[size_t(i)], beta_rayleigh, beta_aerosol, extinction);
+      beta_rayleigh *= ray.nodes.weight[i];
+      beta_aerosol *= ray.nodes.weight[i];
+      const SunTransmittanceAtRadius sun(a, t, ray.r_t[size_t(i)]);
+      const float inverse_r_t = 1.0f / ray.r_t[size_t(i)];
+      for (int x = 0; x < width; ++x) {
+        const float mu_s_t =
+            clamp_cosine((ray.r * columns.mu_s[size_t(x)] + ray.nodes.t[i] * nu[size_t(x)]) * inverse_r_t);
+        const vec3 sun_transmittance = sun(mu_s_t);
+        sum_rayleigh[size_t(x)] += sun_transmittance * beta_rayleigh;
+        sum_aerosol[size_t(x)] += sun_transmittance * beta_aerosol;
+      }
     }
     for (int x = 0; x < width; ++x) {
-      const float mu_s = columns.mu_s[size_t(x)];
-      const float nu = clamp_nu(ray.mu, mu_s, columns.tile_nu[size_t(x)]);
-      vec3 sum_rayleigh(0.0f), sum_aerosol(0.0f);
-      for (int i = 0; i < ray.nodes.count; ++i) {
-        const float mu_s_t = clamp_cosine((ray.r * mu_s + ray.nodes.t[i] * nu) * inverse_r_t[size_t(i)]);
-        const vec3 sun_transmittance = sun[size_t(i)](mu_s_t);
-        sum_rayleigh += sun_transmittance * beta_rayleigh[size_t(i)];
-        sum_aerosol += sun_transmittance * beta_aerosol[size_t(i)];
-      }
-      rayleigh.at(x, y, z) = sum_rayleigh * a.solar_irradiance;
-      aerosol.at(x, y, z) = sum_aerosol * a.solar_irradiance;
+      rayleigh.at(x, y, z) = sum_rayleigh[size_t(x)] * a.solar_irradiance;
+      aerosol.at(x, y, z) = sum_aerosol[size_t(x)] * a.solar_irradiance;
     }
   });
 }
@@ -509,7 +510,17 @@ Table3D compute_multiple_scattering_table(const AtmosphereParams& a, const Table
   const MuSCoordinate u_of_mu_s(a);
   for_each_view_ray(a, progress, [&](int y, int z) {
     const ViewRay ray = make_view_ray(a, y, z, MULTIPLE_SCATTERING_INTERVALS);
-    std::vector<vec3> rows(size_t(ray.nodes.count) * size_t(width));
+    // Per texel: nu and its tiles, as in scattering_lookup().
+    std::vector<float> nu(static_cast<size_t>(width)), tile(static_cast<size_t>(width)), lerp(static_cast<size_t>(width));
+    for (int x = 0; x < width; ++x) {
+      nu[size_t(x)] = clamp_nu(ray.mu, columns.mu_s[size_t(x)], columns.tile_nu[size_t(x)]);
+      const float tex_coord_x = (nu[size_t(x)] + 1.0f) / 2.0f * float(a.scattering_nu_size - 1);
+      tile[size_t(x)] = std::floor(tex_coord_x);
+      lerp[size_t(x)] = tex_coord_x - tile[size_t(x)];
+    }
+    // Node by node (outer loop): the density row of the node stays in cache.
+    std::vector<vec3> row(static_cast<size_t>(width)), sum(static_cast<size_t>(width), vec3(0.0f));
+    const float inverse_nu_size = 1.0f / float(a.scattering_nu_size);
     for (int i = 0; i < ray.nodes.count; ++i) {
       int y0, y1, z0, z1;
       float fy, fz;
@@ -520,37 +531,27 @@ Table3D compute_multiple_scattering_table(const AtmosphereParams& a, const Table
       const vec3* c10 = &density.texels[(size_t(z0) * size_t(density.height) + size_t(y1)) * size_t(width)];
       const vec3* c01 = &density.texels[(size_t(z1) * size_t(density.height) + size_t(y0)) * size_t(width)];
       const vec3* c11 = &density.texels[(size_t(z1) * size_t(density.height) + size_t(y1)) * size_t(width)];
-      vec3* row = &rows[size_t(i) * size_t(width)];
       for (int x = 0; x < width; ++x) {
         const vec3 c0 = c00[x] * (1.0f - fy) + c10[x] * fy;
         const vec3 c1 = c01[x] * (1.0f - fy) + c11[x] * fy;
-        row[x] = c0 * (1.0f - fz) + c1 * fz;
+        row[size_t(x)] = c0 * (1.0f - fz) + c1 * fz;
       }
-    }
-    std::array<float, MAX_RAY_NODES> inverse_r_t{};
-    for (int i = 0; i < ray.nodes.count; ++i) inverse_r_t[size_t(i)] = 1.0f / ray.r_t[size_t(i)];
-    for (int x = 0; x < width; ++x) {
-      const float mu_s = columns.mu_s[size_t(x)];
-      const float nu = clamp_nu(ray.mu, mu_s, columns.tile_nu[size_t(x)]);
-      // The nu tiles and weight, as in scattering_lookup().
-      const float tex_coord_x = (nu + 1.0f) / 2.0f * float(a.scattering_nu_size - 1);
-      const float tex_x = std::floor(tex_coord_x);
-      const float lerp = tex_coord_x - tex_x;
-      vec3 sum(0.0f);
-      for (int i = 0; i < ray.nodes.count; ++i) {
-        const float mu_s_t = clamp_cosine((ray.r * mu_s + ray.nodes.t[i] * nu) * inverse_r_t[size_t(i)]);
+      const float inverse_r_t = 1.0f / ray.r_t[size_t(i)];
+      const vec3 weight = ray.nodes.weight[i];
+      for (int x = 0; x < width; ++x) {
+        const float mu_s_t =
+            clamp_cosine((ray.r * columns.mu_s[size_t(x)] + ray.nodes.t[i] * nu[size_t(x)]) * inverse_r_t);
         const float u_mu_s = u_of_mu_s(mu_s_t);
-        const vec3* row = &rows[size_t(i) * size_t(width)];
         int x0, x1;
         float fx;
-        detail::linear_tap((tex_x + u_mu_s) / float(a.scattering_nu_size), width, x0, x1, fx);
-        vec3 value = (row[x0] * (1.0f - fx) + row[x1] * fx) * (1.0f - lerp);
-        detail::linear_tap((tex_x + 1.0f + u_mu_s) / float(a.scattering_nu_size), width, x0, x1, fx);
-        value += (row[x0] * (1.0f - fx) + row[x1] * fx) * lerp;
-        sum += ray.nodes.weight[i] * value;
+        detail::linear_tap((tile[size_t(x)] + u_mu_s) * inverse_nu_size, width, x0, x1, fx);
+        vec3 value = (row[size_t(x0)] * (1.0f - fx) + row[size_t(x1)] * fx) * (1.0f - lerp[size_t(x)]);
+        detail::linear_tap((tile[size_t(x)] + 1.0f + u_mu_s) * inverse_nu_size, width, x0, x1, fx);
+        value += (row[size_t(x0)] * (1.0f - fx) + row[size_t(x1)] * fx) * lerp[size_t(x)];
+        sum[size_t(x)] += weight * value;
       }
-      result.at(x, y, z) = sum;
     }
+    for (int x = 0; x < width; ++x) result.at(x, y, z) = sum[size_t(x)];
   });
   return result;
 }

@@ -77,6 +77,6 @@ std::vector<double> legendre_moments(const std::function<double(double)>& phase,
 void gauss_legendre(int n, double a, double b, std::vector<double>& nodes, std::vector<double>& weights);
 
 // Degree of the spherical-harmonic expansion of the scattering density.
-inline constexpr int kDensityMaxDegree = 32;
+inline constexpr int kDensityMaxDegree = 28;
 
 }  // namespace atmos::precompute

@@ -27,7 +27,10 @@
 // Wavelengths share the geometry: a distance is drawn for one wavelength
 // picked uniformly, and each wavelength is weighted by its own density over
 // the mixture density (one-sample "balance heuristic"), which is unbiased for
-// all of them.
+// all of them. Forced samples are steered (without bias) by splitting a
+// segment where it crosses the planet's shadow and drawing the piece first
+// (shadow_plan): at twilight most optical depth is in the shadow and most
+// single-scattered light comes from the small sunlit rest.
 //
 // Optical depth is Gauss–Legendre quadrature (4 nodes) on intervals of the ray
 // delimited by its perigee and by a fixed altitude grid (steps of at most 1.5
@@ -276,7 +279,9 @@ Spec optical_depth_spec(const Model& m, const struct Ray& ray, double t0, double
 // ground-grazing ray transmits more.
 double effective_shadow_radius(const Model& m);
 
-Model make_model(const Atmosphere& a) {
+// `steering`: also compute the effective shadow radius (not needed for
+// optical depths alone).
+Model make_model(const Atmosphere& a, bool steering) {
   a.validate();
   Model m;
   if (a.wavelengths_nm.size() > size_t(kMaxWavelengths))
@@ -308,7 +313,7 @@ Model make_model(const Atmosphere& a) {
   }
   m.grid = altitude_grid(a);
   build_table(m);
-  m.shadow_radius = effective_shadow_radius(m);
+  m.shadow_radius = steering ? effective_shadow_radius(m) : m.rb;
   return m;
 }
 
@@ -638,7 +643,8 @@ Plan shadow_plan(const Model& m, const Segment& s, const dvec3& sun) {
   }
   if (cuts == 1) return whole_plan(s);
   cut[size_t(cuts++)] = s.t_end;
-  std::sort(cut.data(), cut.data() + cuts);
+  for (int a = 1; a < cuts; ++a)  // insertion sort of the few cut points
+    for (int b = a; b > 0 && cut[size_t(b - 1)] > cut[size_t(b)]; --b) std::swap(cut[size_t(b - 1)], cut[size_t(b)]);
   Plan p;
   double w[5] = {0.0, 0.0, 0.0, 0.0, 0.0}, w_all = 0.0;
   int nonzero = 0;
@@ -880,29 +886,54 @@ struct Workspace {
 // Mean and standard error of the mean over N = `paths` samples
 // f_i = sample(u_i, random_i, workspace), u_i = (i + ξ_i)/N stratified:
 //   mean = Σ f_i / N,   SE² = Σ (f_i - mean)² / (N (N - 1)).
-// Paths run in parallel; every f_i is stored and the sums are taken in path
-// order, so the result does not depend on the number of threads.
+// Paths run in parallel in fixed blocks of 64; each block keeps its count,
+// mean and Σ(f - mean_block)², and the blocks are merged in order (Chan,
+// Golub & LeVeque: M2 = M2_a + M2_b + δ² n_a n_b / (n_a + n_b)), so the
+// result does not depend on the number of threads and memory stays small.
 template <class F>
 ReferenceResult estimate(const Model& m, const ReferenceOptions& o, F&& sample) {
+  constexpr int kBlock = 64;
   const int paths = o.paths;
-  std::vector<Spec> f(static_cast<size_t>(paths));
-  tbb::parallel_for(tbb::blocked_range<int>(0, paths, 64), [&](const tbb::blocked_range<int>& range) {
+  const int blocks = (paths + kBlock - 1) / kBlock;
+  struct Stats {
+    Spec mean{}, m2{};
+    int count = 0;
+  };
+  std::vector<Stats> stats(static_cast<size_t>(blocks));
+  tbb::parallel_for(tbb::blocked_range<int>(0, blocks, 1), [&](const tbb::blocked_range<int>& range) {
     Workspace ws;
-    for (int i = range.begin(); i != range.end(); ++i) {
-      reference_detail::Random rnd(path_seed(o.seed, std::uint64_t(i)));
-      const double u = (i + rnd.uniform()) / paths;
-      f[size_t(i)] = sample(u, rnd, ws);
+    std::array<Spec, kBlock> f;
+    for (int blk = range.begin(); blk != range.end(); ++blk) {
+      Stats& st = stats[size_t(blk)];
+      const int first = blk * kBlock, last = std::min(paths, first + kBlock);
+      st.count = last - first;
+      for (int i = first; i < last; ++i) {
+        reference_detail::Random rnd(path_seed(o.seed, std::uint64_t(i)));
+        const double u = (i + rnd.uniform()) / paths;
+        f[size_t(i - first)] = sample(u, rnd, ws);
+      }
+      for (int l = 0; l < m.n; ++l) {
+        double sum = 0.0;
+        for (int k = 0; k < st.count; ++k) sum += f[size_t(k)][size_t(l)];
+        const double mean = sum / st.count;
+        double m2 = 0.0;
+        for (int k = 0; k < st.count; ++k) m2 += (f[size_t(k)][size_t(l)] - mean) * (f[size_t(k)][size_t(l)] - mean);
+        st.mean[size_t(l)] = mean;
+        st.m2[size_t(l)] = m2;
+      }
     }
   });
   ReferenceResult r;
   for (int l = 0; l < m.n; ++l) {
-    double sum = 0.0;
-    for (const Spec& x : f) sum += x[size_t(l)];
-    const double mean = sum / paths;
-    double sq = 0.0;
-    for (const Spec& x : f) sq += (x[size_t(l)] - mean) * (x[size_t(l)] - mean);
+    double n = 0.0, mean = 0.0, m2 = 0.0;
+    for (const Stats& st : stats) {
+      const double nb = st.count, delta = st.mean[size_t(l)] - mean;
+      mean += delta * nb / (n + nb);
+      m2 += st.m2[size_t(l)] + delta * delta * n * nb / (n + nb);
+      n += nb;
+    }
     r.radiance.push_back(mean);
-    r.standard_error.push_back(std::sqrt(sq / (double(paths) * (paths - 1))));
+    r.standard_error.push_back(std::sqrt(m2 / (n * (n - 1.0))));
   }
   return r;
 }
@@ -959,7 +990,7 @@ double optical_depth(const Atmosphere& atmosphere, double wavelength_nm, const g
                      const glm::dvec3& to) {
   Atmosphere a = atmosphere;
   a.wavelengths_nm = {wavelength_nm, wavelength_nm, wavelength_nm};  // validate() wants triples
-  const Model m = make_model(a);
+  const Model m = make_model(a, false);
   const double len = glm::length(to - from);
   if (!(len > 0.0)) return 0.0;
   const Ray ray(from, (to - from) / len);
@@ -980,7 +1011,7 @@ double optical_depth(const Atmosphere& atmosphere, double wavelength_nm, const g
 ReferenceResult reference_radiance(const Atmosphere& atmosphere, const glm::dvec3& observer, const glm::dvec3& view,
                                    const glm::dvec3& sun, const ReferenceOptions& options) {
   check_options(options);
-  const Model m = make_model(atmosphere);
+  const Model m = make_model(atmosphere, true);
   const dvec3 x = check_position(m, observer, "observer");
   const Context ctx{m, check_unit(sun, "sun"), options.scattering_orders};
   Segment view_segment;
@@ -994,7 +1025,7 @@ ReferenceResult reference_radiance(const Atmosphere& atmosphere, const glm::dvec
 ReferenceResult reference_irradiance(const Atmosphere& atmosphere, const glm::dvec3& point, const glm::dvec3& normal,
                                      const glm::dvec3& sun, const ReferenceOptions& options) {
   check_options(options);
-  const Model m = make_model(atmosphere);
+  const Model m = make_model(atmosphere, true);
   const dvec3 x = check_position(m, point, "point");
   const dvec3 n = check_unit(normal, "normal");
   // Light reaching the surface has used at most K - 1 interactions.
