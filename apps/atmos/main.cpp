@@ -307,6 +307,7 @@ int run_precompute(const TableOptions& t) {
               s.scattering_nu, s.scattering_mu_s, s.scattering_mu, s.scattering_r, loaded.tables.scattering_width(),
               loaded.tables.scattering_height(), loaded.tables.scattering_depth());
   std::printf("cache           %s\n", loaded.status.c_str());
+  if (loaded.tables.timings.empty()) std::printf("steps           none computed: the cache file is valid\n");
   for (const auto& step : loaded.tables.timings) std::printf("time %-22s %8.3f s\n", step.name.c_str(), step.seconds);
   std::printf("time total                   %8.3f s\n", seconds);
   return 0;

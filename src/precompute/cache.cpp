@@ -6,6 +6,9 @@
 // shared physics sources (so that editing the physics invalidates old files).
 // The file repeats the key and the sizes and ends with a checksum of all its
 // bytes; anything that does not match is reported and recomputed.
+#include <unistd.h>
+
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -205,7 +208,9 @@ std::string write_cache(const std::string& path, const std::string& key, const T
 
   std::error_code ec;
   std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ec);
-  const std::string temporary = path + ".tmp" + std::to_string(std::rand());
+  // Unique per process and call, so that concurrent writers never share a file.
+  static std::atomic<int> counter{0};
+  const std::string temporary = path + ".tmp" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
   {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
     if (!out) return "cannot write " + temporary;
