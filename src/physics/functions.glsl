@@ -393,13 +393,21 @@ INLINE vec3 transmittance_to_sun(IN(AtmosphereParams) atmosphere, IN(sampler2D) 
   return transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, mu_s) * visible;
 }
 
+// The two nu tiles around nu (the lower one's index) and the weight of the
+// upper one, for linear interpolation between tiles.
+INLINE void scattering_nu_tiles(IN(AtmosphereParams) atmosphere, float nu, OUT(float) tile, OUT(float) lerp) {
+  float tex_coord_x = (nu + 1.0f) / 2.0f * float(atmosphere.scattering_nu_size - 1);
+  tile = min(floor(tex_coord_x), float(atmosphere.scattering_nu_size - 1));
+  lerp = tex_coord_x - tile;
+}
+
 // 4D lookup with linear interpolation between the two nearest nu tiles.
 INLINE vec3 scattering_lookup(IN(AtmosphereParams) atmosphere, IN(sampler3D) scattering_texture, float r, float mu,
                               float mu_s, float nu, bool ray_r_mu_intersects_ground) {
   vec4 uvwz = scattering_uvwz_from_r_mu_mu_s_nu(atmosphere, r, mu, mu_s, nu, ray_r_mu_intersects_ground);
-  float tex_coord_x = uvwz.x * float(atmosphere.scattering_nu_size - 1);
-  float tex_x = floor(tex_coord_x);
-  float lerp = tex_coord_x - tex_x;
+  float tex_x;
+  float lerp;
+  scattering_nu_tiles(atmosphere, nu, tex_x, lerp);
   vec3 uvw0 = vec3((tex_x + uvwz.y) / float(atmosphere.scattering_nu_size), uvwz.z, uvwz.w);
   vec3 uvw1 = vec3((tex_x + 1.0f + uvwz.y) / float(atmosphere.scattering_nu_size), uvwz.z, uvwz.w);
   return vec3(texture(scattering_texture, uvw0)) * (1.0f - lerp) + vec3(texture(scattering_texture, uvw1)) * lerp;
@@ -550,6 +558,23 @@ INLINE vec3 compute_multiple_scattering(IN(AtmosphereParams) atmosphere, IN(samp
   return result;
 }
 
+// Radiance of single scattering from the tables' values without phase
+// functions (single Rayleigh, or Rayleigh + multiple / P_R, and single aerosol).
+INLINE vec3 phase_weighted_scattering(IN(AtmosphereParams) atmosphere, vec3 rayleigh, vec3 aerosol, float nu) {
+  return rayleigh * rayleigh_phase_function(nu) + aerosol * aerosol_phase_function(atmosphere, nu);
+}
+
+// Sun zenith cosine at the ground point x + d v that the ray (r, mu) hits at
+// distance d, whose normal is (x + d v) / R_bottom.
+INLINE float mu_s_at_ground(IN(AtmosphereParams) atmosphere, float r, float mu_s, float nu, float d) {
+  return clamp_cosine((r * mu_s + d * nu) / atmosphere.bottom_radius);
+}
+
+// Radiance of the Lambertian ground under `irradiance`.
+INLINE vec3 ground_radiance(IN(AtmosphereParams) atmosphere, vec3 irradiance) {
+  return atmosphere.ground_albedo * (1.0f / PI) * irradiance;
+}
+
 // Radiance of scattering order `order` (>= 1) arriving at radius r from the
 // direction (mu, nu) with the sun at mu_s: in-scattered light of that order
 // along the ray, plus, for a ray that hits the ground, the ground's Lambertian
@@ -564,23 +589,22 @@ INLINE vec3 incident_radiance(IN(AtmosphereParams) atmosphere, IN(sampler2D) tra
   bool ground = ray_intersects_ground(atmosphere, r, mu);
   vec3 radiance;
   if (order == 1) {
-    radiance = scattering_lookup(atmosphere, single_rayleigh_texture, r, mu, mu_s, nu, ground) *
-                   rayleigh_phase_function(nu) +
-               scattering_lookup(atmosphere, single_aerosol_texture, r, mu, mu_s, nu, ground) *
-                   aerosol_phase_function(atmosphere, nu);
+    radiance = phase_weighted_scattering(atmosphere,
+                                         scattering_lookup(atmosphere, single_rayleigh_texture, r, mu, mu_s, nu, ground),
+                                         scattering_lookup(atmosphere, single_aerosol_texture, r, mu, mu_s, nu, ground),
+                                         nu);
   } else {
     radiance = scattering_lookup(atmosphere, multiple_scattering_texture, r, mu, mu_s, nu, ground);
   }
   if (ground) {
     float d = distance_to_bottom_atmosphere_boundary(atmosphere, r, mu);
-    // Sun cosine at the ground point x + d v, whose normal is (x + d v) / R.
-    float mu_s_ground = clamp_cosine((r * mu_s + d * nu) / atmosphere.bottom_radius);
+    float mu_s_ground = mu_s_at_ground(atmosphere, r, mu_s, nu, d);
     vec3 irradiance = order == 1 ? compute_direct_irradiance(atmosphere, transmittance_texture,
                                                              atmosphere.bottom_radius, mu_s_ground)
                                  : irradiance_lookup(atmosphere, irradiance_texture, atmosphere.bottom_radius,
                                                      mu_s_ground);
-    radiance += transmittance_to_ground(atmosphere, transmittance_texture, r, mu) * atmosphere.ground_albedo *
-                (1.0f / PI) * irradiance;
+    radiance += transmittance_to_ground(atmosphere, transmittance_texture, r, mu) *
+                ground_radiance(atmosphere, irradiance);
   }
   return radiance;
 }
@@ -710,7 +734,7 @@ INLINE vec3 sky_radiance(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmit
   }
   vec3 scattering = scattering_lookup(atmosphere, scattering_texture, r, mu, mu_s, nu, ground);
   vec3 single_aerosol = scattering_lookup(atmosphere, single_aerosol_texture, r, mu, mu_s, nu, ground);
-  return scattering * rayleigh_phase_function(nu) + single_aerosol * aerosol_phase_function(atmosphere, nu);
+  return phase_weighted_scattering(atmosphere, scattering, single_aerosol, nu);
 }
 
 // Irradiance on a surface at radius r whose local zenith is `up`, with
@@ -773,7 +797,7 @@ INLINE vec3 radiance_along_view_ray(IN(AtmosphereParams) atmosphere, IN(sampler2
     vec3 sun_irradiance = sun_and_sky_irradiance_at(atmosphere, transmittance_texture, irradiance_texture,
                                                     atmosphere.bottom_radius, normal, normal, sun_direction,
                                                     sky_irradiance);
-    radiance += transmittance * atmosphere.ground_albedo * (1.0f / PI) * (sun_irradiance + sky_irradiance);
+    radiance += transmittance * ground_radiance(atmosphere, sun_irradiance + sky_irradiance);
   } else if (include_sun_disc && dot(view_ray, sun_direction) > cos(atmosphere.sun_angular_radius)) {
     radiance += transmittance * sun_disc_radiance(atmosphere);
   }

@@ -86,8 +86,8 @@ class MuSCoordinate {
 };
 
 // transmittance_to_sun(a, t, r, mu_s) for one radius and many mu_s: the
-// row of the transmittance table at r (its v coordinate) and the horizon are
-// computed once.
+// row of the transmittance table at r (its v coordinate) is interpolated
+// once, and the visible fraction of the sun is only evaluated near the horizon.
 class SunTransmittanceAtRadius {
  public:
   SunTransmittanceAtRadius(const AtmosphereParams& a, const sampler2D& t, float r)
@@ -100,8 +100,6 @@ class SunTransmittanceAtRadius {
       row_[size_t(x)] = t.texels[size_t(y0) * size_t(t.width) + size_t(x)] * (1.0f - fy) +
                         t.texels[size_t(y1) * size_t(t.width) + size_t(x)] * fy;
     mu_h_ = horizon_mu(a, r);
-    d_min_ = a.top_radius - r;
-    d_max_ = horizon_length(a, r) + horizon_length_at_top(a);
   }
   vec3 operator()(float mu_s) const {
     float visible = 1.0f;
@@ -109,12 +107,9 @@ class SunTransmittanceAtRadius {
       visible = sun_visible_fraction(a_, r_, mu_s);
       if (visible <= 0.0f) return vec3(0.0f);
     }
-    // transmittance_uv_from_r_mu(a, r, mu_s).x
-    const float d = distance_to_top_atmosphere_boundary(a_, r_, mu_s);
-    const float x_mu = clamp((d - d_min_) / (d_max_ - d_min_), 0.0f, 1.0f);
     int x0, x1;
     float fx;
-    detail::linear_tap(texture_coord_from_unit_range(x_mu, a_.transmittance_mu_size), int(row_.size()), x0, x1, fx);
+    detail::linear_tap(transmittance_uv_from_r_mu(a_, r_, mu_s).x, int(row_.size()), x0, x1, fx);
     return (row_[size_t(x0)] * (1.0f - fx) + row_[size_t(x1)] * fx) * visible;
   }
 
@@ -122,8 +117,25 @@ class SunTransmittanceAtRadius {
   const AtmosphereParams& a_;
   float r_;
   std::vector<vec3> row_;
-  float mu_h_ = 0.0f, d_min_ = 0.0f, d_max_ = 0.0f;
+  float mu_h_ = 0.0f;
 };
+
+// The 4D table `table` at one (u_mu, u_r), trilinear in those two
+// coordinates exactly as texture() does: a row of (nu, mu_s) texels. Lookups
+// that share (r, mu) interpolate in it instead of the whole table.
+void interpolate_mu_r_row(const Table3D& table, float u_mu, float u_r, std::vector<vec3>& row) {
+  int y0, y1, z0, z1;
+  float fy, fz;
+  detail::linear_tap(u_mu, table.height, y0, y1, fy);
+  detail::linear_tap(u_r, table.depth, z0, z1, fz);
+  auto at = [&](int y, int z) {
+    return &table.texels[(size_t(z) * size_t(table.height) + size_t(y)) * size_t(table.width)];
+  };
+  const vec3 *c00 = at(y0, z0), *c10 = at(y1, z0), *c01 = at(y0, z1), *c11 = at(y1, z1);
+  row.resize(size_t(table.width));
+  for (int x = 0; x < table.width; ++x)
+    row[size_t(x)] = (c00[x] * (1.0f - fy) + c10[x] * fy) * (1.0f - fz) + (c01[x] * (1.0f - fy) + c11[x] * fy) * fz;
+}
 
 // The nodes of the shared ray quadrature (ray_integration_nodes in
 // functions.glsl) for the view ray of row (y, z), with what does not depend
@@ -292,10 +304,9 @@ void compute_single_scattering_tables(const AtmosphereParams& a, const Table2D& 
       beta_rayleigh *= ray.nodes.weight[i];
       beta_aerosol *= ray.nodes.weight[i];
       const SunTransmittanceAtRadius sun(a, t, ray.r_t[size_t(i)]);
-      const float inverse_r_t = 1.0f / ray.r_t[size_t(i)];
       for (int x = 0; x < width; ++x) {
-        const float mu_s_t =
-            clamp_cosine((ray.r * columns.mu_s[size_t(x)] + ray.nodes.t[i] * nu[size_t(x)]) * inverse_r_t);
+        const float mu_s_t = clamp_cosine(
+            mu_s_along_ray(ray.r, columns.mu_s[size_t(x)], nu[size_t(x)], ray.nodes.t[i], ray.r_t[size_t(i)]));
         const vec3 sun_transmittance = sun(mu_s_t);
         sum_rayleigh[size_t(x)] += sun_transmittance * beta_rayleigh;
         sum_aerosol[size_t(x)] += sun_transmittance * beta_aerosol;
@@ -387,22 +398,12 @@ Table3D compute_scattering_density_table(const AtmosphereParams& a, const Table2
       NodeRows& n = node_rows[j];
       const float mu_w = float(nodes[j]);
       n.ground = ray_intersects_ground(a, r, mu_w);
-      int y0, y1, z0, z1;
-      float fy, fz;
-      detail::linear_tap(scattering_u_mu(a, r, mu_w, n.ground), a.scattering_mu_size, y0, y1, fy);
-      detail::linear_tap(scattering_u_r(a, r), a.scattering_r_size, z0, z1, fz);
-      auto blend = [&](const Table3D& table, std::vector<vec3>& row) {
-        row.resize(size_t(width));
-        auto at = [&](int yy, int zz) { return &table.texels[(size_t(zz) * size_t(table.height) + size_t(yy)) * size_t(width)]; };
-        const vec3 *c00 = at(y0, z0), *c10 = at(y1, z0), *c01 = at(y0, z1), *c11 = at(y1, z1);
-        for (int x = 0; x < width; ++x)
-          row[size_t(x)] = (c00[x] * (1.0f - fy) + c10[x] * fy) * (1.0f - fz) + (c01[x] * (1.0f - fy) + c11[x] * fy) * fz;
-      };
+      const float u_mu = scattering_u_mu(a, r, mu_w, n.ground), u_r = scattering_u_r(a, r);
       if (order == 1) {
-        blend(single_rayleigh, n.first);
-        blend(single_aerosol, n.second);
+        interpolate_mu_r_row(single_rayleigh, u_mu, u_r, n.first);
+        interpolate_mu_r_row(single_aerosol, u_mu, u_r, n.second);
       } else {
-        blend(multiple_scattering, n.first);
+        interpolate_mu_r_row(multiple_scattering, u_mu, u_r, n.first);
       }
       if (n.ground) {
         n.ground_distance = distance_to_bottom_atmosphere_boundary(a, r, mu_w);
@@ -427,20 +428,17 @@ Table3D compute_scattering_density_table(const AtmosphereParams& a, const Table2
         for (int l = 0; l <= kPhiIntervals; ++l) {
           // incident_radiance(a, t, sr, sa, ms, e, r, mu_w, mu_s, nu_w, order), with the lookups hoisted.
           const float nu_w = clamp_cosine(sin_w * cos_phi[size_t(l)] * sun.x + mu_w * sun.z);
-          const float tex_coord_x = (nu_w + 1.0f) / 2.0f * float(a.scattering_nu_size - 1);
-          const int tile = std::min(int(std::floor(tex_coord_x)), a.scattering_nu_size - 1);
-          const float f = tex_coord_x - float(tile);
-          const size_t x0 = size_t(tile * a.scattering_mu_s_size + mu_s_index);
-          const size_t x1 = size_t(std::min(tile + 1, a.scattering_nu_size - 1) * a.scattering_mu_s_size + mu_s_index);
+          float tile, f;
+          scattering_nu_tiles(a, nu_w, tile, f);
+          const size_t x0 = size_t(int(tile) * a.scattering_mu_s_size + mu_s_index);
+          const size_t x1 = size_t(std::min(int(tile) + 1, a.scattering_nu_size - 1) * a.scattering_mu_s_size + mu_s_index);
           vec3 value = n.first[x0] * (1.0f - f) + n.first[x1] * f;
-          if (order == 1)
-            value = value * rayleigh_phase_function(nu_w) +
-                    (n.second[x0] * (1.0f - f) + n.second[x1] * f) * aerosol_phase_function(a, nu_w);
+          if (order == 1) value = phase_weighted_scattering(a, value, n.second[x0] * (1.0f - f) + n.second[x1] * f, nu_w);
           if (n.ground) {
-            const float mu_s_ground = clamp_cosine((r * mu_s + n.ground_distance * nu_w) / a.bottom_radius);
+            const float mu_s_ground = mu_s_at_ground(a, r, mu_s, nu_w, n.ground_distance);
             const vec3 ground_irradiance = order == 1 ? compute_direct_irradiance(a, t, a.bottom_radius, mu_s_ground)
                                                       : irradiance_lookup(a, e, a.bottom_radius, mu_s_ground);
-            value += n.ground_transmittance * a.ground_albedo * (1.0f / PI) * ground_irradiance;
+            value += n.ground_transmittance * ground_radiance(a, ground_irradiance);
           }
           radiance[size_t(l)] = value;
         }
@@ -514,33 +512,18 @@ Table3D compute_multiple_scattering_table(const AtmosphereParams& a, const Table
     std::vector<float> nu(static_cast<size_t>(width)), tile(static_cast<size_t>(width)), lerp(static_cast<size_t>(width));
     for (int x = 0; x < width; ++x) {
       nu[size_t(x)] = clamp_nu(ray.mu, columns.mu_s[size_t(x)], columns.tile_nu[size_t(x)]);
-      const float tex_coord_x = (nu[size_t(x)] + 1.0f) / 2.0f * float(a.scattering_nu_size - 1);
-      tile[size_t(x)] = std::floor(tex_coord_x);
-      lerp[size_t(x)] = tex_coord_x - tile[size_t(x)];
+      scattering_nu_tiles(a, nu[size_t(x)], tile[size_t(x)], lerp[size_t(x)]);
     }
     // Node by node (outer loop): the density row of the node stays in cache.
-    std::vector<vec3> row(static_cast<size_t>(width)), sum(static_cast<size_t>(width), vec3(0.0f));
+    std::vector<vec3> row, sum(static_cast<size_t>(width), vec3(0.0f));
     const float inverse_nu_size = 1.0f / float(a.scattering_nu_size);
     for (int i = 0; i < ray.nodes.count; ++i) {
-      int y0, y1, z0, z1;
-      float fy, fz;
-      detail::linear_tap(scattering_u_mu(a, ray.r_t[size_t(i)], ray.mu_t[size_t(i)], ray.ground), density.height, y0,
-                         y1, fy);
-      detail::linear_tap(scattering_u_r(a, ray.r_t[size_t(i)]), density.depth, z0, z1, fz);
-      const vec3* c00 = &density.texels[(size_t(z0) * size_t(density.height) + size_t(y0)) * size_t(width)];
-      const vec3* c10 = &density.texels[(size_t(z0) * size_t(density.height) + size_t(y1)) * size_t(width)];
-      const vec3* c01 = &density.texels[(size_t(z1) * size_t(density.height) + size_t(y0)) * size_t(width)];
-      const vec3* c11 = &density.texels[(size_t(z1) * size_t(density.height) + size_t(y1)) * size_t(width)];
-      for (int x = 0; x < width; ++x) {
-        const vec3 c0 = c00[x] * (1.0f - fy) + c10[x] * fy;
-        const vec3 c1 = c01[x] * (1.0f - fy) + c11[x] * fy;
-        row[size_t(x)] = c0 * (1.0f - fz) + c1 * fz;
-      }
-      const float inverse_r_t = 1.0f / ray.r_t[size_t(i)];
+      interpolate_mu_r_row(density, scattering_u_mu(a, ray.r_t[size_t(i)], ray.mu_t[size_t(i)], ray.ground),
+                           scattering_u_r(a, ray.r_t[size_t(i)]), row);
       const vec3 weight = ray.nodes.weight[i];
       for (int x = 0; x < width; ++x) {
-        const float mu_s_t =
-            clamp_cosine((ray.r * columns.mu_s[size_t(x)] + ray.nodes.t[i] * nu[size_t(x)]) * inverse_r_t);
+        const float mu_s_t = clamp_cosine(
+            mu_s_along_ray(ray.r, columns.mu_s[size_t(x)], nu[size_t(x)], ray.nodes.t[i], ray.r_t[size_t(i)]));
         const float u_mu_s = u_of_mu_s(mu_s_t);
         int x0, x1;
         float fx;
