@@ -111,13 +111,31 @@ TEST_F(EarthParams, ScatteringMappingRoundTrips) {
 }
 
 TEST_F(EarthParams, IrradianceMappingRoundTrips) {
-  for (float r = params.bottom_radius; r <= params.top_radius; r += 5000.0f)
-    for (float mu_s = -1.0f; mu_s <= 1.0f; mu_s += 0.01f) {
+  for (float r = params.bottom_radius; r <= params.top_radius; r += 5000.0f) {
+    for (float mu_s = params.mu_s_min; mu_s <= 1.0f; mu_s += 0.01f) {
       float r2, mu_s2;
       r_mu_s_from_irradiance_uv(params, irradiance_uv_from_r_mu_s(params, r, mu_s), r2, mu_s2);
       EXPECT_NEAR(r2, r, 1.0f);
-      EXPECT_NEAR(mu_s2, mu_s, 1e-5f);
+      EXPECT_NEAR(mu_s2, mu_s, 2e-4f);
     }
+    // Below mu_s_min (no sunlight anywhere in the atmosphere) the mapping
+    // clamps to the first texel centre.
+    const vec2 uv = irradiance_uv_from_r_mu_s(params, r, -0.9f);
+    EXPECT_FLOAT_EQ(uv.x, 0.5f / float(params.irradiance_mu_s_size));
+  }
+}
+
+// Twilight gets finer texels than the high sun: the sky irradiance changes
+// fastest there.
+TEST_F(EarthParams, IrradianceMuSTexelsAreDensestNearTheHorizon) {
+  auto texel_width_deg = [&](float elevation_deg) {
+    const float e = elevation_deg * float(M_PI) / 180.0f, de = 1e-3f;
+    const float du = irradiance_uv_from_r_mu_s(params, params.bottom_radius, std::sin(e + de)).x -
+                     irradiance_uv_from_r_mu_s(params, params.bottom_radius, std::sin(e)).x;
+    return de / (du * float(params.irradiance_mu_s_size)) * 180.0f / float(M_PI);
+  };
+  EXPECT_LT(texel_width_deg(-3.0f), 1.0f);
+  EXPECT_LT(texel_width_deg(-3.0f), 0.5f * texel_width_deg(60.0f));
 }
 
 TEST_F(EarthParams, TextureCoordinatesSampleTexelCentres) {

@@ -114,20 +114,29 @@ class Renderer {
   // so there it is the wall-clock time of the draw up to glFinish — the time
   // the "GPU", i.e. the CPU, spent rendering.
   double last_frame_ms() const { return last_frame_ms_; }
+  // The part of last_frame_ms() spent on the sky-view table (the per-frame
+  // low-sun single scattering, see sky_view_frame in functions.glsl).
+  double last_sky_view_ms() const { return last_sky_view_ms_; }
 
  private:
   GlContext& context_;
   std::uint32_t program_ = 0;
   std::uint32_t vertex_array_ = 0;
-  std::uint32_t textures_[4] = {0, 0, 0, 0};  // transmittance, scattering, single aerosol, irradiance
+  // transmittance, scattering, single aerosol, irradiance, multiple scattering
+  std::uint32_t textures_[5] = {0, 0, 0, 0, 0};
   std::uint32_t timer_query_ = 0;
+  std::uint32_t sky_view_program_ = 0;
+  std::uint32_t sky_view_framebuffer_ = 0;
+  std::uint32_t sky_view_textures_[2] = {0, 0};  // single Rayleigh, single aerosol (RGBA32F)
   std::uint32_t framebuffer_ = 0;             // one RGBA32F tile, reused while large enough
   std::uint32_t tile_texture_ = 0;
   int tile_width_ = 0;
   int tile_height_ = 0;
+  double top_radius_ = 0.0;                   // m, the atmosphere's (the sky-view pass runs below it)
   float radiance_to_srgb_[9] = {};            // column-major mat3
   bool software_rasterizer_ = false;          // time with the wall clock, not timer queries
   double last_frame_ms_ = 0.0;
+  double last_sky_view_ms_ = 0.0;
 };
 
 // The same image computed on the CPU (all cores, TBB) with the same shared

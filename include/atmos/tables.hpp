@@ -51,6 +51,7 @@ struct TableSet {
   std::vector<glm::vec3> indirect_irradiance;  // same layout: sky light of orders 1..K-1 on a horizontal surface
   std::vector<glm::vec3> scattering;           // 3D: single Rayleigh + (orders 2..K) / Rayleigh phase, W m^-2 sr^-1 nm^-1 per unit phase
   std::vector<glm::vec3> single_aerosol;       // 3D: single aerosol scattering without its phase function
+  std::vector<glm::vec3> multiple_scattering;  // 3D: orders 2..K / Rayleigh phase (zero for K = 1), for the low-sun path
 };
 
 struct Tables {

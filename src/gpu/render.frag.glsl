@@ -8,6 +8,10 @@ layout(binding = 0) uniform sampler2D transmittance_texture;
 layout(binding = 1) uniform sampler3D scattering_texture;
 layout(binding = 2) uniform sampler3D single_aerosol_texture;
 layout(binding = 3) uniform sampler2D irradiance_texture;
+layout(binding = 4) uniform sampler3D multiple_scattering_texture;
+// This frame's sky-view table (sky_view.frag.glsl).
+layout(binding = 5) uniform sampler2D sky_view_rayleigh_texture;
+layout(binding = 6) uniform sampler2D sky_view_aerosol_texture;
 
 layout(location = 0) uniform vec3 camera;           // m, planet-centred
 layout(location = 1) uniform vec3 camera_right;
@@ -38,7 +42,8 @@ void main() {
     return;
   }
   vec3 radiance = radiance_along_view_ray(ATMOSPHERE, transmittance_texture, scattering_texture,
-                                          single_aerosol_texture, irradiance_texture, camera, view_ray,
+                                          single_aerosol_texture, multiple_scattering_texture, irradiance_texture,
+                                          sky_view_rayleigh_texture, sky_view_aerosol_texture, true, camera, view_ray,
                                           sun_direction, true);
   frag_color = vec4(radiance_to_srgb * radiance, 1.0);
 }

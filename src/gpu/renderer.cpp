@@ -108,7 +108,8 @@ void check_tables(const Atmosphere& atmosphere, const Tables& tables) {
   const size_t scattering =
       size_t(tables.scattering_width()) * size_t(tables.scattering_height()) * size_t(tables.scattering_depth());
   if (t.transmittance.size() != transmittance || t.indirect_irradiance.size() != irradiance ||
-      t.scattering.size() != scattering || t.single_aerosol.size() != scattering)
+      t.scattering.size() != scattering || t.single_aerosol.size() != scattering ||
+      t.multiple_scattering.size() != scattering)
     throw Error("the tables hold fewer or more texels than their sizes say");
 }
 
@@ -327,11 +328,17 @@ void validate_camera(const Camera& camera) {
 
 namespace {
 
-void delete_gl_objects(GLuint& program, GLuint& vertex_array, GLuint (&textures)[4], GLuint& query,
-                       GLuint& framebuffer, GLuint& tile_texture) {
+void delete_gl_objects(GLuint& program, GLuint& vertex_array, GLuint (&textures)[5], GLuint& query,
+                       GLuint& framebuffer, GLuint& tile_texture, GLuint& sky_view_program,
+                       GLuint& sky_view_framebuffer, GLuint (&sky_view_textures)[2]) {
+  if (sky_view_program != 0) glDeleteProgram(sky_view_program);
+  if (sky_view_framebuffer != 0) glDeleteFramebuffers(1, &sky_view_framebuffer);
+  glDeleteTextures(2, sky_view_textures);
+  sky_view_program = sky_view_framebuffer = 0;
+  for (GLuint& t : sky_view_textures) t = 0;
   if (program != 0) glDeleteProgram(program);
   if (vertex_array != 0) glDeleteVertexArrays(1, &vertex_array);
-  glDeleteTextures(4, textures);
+  glDeleteTextures(5, textures);
   if (query != 0) glDeleteQueries(1, &query);
   if (framebuffer != 0) glDeleteFramebuffers(1, &framebuffer);
   if (tile_texture != 0) glDeleteTextures(1, &tile_texture);
@@ -347,6 +354,7 @@ Renderer::Renderer(GlContext& context, const Atmosphere& atmosphere, const Table
   check_tables(atmosphere, tables);
   const physics::AtmosphereParams params = physics::make_atmosphere_params(atmosphere, tables.sizes, 0);
   const glm::mat3 matrix = srgb_matrix(tables);
+  top_radius_ = double(params.top_radius);
   for (int c = 0; c < 3; ++c)
     for (int r = 0; r < 3; ++r) radiance_to_srgb_[3 * c + r] = matrix[c][r];
 
@@ -357,6 +365,21 @@ Renderer::Renderer(GlContext& context, const Atmosphere& atmosphere, const Table
     gpu::AssembledSource vertex;
     vertex.append("vertex shader", gpu::fullscreen_vertex_shader_source());
     program_ = link_program(vertex, gpu::render_fragment_shader_source(params));
+    sky_view_program_ = link_program(vertex, gpu::sky_view_fragment_shader_source(params));
+    // The sky-view table: recomputed by every render(), read with GL_LINEAR
+    // + CLAMP_TO_EDGE like the precomputed tables.
+    glCreateTextures(GL_TEXTURE_2D, 2, sky_view_textures_);
+    glCreateFramebuffers(1, &sky_view_framebuffer_);
+    for (int i = 0; i < 2; ++i) {
+      glTextureStorage2D(sky_view_textures_[i], 1, GL_RGBA32F, SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT);
+      set_table_sampling(sky_view_textures_[i]);
+      glNamedFramebufferTexture(sky_view_framebuffer_, GLenum(GL_COLOR_ATTACHMENT0 + i), sky_view_textures_[i], 0);
+    }
+    const GLenum attachments[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    glNamedFramebufferDrawBuffers(sky_view_framebuffer_, 2, attachments);
+    check_gl("while creating the sky-view table");
+    if (glCheckNamedFramebufferStatus(sky_view_framebuffer_, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw Error("the RGBA32F sky-view target is not supported by this OpenGL driver");
     // Core profile draws need a vertex array object, even an empty one.
     glCreateVertexArrays(1, &vertex_array_);
     glCreateQueries(GL_TIME_ELAPSED, 1, &timer_query_);
@@ -375,6 +398,8 @@ Renderer::Renderer(GlContext& context, const Atmosphere& atmosphere, const Table
     textures_[2] = make_texture_3d(tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
                                    t.single_aerosol, format);
     textures_[3] = make_texture_2d(s.irradiance_mu_s, s.irradiance_r, t.indirect_irradiance, format);
+    textures_[4] = make_texture_3d(tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
+                                   t.multiple_scattering, format);
     check_gl("while uploading the tables");
     // Drivers (llvmpipe's JIT in particular) compile the shader at its first
     // draw; do it now, so that render() and last_frame_ms() time frames, not
@@ -384,9 +409,10 @@ Renderer::Renderer(GlContext& context, const Atmosphere& atmosphere, const Table
     warm_up.width = 1;
     warm_up.height = 1;
     render(warm_up, {0.0, 0.0, 1.0});
-    last_frame_ms_ = 0.0;
+    last_frame_ms_ = last_sky_view_ms_ = 0.0;
   } catch (...) {
-    delete_gl_objects(program_, vertex_array_, textures_, timer_query_, framebuffer_, tile_texture_);
+    delete_gl_objects(program_, vertex_array_, textures_, timer_query_, framebuffer_, tile_texture_,
+                      sky_view_program_, sky_view_framebuffer_, sky_view_textures_);
     throw;
   }
 }
@@ -397,7 +423,8 @@ Renderer::~Renderer() {
   } catch (const Error&) {
     return;  // the context is current elsewhere: its objects die with it
   }
-  delete_gl_objects(program_, vertex_array_, textures_, timer_query_, framebuffer_, tile_texture_);
+  delete_gl_objects(program_, vertex_array_, textures_, timer_query_, framebuffer_, tile_texture_,
+                      sky_view_program_, sky_view_framebuffer_, sky_view_textures_);
 }
 
 Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
@@ -432,6 +459,40 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
     tile_height_ = h;
   }
 
+  glBindVertexArray(vertex_array_);
+  glDisable(GL_BLEND);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_SCISSOR_TEST);
+  glDisable(GL_DITHER);
+  glDisable(GL_FRAMEBUFFER_SRGB);
+
+  // Pass 1: this frame's sky-view table (the low-sun single scattering), for
+  // cameras in the atmosphere (see sky_radiance).
+  double gpu_ms = 0.0;
+  // (A margin over the shader's float test: an unneeded pass costs nothing wrong.)
+  if (glm::length(glm::dvec3(frame.position)) <= top_radius_ * (1.0 + 1e-6)) {
+    glUseProgram(sky_view_program_);
+    glProgramUniform3f(sky_view_program_, 0, frame.position.x, frame.position.y, frame.position.z);
+    glProgramUniform3f(sky_view_program_, 7, sun.x, sun.y, sun.z);
+    glBindTextureUnit(0, textures_[0]);
+    glBindFramebuffer(GL_FRAMEBUFFER, sky_view_framebuffer_);
+    glViewport(0, 0, SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT);
+    const auto start = std::chrono::steady_clock::now();
+    if (!software_rasterizer_) glBeginQuery(GL_TIME_ELAPSED, timer_query_);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    if (!software_rasterizer_) {
+      glEndQuery(GL_TIME_ELAPSED);
+      GLuint64 nanoseconds = 0;
+      glGetQueryObjectui64v(timer_query_, GL_QUERY_RESULT, &nanoseconds);
+      gpu_ms += double(nanoseconds) * 1e-6;
+    } else {
+      glFinish();
+      gpu_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    }
+  }
+  last_sky_view_ms_ = gpu_ms;
+
+  // Pass 2: the image, in tiles.
   glUseProgram(program_);
   glProgramUniform3f(program_, 0, frame.position.x, frame.position.y, frame.position.z);
   glProgramUniform3f(program_, 1, frame.right.x, frame.right.y, frame.right.z);
@@ -442,14 +503,10 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   glProgramUniform2f(program_, 6, frame.image_size.x, frame.image_size.y);
   glProgramUniform3f(program_, 7, sun.x, sun.y, sun.z);
   glProgramUniformMatrix3fv(program_, 9, 1, GL_FALSE, radiance_to_srgb_);
-  for (GLuint unit = 0; unit < 4; ++unit) glBindTextureUnit(unit, textures_[unit]);
-  glBindVertexArray(vertex_array_);
+  for (GLuint unit = 0; unit < 5; ++unit) glBindTextureUnit(unit, textures_[unit]);
+  glBindTextureUnit(5, sky_view_textures_[0]);
+  glBindTextureUnit(6, sky_view_textures_[1]);
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
-  glDisable(GL_BLEND);
-  glDisable(GL_DEPTH_TEST);
-  glDisable(GL_SCISSOR_TEST);
-  glDisable(GL_DITHER);
-  glDisable(GL_FRAMEBUFFER_SRGB);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
   glPixelStorei(GL_PACK_ROW_LENGTH, 0);
   glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
@@ -459,7 +516,6 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   image.height = height;
   image.rgb.resize(size_t(width) * size_t(height) * 3);
   std::vector<float> tile(size_t(tile_width) * size_t(tile_height) * 4);
-  double gpu_ms = 0.0;
   for (int y0 = 0; y0 < height; y0 += kTileSize) {
     for (int x0 = 0; x0 < width; x0 += kTileSize) {
       const int w = std::min(kTileSize, width - x0);
@@ -512,6 +568,22 @@ Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camer
   const precompute::TableSamplers samplers = precompute::make_samplers(tables, 0);
   const glm::mat3 matrix = srgb_matrix(tables);
 
+  // The sky-view table, texel by texel as the sky-view pass computes it.
+  std::vector<glm::vec3> sky_view_rayleigh(size_t(SKY_VIEW_WIDTH) * SKY_VIEW_HEIGHT);
+  std::vector<glm::vec3> sky_view_aerosol(sky_view_rayleigh.size());
+  if (glm::length(glm::dvec3(frame.position)) <= double(params.top_radius) * (1.0 + 1e-6)) {
+    tbb::parallel_for(0, SKY_VIEW_HEIGHT, [&](int y) {
+      for (int x = 0; x < SKY_VIEW_WIDTH; ++x) {
+        const glm::vec2 uv((float(x) + 0.5f) / float(SKY_VIEW_WIDTH), (float(y) + 0.5f) / float(SKY_VIEW_HEIGHT));
+        const size_t i = size_t(y) * SKY_VIEW_WIDTH + size_t(x);
+        physics::compute_sky_view_texel(params, samplers.transmittance, frame.position, sun, uv,
+                                        sky_view_rayleigh[i], sky_view_aerosol[i]);
+      }
+    });
+  }
+  const physics::sampler2D sky_view_rayleigh_sampler{SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT, sky_view_rayleigh.data()};
+  const physics::sampler2D sky_view_aerosol_sampler{SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT, sky_view_aerosol.data()};
+
   Image image;
   image.width = camera.width;
   image.height = camera.height;
@@ -529,7 +601,8 @@ Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camer
         if (valid) {
           const glm::vec3 radiance = physics::radiance_along_view_ray(
               params, samplers.transmittance, samplers.scattering, samplers.single_aerosol,
-              samplers.indirect_irradiance, frame.position, view_ray, sun, true);
+              samplers.multiple_scattering, samplers.indirect_irradiance, sky_view_rayleigh_sampler,
+              sky_view_aerosol_sampler, true, frame.position, view_ray, sun, true);
           rgb = matrix * radiance;
         }
         dst[3 * x + 0] = rgb.x;

@@ -108,7 +108,9 @@ std::string AssembledSource::locate(int line) const {
 // No #line directives: Mesa 22 reports source string 0 whatever "#line 1 N"
 // sets, while drivers agree on counting the lines of the whole string, which
 // locate() maps back to the files.
-AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& params) {
+namespace {
+
+AssembledSource shared_fragment_shader_source(const physics::AtmosphereParams& params) {
   AssembledSource s;
   s.append("header", "#version 450 core\n");
   // The GLSL meaning of the subset macros (the C++ one is in physics/shader_cpp.hpp).
@@ -116,8 +118,21 @@ AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& p
   s.append("definitions.glsl", embedded("src/physics/definitions.glsl"));
   s.append("ATMOSPHERE", atmosphere_params_glsl(params));
   s.append("functions.glsl", embedded("src/physics/functions.glsl"));
+  return s;
+}
+
+}  // namespace
+
+AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& params) {
+  AssembledSource s = shared_fragment_shader_source(params);
   s.append("camera.glsl", embedded("src/gpu/camera.glsl"));
   s.append("render.frag.glsl", embedded("src/gpu/render.frag.glsl"));
+  return s;
+}
+
+AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams& params) {
+  AssembledSource s = shared_fragment_shader_source(params);
+  s.append("sky_view.frag.glsl", embedded("src/gpu/sky_view.frag.glsl"));
   return s;
 }
 

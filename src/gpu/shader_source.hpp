@@ -41,4 +41,8 @@ struct AssembledSource {
 // render.frag.glsl.
 AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& params);
 
+// The fragment shader of the sky-view pass: the same shared part, then
+// sky_view.frag.glsl.
+AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams& params);
+
 }  // namespace atmos::gpu

@@ -225,8 +225,9 @@ INLINE float scattering_u_mu(IN(AtmosphereParams) atmosphere, float r, float mu,
 }
 
 // mu_s through the distance to the top from the ground, squeezed so that
-// mu_s_min maps to 0 and more texels go to the sun high in the sky.
-INLINE float scattering_u_mu_s(IN(AtmosphereParams) atmosphere, float mu_s) {
+// mu_s_min maps to 0 and more texels go to the sun near the horizon, where
+// the light changes fastest. Shared by the scattering and irradiance tables.
+INLINE float unit_range_from_mu_s(IN(AtmosphereParams) atmosphere, float mu_s) {
   float H = horizon_length_at_top(atmosphere);
   float d = distance_to_top_atmosphere_boundary(atmosphere, atmosphere.bottom_radius, mu_s);
   float d_min = atmosphere.top_radius - atmosphere.bottom_radius;
@@ -234,7 +235,22 @@ INLINE float scattering_u_mu_s(IN(AtmosphereParams) atmosphere, float mu_s) {
   float a = (d - d_min) / (d_max - d_min);
   float D = distance_to_top_atmosphere_boundary(atmosphere, atmosphere.bottom_radius, atmosphere.mu_s_min);
   float A = (D - d_min) / (d_max - d_min);
-  return texture_coord_from_unit_range(max(1.0f - a / A, 0.0f) / (1.0f + a), atmosphere.scattering_mu_s_size);
+  return max(1.0f - a / A, 0.0f) / (1.0f + a);
+}
+
+INLINE float mu_s_from_unit_range(IN(AtmosphereParams) atmosphere, float x_mu_s) {
+  float H = horizon_length_at_top(atmosphere);
+  float d_min = atmosphere.top_radius - atmosphere.bottom_radius;
+  float d_max = H;
+  float D = distance_to_top_atmosphere_boundary(atmosphere, atmosphere.bottom_radius, atmosphere.mu_s_min);
+  float A = (D - d_min) / (d_max - d_min);
+  float a = (A - x_mu_s * A) / (1.0f + x_mu_s * A);
+  float d = d_min + min(a, A) * (d_max - d_min);
+  return d == 0.0f ? 1.0f : clamp_cosine((H * H - d * d) / (2.0f * atmosphere.bottom_radius * d));
+}
+
+INLINE float scattering_u_mu_s(IN(AtmosphereParams) atmosphere, float mu_s) {
+  return texture_coord_from_unit_range(unit_range_from_mu_s(atmosphere, mu_s), atmosphere.scattering_mu_s_size);
 }
 
 // Scattering table: (r, mu, mu_s, nu) -> (u_nu, u_mu_s, u_mu, u_r) in the
@@ -270,14 +286,7 @@ INLINE void r_mu_mu_s_nu_from_scattering_uvwz(IN(AtmosphereParams) atmosphere, v
     ray_r_mu_intersects_ground = false;
   }
 
-  float x_mu_s = unit_range_from_texture_coord(uvwz.y, atmosphere.scattering_mu_s_size);
-  float d_min = atmosphere.top_radius - atmosphere.bottom_radius;
-  float d_max = H;
-  float D = distance_to_top_atmosphere_boundary(atmosphere, atmosphere.bottom_radius, atmosphere.mu_s_min);
-  float A = (D - d_min) / (d_max - d_min);
-  float a = (A - x_mu_s * A) / (1.0f + x_mu_s * A);
-  float d = d_min + min(a, A) * (d_max - d_min);
-  mu_s = d == 0.0f ? 1.0f : clamp_cosine((H * H - d * d) / (2.0f * atmosphere.bottom_radius * d));
+  mu_s = mu_s_from_unit_range(atmosphere, unit_range_from_texture_coord(uvwz.y, atmosphere.scattering_mu_s_size));
 
   nu = clamp_cosine(uvwz.x * 2.0f - 1.0f);
 }
@@ -316,11 +325,13 @@ INLINE void r_mu_mu_s_nu_from_scattering_texel(IN(AtmosphereParams) atmosphere, 
   nu = clamp_nu(mu, mu_s, nu);
 }
 
-// Irradiance table: (r, mu_s), both linear.
+// Irradiance table: (r, mu_s), r linear, mu_s as in the scattering table.
+// The sky irradiance falls by about ten times per 3° of sun depression in
+// twilight; a linear mu_s axis (3.2° per texel at 64 texels) overestimates it
+// there by up to 30 %.
 INLINE vec2 irradiance_uv_from_r_mu_s(IN(AtmosphereParams) atmosphere, float r, float mu_s) {
   float x_r = (r - atmosphere.bottom_radius) / (atmosphere.top_radius - atmosphere.bottom_radius);
-  float x_mu_s = mu_s * 0.5f + 0.5f;
-  return vec2(texture_coord_from_unit_range(x_mu_s, atmosphere.irradiance_mu_s_size),
+  return vec2(texture_coord_from_unit_range(unit_range_from_mu_s(atmosphere, mu_s), atmosphere.irradiance_mu_s_size),
               texture_coord_from_unit_range(x_r, atmosphere.irradiance_r_size));
 }
 
@@ -328,7 +339,7 @@ INLINE void r_mu_s_from_irradiance_uv(IN(AtmosphereParams) atmosphere, vec2 uv, 
   float x_mu_s = unit_range_from_texture_coord(uv.x, atmosphere.irradiance_mu_s_size);
   float x_r = unit_range_from_texture_coord(uv.y, atmosphere.irradiance_r_size);
   r = atmosphere.bottom_radius + x_r * (atmosphere.top_radius - atmosphere.bottom_radius);
-  mu_s = clamp_cosine(2.0f * x_mu_s - 1.0f);
+  mu_s = mu_s_from_unit_range(atmosphere, x_mu_s);
 }
 
 // ===========================================================================
@@ -385,12 +396,60 @@ INLINE float sun_visible_fraction(IN(AtmosphereParams) atmosphere, float r, floa
   return 0.5f + (x * sqrt(1.0f - x * x) + asin(x)) / PI;
 }
 
-// Transmittance from radius r to the sun, including the planet's shadow.
+// Within this cosine margin above the horizon (about 6°), the transmittance
+// to the sun is averaged over the solar disc instead of taken at its centre.
+// Near the horizon the optical depth of the path changes by a large factor
+// across the disc's 0.53°, and since exp is convex the centre value
+// underestimates the mean — by 20-30 % for the grazing rays that light the
+// twilight sky, and still 0.4 % at 5° (blue light at sea level: the
+// relative error is about Var(elevation) (d tau / d elevation)² / 2, with
+// Var = alpha² / 4 for a uniform disc). Above the margin it is below 0.3 %.
+#define SUN_DISC_AVERAGE_MARGIN 0.1f
+#define SUN_DISC_NODES 4
+
+INLINE bool sun_needs_disc_average(IN(AtmosphereParams) atmosphere, float mu_s, float mu_h) {
+  return mu_s - mu_h < SUN_DISC_AVERAGE_MARGIN + atmosphere.sun_angular_radius;
+}
+
+// Node k of the quadrature over the visible part of a uniform solar disc at
+// zenith cosine mu_s, seen from a point whose horizon is at mu_h. Disc
+// points at elevation offset x alpha from the centre (x in [-1, 1]) form a
+// chord of relative length sqrt(1 - x²); with x = cos θ the visible part
+// (x above the horizon) is θ in [0, θ_h] and the disc average of f is
+//   (2 / π) ∫_0^θ_h sin²θ f(cos θ) dθ,
+// integrated by 4-point Gauss-Legendre. Returns the zenith cosine of the
+// node and its weight (the weights sum to the visible fraction).
+INLINE float sun_disc_node(IN(AtmosphereParams) atmosphere, float mu_s, float mu_h, int k, OUT(float) weight) {
+  float alpha = atmosphere.sun_angular_radius;
+  float elevation = asin(clamp_cosine(mu_s));
+  float x_h = clamp((asin(clamp_cosine(mu_h)) - elevation) / alpha, -1.0f, 1.0f);
+  float theta_h = acos(x_h);
+  // Gauss-Legendre nodes and weights on [-1, 1].
+  float node = (k == 0 || k == 3) ? 0.8611363116f : 0.3399810436f;
+  float w = (k == 0 || k == 3) ? 0.3478548451f : 0.6521451549f;
+  if (k < 2) node = -node;
+  float theta = 0.5f * theta_h * (1.0f + node);
+  float sin_theta = sin(theta);
+  weight = w * 0.5f * theta_h * sin_theta * sin_theta * (2.0f / PI);
+  return clamp_cosine(sin(elevation + alpha * cos(theta)));
+}
+
+// Transmittance from radius r to the sun, including the planet's shadow:
+// the mean over the solar disc of the transmittance of the unobstructed
+// rays to its points (a uniform disc; seed 000 §3 uses a point sun).
 INLINE vec3 transmittance_to_sun(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture, float r,
                                  float mu_s) {
-  float visible = sun_visible_fraction(atmosphere, r, mu_s);
-  if (visible <= 0.0f) return vec3(0.0f);
-  return transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, mu_s) * visible;
+  float mu_h = horizon_mu(atmosphere, r);
+  if (!sun_needs_disc_average(atmosphere, mu_s, mu_h))
+    return transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, mu_s);
+  if (mu_s - mu_h < -atmosphere.sun_angular_radius) return vec3(0.0f);
+  vec3 sum = vec3(0.0f);
+  for (int k = 0; k < SUN_DISC_NODES; ++k) {
+    float weight;
+    float mu_k = sun_disc_node(atmosphere, mu_s, mu_h, k, weight);
+    sum += weight * transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, mu_k);
+  }
+  return sum;
 }
 
 // The two nu tiles around nu (the lower one's index) and the weight of the
@@ -431,6 +490,10 @@ INLINE vec3 irradiance_lookup(IN(AtmosphereParams) atmosphere, IN(sampler2D) irr
 #define OPTICAL_DEPTH_SUBSTEPS 4
 // Cells of the piecewise-linear importance density that places the nodes.
 #define RAY_MAP_CELLS 128
+// Share of the nodes of the sunlit map spread uniformly (see sunlit_ray_map).
+#ifndef SUNLIT_FLOOR_FRACTION
+#define SUNLIT_FLOOR_FRACTION 0.1f
+#endif
 
 // Simpson's rule weight of node i of n intervals of width dt (n even).
 INLINE float simpson_weight(int i, int n, float dt) {
@@ -439,28 +502,75 @@ INLINE float simpson_weight(int i, int n, float dt) {
 }
 
 // Quadrature nodes of an integral along the ray (r, mu) from its start to
-// the nearest atmosphere boundary, with the transmittance from the start
-// folded into the weights:
+// distance d, with the transmittance from the start folded into the weights:
 //   ∫ T(x, x + t v) f(t) dt ≈ Σ_i weight_i f(t_i).
-// The scattering medium can be much thinner than the ray (a 1.2 km aerosol
-// layer under a 100 km atmosphere: Simpson's rule on 40 uniform intervals
-// overestimates it by 6 %), so the nodes are placed at equal steps of the
-// cumulative extinction plus a uniform floor (a quarter of its mean):
-// with t = t(s) and dt/ds = W / w(t), the integrand in s is f / w, which is
-// smooth wherever f follows the density. w is piecewise linear on
-// RAY_MAP_CELLS cells, and t(s) inverts its exact (piecewise quadratic)
-// integral, so that dt/ds is the true derivative of the map.
+// Uniform nodes would waste most of their samples: the scattering medium can
+// be much thinner than the ray (a 1.2 km aerosol layer under a 100 km
+// atmosphere: Simpson's rule on 40 uniform intervals overestimates it by
+// 6 %), and in twilight only a short, high stretch of the ray is sunlit. So
+// the nodes are placed at equal steps of the cumulative integral of an
+// importance density w(t) plus a uniform floor: with t = t(s) and
+// dt/ds = W / w(t), the integrand in s is f / w, which is smooth wherever f
+// follows w. w is piecewise linear on `cells` (<= RAY_MAP_CELLS) equal cells,
+// and t(s) inverts its exact (piecewise quadratic) integral, so that dt/ds is
+// the true derivative of the map. Two importance densities:
+//  - extinction_ray_map: the extinction, for integrands that follow the
+//    medium whatever the sun (the precomputation, which shares the nodes of a
+//    view ray between all sun directions);
+//  - sunlit_ray_map: the single-scattering integrand itself (scattering
+//    coefficient x transmittance from the start x transmittance to the sun),
+//    which follows the planet's shadow and the reddened grazing sunlight.
 struct RayNodes {
   int count;
   float t[MAX_RAY_NODES];
   vec3 weight[MAX_RAY_NODES];
 };
 
-INLINE RayNodes ray_integration_nodes(IN(AtmosphereParams) atmosphere, float r, float mu,
-                                      bool ray_r_mu_intersects_ground, int intervals) {
+struct RayMap {
+  int cells;
+  float cell;  // cell length, m
+  float w[RAY_MAP_CELLS + 1];
+};
+
+INLINE RayMap extinction_ray_map(IN(AtmosphereParams) atmosphere, float r, float mu, float d, int cells) {
+  RayMap map;
+  map.cells = cells;
+  map.cell = d / float(cells);
+  for (int k = 0; k <= cells; ++k) {
+    vec3 e = extinction_at(atmosphere, clamp_radius(atmosphere, radius_along_ray(r, mu, float(k) * map.cell)));
+    map.w[k] = e.x + e.y + e.z;
+  }
+  return map;
+}
+
+INLINE RayMap sunlit_ray_map(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture, float r, float mu,
+                             float mu_s, float nu, float d, int cells) {
+  RayMap map;
+  map.cells = cells;
+  map.cell = d / float(cells);
+  vec3 optical_depth = vec3(0.0f);
+  vec3 previous_extinction = vec3(0.0f);
+  for (int k = 0; k <= cells; ++k) {
+    float t = float(k) * map.cell;
+    float r_t = clamp_radius(atmosphere, radius_along_ray(r, mu, t));
+    vec3 beta_rayleigh;
+    vec3 beta_aerosol;
+    vec3 extinction;
+    medium_at(atmosphere, r_t, beta_rayleigh, beta_aerosol, extinction);
+    if (k > 0) optical_depth += 0.5f * (previous_extinction + extinction) * map.cell;
+    previous_extinction = extinction;
+    vec3 f = (beta_rayleigh + beta_aerosol) * exp(-optical_depth) *
+             transmittance_to_sun(atmosphere, transmittance_texture, r_t,
+                                  clamp_cosine(mu_s_along_ray(r, mu_s, nu, t, r_t)));
+    map.w[k] = f.x + f.y + f.z;
+  }
+  return map;
+}
+
+INLINE RayNodes ray_integration_nodes_from_map(IN(AtmosphereParams) atmosphere, float r, float mu, float d,
+                                               IN(RayMap) map, float floor_fraction, int intervals) {
   RayNodes nodes;
   nodes.count = intervals + 1;
-  float d = distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ray_r_mu_intersects_ground);
   if (!(d > 0.0f)) {
     // A ray of zero length (leaving the top straight away): nothing to integrate.
     for (int i = 0; i < MAX_RAY_NODES; ++i) {
@@ -469,27 +579,24 @@ INLINE RayNodes ray_integration_nodes(IN(AtmosphereParams) atmosphere, float r, 
     }
     return nodes;
   }
-  float cell = d / float(RAY_MAP_CELLS);
+  int cells = map.cells;
+  float cell = map.cell;
   float w[RAY_MAP_CELLS + 1];
   float cumulative[RAY_MAP_CELLS + 1];
   float mean = 0.0f;
-  for (int k = 0; k <= RAY_MAP_CELLS; ++k) {
-    vec3 e = extinction_at(atmosphere, clamp_radius(atmosphere, radius_along_ray(r, mu, float(k) * cell)));
-    w[k] = e.x + e.y + e.z;
-    mean += w[k] * ((k == 0 || k == RAY_MAP_CELLS) ? 0.5f : 1.0f) / float(RAY_MAP_CELLS);
-  }
-  float floor_density = 0.25f * mean + 1e-30f;
+  for (int k = 0; k <= cells; ++k) mean += map.w[k] * ((k == 0 || k == cells) ? 0.5f : 1.0f) / float(cells);
+  float floor_density = floor_fraction * mean + 1e-30f;
   cumulative[0] = 0.0f;
-  for (int k = 0; k <= RAY_MAP_CELLS; ++k) {
-    w[k] += floor_density;
+  for (int k = 0; k <= cells; ++k) {
+    w[k] = map.w[k] + floor_density;
     if (k > 0) cumulative[k] = cumulative[k - 1] + 0.5f * (w[k - 1] + w[k]) * cell;
   }
-  float total = cumulative[RAY_MAP_CELLS];
+  float total = cumulative[cells];
   int k = 0;
   vec3 optical_depth = vec3(0.0f);
   for (int i = 0; i <= intervals; ++i) {
     float target = total * float(i) / float(intervals);
-    while (k < RAY_MAP_CELLS - 1 && cumulative[k + 1] < target) ++k;
+    while (k < cells - 1 && cumulative[k + 1] < target) ++k;
     // Solve cumulative[k] + w_k x + a x² / 2 = target for x in the cell.
     float a = (w[k + 1] - w[k]) / cell;
     float c = max(target - cumulative[k], 0.0f);
@@ -497,11 +604,27 @@ INLINE RayNodes ray_integration_nodes(IN(AtmosphereParams) atmosphere, float r, 
     float t = i == intervals ? d : float(k) * cell + x;
     float density = w[k] + a * x;
     nodes.t[i] = t;
-    if (i > 0) optical_depth += optical_depth_along_ray(atmosphere, r, mu, nodes.t[i - 1], t, OPTICAL_DEPTH_SUBSTEPS);
+    // Nodes can be many cells apart where w is small (the dense, dark
+    // bottom of a ray in the planet's shadow): the optical depth between
+    // them keeps the resolution of the cells.
+    if (i > 0)
+      optical_depth += optical_depth_along_ray(
+          atmosphere, r, mu, nodes.t[i - 1], t,
+          OPTICAL_DEPTH_SUBSTEPS * int(min(ceil((t - nodes.t[i - 1]) / cell), float(RAY_MAP_CELLS))));
     float weight = simpson_weight(i, intervals, 1.0f / float(intervals)) * total / density;
     nodes.weight[i] = exp(-optical_depth) * weight;
   }
   return nodes;
+}
+
+// Extinction-placed nodes from the start of the ray to the nearest atmosphere
+// boundary, with the full resolution of the precomputation. The floor (a
+// quarter of the mean) keeps a share of the nodes where the air is thin.
+INLINE RayNodes ray_integration_nodes(IN(AtmosphereParams) atmosphere, float r, float mu,
+                                      bool ray_r_mu_intersects_ground, int intervals) {
+  float d = distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ray_r_mu_intersects_ground);
+  return ray_integration_nodes_from_map(atmosphere, r, mu, d, extinction_ray_map(atmosphere, r, mu, d, RAY_MAP_CELLS),
+                                        0.25f, intervals);
 }
 
 // Direct ground irradiance: the sun's irradiance on a horizontal surface at
@@ -511,17 +634,12 @@ INLINE vec3 compute_direct_irradiance(IN(AtmosphereParams) atmosphere, IN(sample
   return atmosphere.solar_irradiance * transmittance_to_sun(atmosphere, transmittance_texture, r, mu_s) * max(mu_s, 0.0f);
 }
 
-// Single scattering of the ray (r, mu) with the sun at (mu_s, nu), without
-// its phase function (applied per pixel so that the aerosol halo stays sharp):
-// seed 000 eq. 3.13 with j reduced to the direct sunlight,
-//   S = E_sun ∫ T(x, y) beta_s(y) T(y, sun) dy,
-// for the Rayleigh and the aerosol constituents separately. T(x, y) is
-// integrated along the ray itself (ray_integration_nodes), not read from the
-// table.
-INLINE void compute_single_scattering(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture, float r,
-                                      float mu, float mu_s, float nu, bool ray_r_mu_intersects_ground,
-                                      OUT(vec3) rayleigh, OUT(vec3) aerosol) {
-  RayNodes nodes = ray_integration_nodes(atmosphere, r, mu, ray_r_mu_intersects_ground, SINGLE_SCATTERING_INTERVALS);
+// Single scattering summed over quadrature nodes along the ray (r, mu) with
+// the sun at (mu_s, nu), without phase functions (see
+// compute_single_scattering).
+INLINE void single_scattering_over_nodes(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
+                                         float r, float mu, float mu_s, float nu, IN(RayNodes) nodes,
+                                         OUT(vec3) rayleigh, OUT(vec3) aerosol) {
   rayleigh = vec3(0.0f);
   aerosol = vec3(0.0f);
   for (int i = 0; i < nodes.count; ++i) {
@@ -537,6 +655,36 @@ INLINE void compute_single_scattering(IN(AtmosphereParams) atmosphere, IN(sample
   }
   rayleigh *= atmosphere.solar_irradiance;
   aerosol *= atmosphere.solar_irradiance;
+}
+
+// Single scattering of the ray (r, mu), up to the atmosphere's boundary,
+// with the sun at (mu_s, nu), without its phase function (applied per pixel
+// so that the aerosol halo stays sharp): seed 000 eq. 3.13 with j reduced to
+// the direct sunlight,
+//   S = E_sun ∫ T(x, y) beta_s(y) T(y, sun) dy,
+// for the Rayleigh and the aerosol constituents separately. T(x, y) is
+// integrated along the ray itself (ray_integration_nodes), not read from the
+// table. This is the form of the precomputed tables.
+INLINE void compute_single_scattering(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture, float r,
+                                      float mu, float mu_s, float nu, bool ray_r_mu_intersects_ground,
+                                      OUT(vec3) rayleigh, OUT(vec3) aerosol) {
+  RayNodes nodes = ray_integration_nodes(atmosphere, r, mu, ray_r_mu_intersects_ground, SINGLE_SCATTERING_INTERVALS);
+  single_scattering_over_nodes(atmosphere, transmittance_texture, r, mu, mu_s, nu, nodes, rayleigh, aerosol);
+}
+
+// Single scattering of the ray (r, mu) from its start to distance d, with
+// nodes placed by the integrand itself (sunlit_ray_map, `cells` cells,
+// `intervals` Simpson intervals): the run-time form, which stays accurate in
+// twilight, where the lit part of the ray is short and far and the table's
+// interpolation in mu_s is not (the radiance switches on over a fraction of
+// a degree of sun elevation there).
+INLINE void integrate_single_scattering(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture, float r,
+                                        float mu, float mu_s, float nu, float d, int intervals, int cells,
+                                        OUT(vec3) rayleigh, OUT(vec3) aerosol) {
+  RayNodes nodes = ray_integration_nodes_from_map(
+      atmosphere, r, mu, d, sunlit_ray_map(atmosphere, transmittance_texture, r, mu, mu_s, nu, d, cells),
+      SUNLIT_FLOOR_FRACTION, intervals);
+  single_scattering_over_nodes(atmosphere, transmittance_texture, r, mu, mu_s, nu, nodes, rayleigh, aerosol);
 }
 
 // Multiple scattering of one order along the ray (r, mu): seed 000 eq. 3.13,
@@ -694,6 +842,8 @@ INLINE vec3 compute_indirect_irradiance(IN(AtmosphereParams) atmosphere, IN(samp
 //    scattering divided by the Rayleigh phase function (so one lookup and one
 //    phase function give both);
 //  - single_aerosol_texture: single aerosol scattering without phase function;
+//  - multiple_scattering_texture: the multiple scattering alone, divided by
+//    the Rayleigh phase function (for the low-sun path of sky_radiance);
 //  - irradiance_texture: indirect (sky) irradiance on a horizontal surface.
 
 // Moves a camera outside the atmosphere to where its view ray enters it.
@@ -713,12 +863,162 @@ INLINE bool enter_atmosphere(IN(AtmosphereParams) atmosphere, INOUT(vec3) camera
   return true;
 }
 
+// The low-sun path. The 4D tables interpolate linearly in mu_s between
+// texels about 1° of sun elevation apart near the horizon, and with the sun
+// low on some part of a view ray its single scattering switches on over a
+// fraction of a degree (the planet's shadow and the grazing, reddened
+// sunlight): the interpolation is then off by up to 60 %. Where the sun is
+// lower than LOW_SUN_MU_S_TABLE at some point of the view ray, single
+// scattering is integrated along the ray at run time instead
+// (integrate_single_scattering, nodes placed by the integrand), and only the
+// smooth multiple scattering is read from its table; between
+// LOW_SUN_MU_S_MARCHED and LOW_SUN_MU_S_TABLE the two are blended so that no
+// seam appears when the sun moves. Above, the tables agree with the
+// reference to about 1 %.
+#define LOW_SUN_MU_S_MARCHED 0.1045285f  // sin 6°
+#define LOW_SUN_MU_S_TABLE 0.1736482f    // sin 10°
+#define RUNTIME_SINGLE_SCATTERING_INTERVALS 16
+#define RUNTIME_RAY_MAP_CELLS 32
+
+// Zenith cosine of the sun at the far end (distance d) of the ray (r, mu).
+INLINE float mu_s_at_ray_end(float r, float mu, float mu_s, float nu, float d) {
+  return mu_s_along_ray(r, mu_s, nu, d, radius_along_ray(r, mu, d));
+}
+
+// Weight of the low-sun path for a ray whose ends see the sun at mu_s and
+// mu_s_end: 1 when the sun is below 6° somewhere on it, 0 above 10°
+// everywhere. The sun elevation is lowest at one end of the ray: with
+// mu_s(t) = N(t) / r(t), N linear and r(t) convex, N - c r is concave for
+// c >= 0, so its minimum is at an end.
+INLINE float low_sun_weight(float mu_s, float mu_s_end) {
+  return 1.0f - smoothstep(LOW_SUN_MU_S_MARCHED, LOW_SUN_MU_S_TABLE, min(mu_s, mu_s_end));
+}
+
+// Whether no point of a ray whose ends see the sun below mu_s_min is lit:
+// such points are in the planet's shadow cylinder (the sun more than 2°
+// below the horizon of any point of the atmosphere, see mu_s_min), and a
+// segment between two points of a convex set stays in it.
+INLINE bool ray_in_planet_shadow(IN(AtmosphereParams) atmosphere, float mu_s, float mu_s_end) {
+  return max(mu_s, mu_s_end) < atmosphere.mu_s_min;
+}
+
+// The sky-view table: the low-sun single scattering for one camera and sun,
+// recomputed every frame (the idea of Hillaire 2020's sky-view LUT). The
+// run-time integration above costs ~50 evaluations of the medium and of the
+// transmittance to the sun per ray — seconds per frame for a full screen on
+// a software rasteriser. For a given camera and sun a view ray is fixed by its
+// direction, so a small 2D table over directions, with mu_s exact, holds it:
+//  - x: azimuth phi in [0, π] from the sun's vertical plane (the radiance is
+//    symmetric about it), linear;
+//  - y: view zenith angle, split at the ground's horizon like the scattering
+//    table's mu (ground rays below 0.5, the others above, so that the
+//    discontinuity falls between texels), each half with texels concentrated
+//    towards the horizon (x = sqrt of the normalised angle from it), between
+//    the nadir and the horizon for ground rays and between the horizon and
+//    the zenith (or, for a camera above the atmosphere, the top's limb) for
+//    the others — the table follows the planet's apparent size, from 1 m to
+//    hundreds of planet radii.
+// Texels hold single Rayleigh and single aerosol scattering without phase
+// functions, integrated as integrate_single_scattering does.
+#define SKY_VIEW_WIDTH 96
+#define SKY_VIEW_HEIGHT 128
+
+struct SkyViewFrame {
+  vec3 zenith;          // unit vector from the planet centre to the camera
+  vec3 sun_side;        // horizontal unit vector towards the sun's azimuth
+  vec3 across;          // zenith x sun_side
+  float theta_horizon;  // view zenith angle of the ground's horizon
+  float theta_top;      // view zenith angle of the top's limb (camera above the atmosphere), else 0
+};
+
+// `camera` relative to the planet centre, as in radiance_along_view_ray (a
+// camera below the ground counts as standing on it).
+INLINE SkyViewFrame sky_view_frame(IN(AtmosphereParams) atmosphere, vec3 camera, vec3 sun_direction) {
+  SkyViewFrame frame;
+  float length_camera = length(camera);
+  float r = max(length_camera, atmosphere.bottom_radius);
+  frame.zenith = camera / length_camera;
+  vec3 side = sun_direction - frame.zenith * dot(sun_direction, frame.zenith);
+  if (dot(side, side) < 1e-10f) {
+    // Sun at the zenith or nadir: every azimuth is the same, pick one.
+    side = abs(frame.zenith.x) < 0.9f ? cross(frame.zenith, vec3(1.0f, 0.0f, 0.0f))
+                                      : cross(frame.zenith, vec3(0.0f, 1.0f, 0.0f));
+  }
+  frame.sun_side = normalize(side);
+  frame.across = cross(frame.zenith, frame.sun_side);
+  frame.theta_horizon = PI - asin(min(atmosphere.bottom_radius / r, 1.0f));
+  frame.theta_top = r > atmosphere.top_radius ? PI - asin(atmosphere.top_radius / r) : 0.0f;
+  return frame;
+}
+
+// Texture coordinates of a view direction; `ground` says which half (the
+// caller's ray_intersects_ground, so that both agree at the horizon).
+INLINE vec2 sky_view_uv(IN(SkyViewFrame) frame, vec3 view_ray, bool ground) {
+  float theta = acos(clamp_cosine(dot(view_ray, frame.zenith)));
+  float phi = atan(abs(dot(view_ray, frame.across)), dot(view_ray, frame.sun_side));
+  float v;
+  if (ground) {
+    float x = safe_sqrt((theta - frame.theta_horizon) / max(PI - frame.theta_horizon, 1e-7f));
+    v = 0.5f - 0.5f * texture_coord_from_unit_range(min(x, 1.0f), SKY_VIEW_HEIGHT / 2);
+  } else {
+    float x = safe_sqrt((frame.theta_horizon - theta) / max(frame.theta_horizon - frame.theta_top, 1e-7f));
+    v = 0.5f + 0.5f * texture_coord_from_unit_range(min(x, 1.0f), SKY_VIEW_HEIGHT / 2);
+  }
+  return vec2(texture_coord_from_unit_range(phi / PI, SKY_VIEW_WIDTH), v);
+}
+
+// The view direction of texture coordinates uv, and whether its ray is in the
+// ground half.
+INLINE vec3 sky_view_direction(IN(SkyViewFrame) frame, vec2 uv, OUT(bool) ground) {
+  float theta;
+  ground = uv.y < 0.5f;
+  if (ground) {
+    float x = unit_range_from_texture_coord(1.0f - 2.0f * uv.y, SKY_VIEW_HEIGHT / 2);
+    theta = frame.theta_horizon + x * x * (PI - frame.theta_horizon);
+  } else {
+    float x = unit_range_from_texture_coord(2.0f * uv.y - 1.0f, SKY_VIEW_HEIGHT / 2);
+    theta = frame.theta_horizon - x * x * (frame.theta_horizon - frame.theta_top);
+  }
+  float phi = PI * unit_range_from_texture_coord(uv.x, SKY_VIEW_WIDTH);
+  return frame.zenith * cos(theta) + (frame.sun_side * cos(phi) + frame.across * sin(phi)) * sin(theta);
+}
+
+// One texel of the sky-view table (uv at its centre): single Rayleigh and
+// single aerosol scattering, without phase functions, of its view ray.
+INLINE void compute_sky_view_texel(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
+                                   vec3 camera, vec3 sun_direction, vec2 uv, OUT(vec3) rayleigh, OUT(vec3) aerosol) {
+  rayleigh = vec3(0.0f);
+  aerosol = vec3(0.0f);
+  float camera_r = length(camera);
+  if (camera_r < atmosphere.bottom_radius) camera = camera * (atmosphere.bottom_radius / camera_r);
+  SkyViewFrame frame = sky_view_frame(atmosphere, camera, sun_direction);
+  bool ground;
+  vec3 view_ray = sky_view_direction(frame, uv, ground);
+  vec3 start = camera;
+  if (!enter_atmosphere(atmosphere, start, view_ray)) return;
+  float r = clamp_radius(atmosphere, length(start));
+  float mu = clamp_cosine(dot(start, view_ray) / r);
+  float mu_s = clamp_cosine(dot(start, sun_direction) / r);
+  float nu = clamp_cosine(dot(view_ray, sun_direction));
+  float d = distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ground);
+  integrate_single_scattering(atmosphere, transmittance_texture, r, mu, mu_s, nu, d,
+                              RUNTIME_SINGLE_SCATTERING_INTERVALS, RUNTIME_RAY_MAP_CELLS, rayleigh, aerosol);
+}
+
 // Radiance scattered towards the camera along the view ray up to the top of
 // the atmosphere or the ground (seed 000 eq. 3.13), and the transmittance of
 // that path. Excludes the sun disc and the light reflected by the ground.
+// The low-sun single scattering comes from the sky-view table of this camera
+// and sun when `use_sky_view` (the renderers) and the camera is in the
+// atmosphere; else it is integrated for this ray alone (the CPU sky model,
+// exact; and cameras in space, where the lit part of the atmosphere near the
+// terminator spans a few degrees of view, too sharp for the table: 30 %
+// errors at 2 planet radii).
 INLINE vec3 sky_radiance(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
-                         IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture, vec3 camera,
-                         vec3 view_ray, vec3 sun_direction, OUT(vec3) transmittance) {
+                         IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
+                         IN(sampler3D) multiple_scattering_texture, IN(sampler2D) sky_view_rayleigh_texture,
+                         IN(sampler2D) sky_view_aerosol_texture, bool use_sky_view, vec3 camera, vec3 view_ray,
+                         vec3 sun_direction, OUT(vec3) transmittance) {
   transmittance = vec3(1.0f);
   vec3 start = camera;
   if (!enter_atmosphere(atmosphere, start, view_ray)) return vec3(0.0f);
@@ -732,9 +1032,33 @@ INLINE vec3 sky_radiance(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmit
   } else {
     transmittance = transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, mu);
   }
-  vec3 scattering = scattering_lookup(atmosphere, scattering_texture, r, mu, mu_s, nu, ground);
-  vec3 single_aerosol = scattering_lookup(atmosphere, single_aerosol_texture, r, mu, mu_s, nu, ground);
-  return phase_weighted_scattering(atmosphere, scattering, single_aerosol, nu);
+  float d = distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ground);
+  float mu_s_end = mu_s_at_ray_end(r, mu, mu_s, nu, d);
+  float low_sun = low_sun_weight(mu_s, mu_s_end);
+  vec3 radiance = vec3(0.0f);
+  if (low_sun < 1.0f) {
+    vec3 scattering = scattering_lookup(atmosphere, scattering_texture, r, mu, mu_s, nu, ground);
+    vec3 single_aerosol = scattering_lookup(atmosphere, single_aerosol_texture, r, mu, mu_s, nu, ground);
+    radiance += (1.0f - low_sun) * phase_weighted_scattering(atmosphere, scattering, single_aerosol, nu);
+  }
+  if (low_sun > 0.0f) {
+    vec3 single_rayleigh = vec3(0.0f);
+    vec3 single_aerosol = vec3(0.0f);
+    if (ray_in_planet_shadow(atmosphere, mu_s, mu_s_end)) {
+      // Nothing to integrate: the night side.
+    } else if (use_sky_view && length(camera) <= atmosphere.top_radius) {
+      vec2 uv = sky_view_uv(sky_view_frame(atmosphere, camera, sun_direction), view_ray, ground);
+      single_rayleigh = vec3(texture(sky_view_rayleigh_texture, uv));
+      single_aerosol = vec3(texture(sky_view_aerosol_texture, uv));
+    } else {
+      integrate_single_scattering(atmosphere, transmittance_texture, r, mu, mu_s, nu, d,
+                                  RUNTIME_SINGLE_SCATTERING_INTERVALS, RUNTIME_RAY_MAP_CELLS, single_rayleigh,
+                                  single_aerosol);
+    }
+    vec3 multiple = scattering_lookup(atmosphere, multiple_scattering_texture, r, mu, mu_s, nu, ground);
+    radiance += low_sun * phase_weighted_scattering(atmosphere, single_rayleigh + multiple, single_aerosol, nu);
+  }
+  return radiance;
 }
 
 // Irradiance on a surface at radius r whose local zenith is `up`, with
@@ -774,13 +1098,16 @@ INLINE vec3 sun_disc_radiance(IN(AtmosphereParams) atmosphere) {
 // treated as standing on it.
 INLINE vec3 radiance_along_view_ray(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
                                     IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
-                                    IN(sampler2D) irradiance_texture, vec3 camera, vec3 view_ray,
-                                    vec3 sun_direction, bool include_sun_disc) {
+                                    IN(sampler3D) multiple_scattering_texture, IN(sampler2D) irradiance_texture,
+                                    IN(sampler2D) sky_view_rayleigh_texture, IN(sampler2D) sky_view_aerosol_texture,
+                                    bool use_sky_view, vec3 camera, vec3 view_ray, vec3 sun_direction,
+                                    bool include_sun_disc) {
   float camera_r = length(camera);
   if (camera_r < atmosphere.bottom_radius) camera = camera * (atmosphere.bottom_radius / camera_r);
   vec3 transmittance;
-  vec3 radiance = sky_radiance(atmosphere, transmittance_texture, scattering_texture, single_aerosol_texture, camera,
-                               view_ray, sun_direction, transmittance);
+  vec3 radiance = sky_radiance(atmosphere, transmittance_texture, scattering_texture, single_aerosol_texture,
+                               multiple_scattering_texture, sky_view_rayleigh_texture, sky_view_aerosol_texture,
+                               use_sky_view, camera, view_ray, sun_direction, transmittance);
   vec3 start = camera;
   if (!enter_atmosphere(atmosphere, start, view_ray)) {
     // Outside the atmosphere and missing it: only the sun.

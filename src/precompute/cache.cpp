@@ -27,7 +27,7 @@ namespace {
 constexpr char kMagic[8] = {'A', 'T', 'M', 'O', 'S', 'T', 'B', 'L'};
 // Bump when the meaning of the tables changes in code that is not one of the
 // hashed sources (src/precompute/*.cpp).
-constexpr std::uint32_t kFormatVersion = 1;
+constexpr std::uint32_t kFormatVersion = 2;
 
 struct Fnv1a {
   std::uint64_t h = 1469598103934665603ull;
@@ -56,7 +56,7 @@ std::size_t set_floats(const TableSizes& s) {
   const std::size_t t = std::size_t(s.transmittance_mu) * s.transmittance_r;
   const std::size_t e = std::size_t(s.irradiance_mu_s) * s.irradiance_r;
   const std::size_t sc = std::size_t(s.scattering_nu) * s.scattering_mu_s * s.scattering_mu * s.scattering_r;
-  return 3 * (t + 2 * e + 2 * sc);
+  return 3 * (t + 2 * e + 3 * sc);  // transmittance, 2 irradiance, 3 scattering tables
 }
 
 void write_sizes(Fnv1a& h, const TableSizes& s) {
@@ -174,7 +174,8 @@ std::string read_cache(const std::string& path, const std::string& key, const Pr
   for (int i = 0; i < sets; ++i) {
     TableSet set;
     if (!take_vec3(set.transmittance, t) || !take_vec3(set.direct_irradiance, e) ||
-        !take_vec3(set.indirect_irradiance, e) || !take_vec3(set.scattering, sc) || !take_vec3(set.single_aerosol, sc))
+        !take_vec3(set.indirect_irradiance, e) || !take_vec3(set.scattering, sc) || !take_vec3(set.single_aerosol, sc) ||
+        !take_vec3(set.multiple_scattering, sc))
       return "non-finite texels";
     tables.sets.push_back(std::move(set));
   }
@@ -200,7 +201,7 @@ std::string write_cache(const std::string& path, const std::string& key, const T
   put(tables.wavelengths_nm.data(), tables.wavelengths_nm.size() * 8);
   for (const auto& set : tables.sets)
     for (const auto* v : {&set.transmittance, &set.direct_irradiance, &set.indirect_irradiance, &set.scattering,
-                          &set.single_aerosol})
+                          &set.single_aerosol, &set.multiple_scattering})
       put(v->data(), v->size() * sizeof(glm::vec3));
   Fnv1a check;
   check.bytes(data.data(), data.size());

@@ -85,7 +85,7 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
     timed("single_scattering", cost_single, [&](auto&& progress) {
       compute_single_scattering_tables(a, transmittance, single_rayleigh, single_aerosol, progress);
     });
-    Table3D scattering = single_rayleigh;
+    Table3D multiple(single_rayleigh.width, single_rayleigh.height, single_rayleigh.depth);
     delta_multiple = Table3D(single_rayleigh.width, single_rayleigh.height, single_rayleigh.depth);
 
     for (int order = 2; order <= K; ++order) {
@@ -102,21 +102,25 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
       timed("multiple_scattering", cost_order * 0.5, [&](auto&& progress) {
         delta_multiple = compute_multiple_scattering_table(a, density, progress);
         // Stored divided by the Rayleigh phase function so that one lookup and
-        // one phase function at run time give single Rayleigh + all multiple.
+        // one phase function at run time give single Rayleigh + all multiple
+        // (the `scattering` table below).
         // The division uses the nu of the texel's tile, not the clamped nu
         // the texel was computed for: the run-time interpolation between
         // tiles weights them by their tile nu, and a clamped nu there makes
         // M / P_R jump between neighbours (17 % errors in the second order
         // towards the sun, measured against the reference).
-        tbb::parallel_for(0, scattering.depth, [&](int z) {
-          for (int y = 0; y < scattering.height; ++y)
-            for (int x = 0; x < scattering.width; ++x) {
+        tbb::parallel_for(0, multiple.depth, [&](int z) {
+          for (int y = 0; y < multiple.height; ++y)
+            for (int x = 0; x < multiple.width; ++x) {
               const float tile_nu = physics::scattering_texel_tile_nu(a, vec3(float(x), float(y), float(z)));
-              scattering.at(x, y, z) += delta_multiple.at(x, y, z) / physics::rayleigh_phase_function(tile_nu);
+              multiple.at(x, y, z) += delta_multiple.at(x, y, z) / physics::rayleigh_phase_function(tile_nu);
             }
         });
       });
     }
+
+    Table3D scattering = single_rayleigh;
+    for (size_t i = 0; i < scattering.texels.size(); ++i) scattering.texels[i] += multiple.texels[i];
 
     TableSet out;
     out.transmittance = std::move(transmittance.texels);
@@ -124,6 +128,7 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
     out.indirect_irradiance = std::move(indirect_irradiance.texels);
     out.scattering = std::move(scattering.texels);
     out.single_aerosol = std::move(single_aerosol.texels);
+    out.multiple_scattering = std::move(multiple.texels);
     tables.sets.push_back(std::move(out));
   }
   return tables;

@@ -13,6 +13,7 @@ struct TableSamplers {
   physics::sampler2D indirect_irradiance;
   physics::sampler3D scattering;
   physics::sampler3D single_aerosol;
+  physics::sampler3D multiple_scattering;
 };
 
 inline TableSamplers make_samplers(const Tables& tables, int set) {
@@ -26,6 +27,8 @@ inline TableSamplers make_samplers(const Tables& tables, int set) {
                     t.scattering.data()};
   out.single_aerosol = {tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
                         t.single_aerosol.data()};
+  out.multiple_scattering = {tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
+                             t.multiple_scattering.data()};
   return out;
 }
 

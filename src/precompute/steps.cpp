@@ -87,7 +87,7 @@ class MuSCoordinate {
 
 // transmittance_to_sun(a, t, r, mu_s) for one radius and many mu_s: the
 // row of the transmittance table at r (its v coordinate) is interpolated
-// once, and the visible fraction of the sun is only evaluated near the horizon.
+// once, and the solar disc is only averaged near the horizon.
 class SunTransmittanceAtRadius {
  public:
   SunTransmittanceAtRadius(const AtmosphereParams& a, const sampler2D& t, float r)
@@ -102,18 +102,25 @@ class SunTransmittanceAtRadius {
     mu_h_ = horizon_mu(a, r);
   }
   vec3 operator()(float mu_s) const {
-    float visible = 1.0f;
-    if (mu_s - mu_h_ < a_.sun_angular_radius) {
-      visible = sun_visible_fraction(a_, r_, mu_s);
-      if (visible <= 0.0f) return vec3(0.0f);
+    if (!sun_needs_disc_average(a_, mu_s, mu_h_)) return at(mu_s);
+    if (mu_s - mu_h_ < -a_.sun_angular_radius) return vec3(0.0f);
+    vec3 sum(0.0f);
+    for (int k = 0; k < SUN_DISC_NODES; ++k) {
+      float weight;
+      const float mu_k = sun_disc_node(a_, mu_s, mu_h_, k, weight);
+      sum += weight * at(mu_k);
     }
-    int x0, x1;
-    float fx;
-    detail::linear_tap(transmittance_uv_from_r_mu(a_, r_, mu_s).x, int(row_.size()), x0, x1, fx);
-    return (row_[size_t(x0)] * (1.0f - fx) + row_[size_t(x1)] * fx) * visible;
+    return sum;
   }
 
  private:
+  vec3 at(float mu) const {
+    int x0, x1;
+    float fx;
+    detail::linear_tap(transmittance_uv_from_r_mu(a_, r_, mu).x, int(row_.size()), x0, x1, fx);
+    return row_[size_t(x0)] * (1.0f - fx) + row_[size_t(x1)] * fx;
+  }
+
   const AtmosphereParams& a_;
   float r_;
   std::vector<vec3> row_;

@@ -28,8 +28,13 @@ SkyModel::~SkyModel() = default;
 glm::dvec3 SkyModel::radiance(const glm::dvec3& observer, const glm::dvec3& view, const glm::dvec3& sun,
                               bool include_sun_disc) const {
   const auto& s = impl_->samplers;
+  // Each ray integrates its own low-sun single scattering (exact, not
+  // interpolated from a sky-view table: this is the form the reference
+  // tests measure).
+  const physics::sampler2D no_sky_view{};
   return glm::dvec3(physics::radiance_along_view_ray(impl_->params, s.transmittance, s.scattering, s.single_aerosol,
-                                                     s.indirect_irradiance, glm::vec3(observer), glm::vec3(view),
+                                                     s.multiple_scattering, s.indirect_irradiance, no_sky_view,
+                                                     no_sky_view, false, glm::vec3(observer), glm::vec3(view),
                                                      glm::vec3(sun), include_sun_disc));
 }
 
