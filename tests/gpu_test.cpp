@@ -114,6 +114,14 @@ std::vector<Scene> scenes() {
   panorama.forward = {0.0, 1.0, 0.0};
   panorama.projection = Projection::equirect;
   out.push_back({"equirect_10km", panorama, sun_at(20.0, 45.0)});
+
+  // Twilight: the low-sun path (the sky-view table's integrated single
+  // scattering in the atmosphere, each ray's own integration in space).
+  out.push_back({"twilight", ground, sun_at(-3.0, 10.0)});
+  Camera terminator = orbit;
+  terminator.position = {0.0, -1.2 * kEarthRadius, 0.0};
+  terminator.fov_deg = 120.0;
+  out.push_back({"orbit_terminator", terminator, glm::dvec3(1.0, 0.0, 0.0)});
   return out;
 }
 
@@ -221,17 +229,26 @@ TEST_F(Gpu, HeadlessContextReportsRenderer) {
 // Tolerances of the GPU image against the CPU twin. Measured on llvmpipe
 // (Mesa 22.3, LLVM 15) with the small tables above, relative to the pixel
 // luminance (the test prints them):
-//                    full vs CPU        half vs CPU(half tables)   half vs CPU(float tables)
-//   ground_horizon   4e-5 (RMS 4e-6)    4e-5 (RMS 4e-6)            5e-4 (RMS 1.4e-4)
-//   altitude_10km    3e-4 (RMS 3e-5)    3e-4 (RMS 3e-5)            7e-4 (RMS 1.8e-4)
-//   orbit            3e-4 (RMS 4e-5)    3e-4 (RMS 4e-5)            1.5e-3 (RMS 2e-4)
-//   fisheye_sky      9e-6 (RMS 7e-7)    9e-6 (RMS 7e-7)            5e-4 (RMS 1.4e-4)
-//   equirect_10km    8e-4 (RMS 1.1e-4)  8e-4 (RMS 1.1e-4)          7e-4 (RMS 1.8e-4)
+//                    full vs CPU         half vs CPU(half tables)   half vs CPU(float tables)
+//   ground_horizon   5.9e-4 (RMS 2.7e-4) 5.9e-4 (RMS 2.7e-4)        8.2e-4 (RMS 3.2e-4)
+//   altitude_10km    1.7e-3 (RMS 5.7e-4) 1.7e-3 (RMS 5.7e-4)        1.7e-3 (RMS 4.8e-4)
+//   orbit            6.9e-4 (RMS 7e-5)   1.5e-3 (RMS 1.9e-4)        1.7e-3 (RMS 2.3e-4)
+//   fisheye_sky      5.8e-4 (RMS 2.1e-4) 5.8e-4 (RMS 2.1e-4)        7.7e-4 (RMS 2.6e-4)
+//   equirect_10km    1.0e-3 (RMS 3.3e-4) 1.0e-3 (RMS 3.3e-4)        1.3e-3 (RMS 3.6e-4)
 // Where the difference comes from (checked stage by stage, outside the tests):
 //  - not the texture filtering: llvmpipe filters float textures with float
 //    weights (a lookup at weight 0.302656 between texels 0 and 1 returns
-//    0.302656, not an 8-bit 77/256), and the GPU and C++ evaluations of
-//    radiance_along_view_ray for one given ray agree to ~1e-7;
+//    0.302656, not an 8-bit 77/256);
+//  - cameras in the atmosphere read this frame's sky-view table (see
+//    sky_radiance). Its texels, computed by the GPU pass and by the CPU, agree
+//    to 1e-4 wherever the radiance is not negligible (checked by reading the
+//    texture back); the 1e-3 differences come from the lookup, whose texture
+//    coordinates come from acos and atan of the view direction: llvmpipe
+//    approximates them differently from glibc, and a coordinate difference of
+//    1e-3 texel near the horizon, where the table changes fastest, is a 1e-3
+//    change of the radiance. (Before the sky-view table, the same scenes
+//    differed by at most 3e-5 in the sky.) Cameras in space evaluate each
+//    ray and agree to 7e-4;
 //  - the view rays differ by 1-2 ulp (~1.5e-7): llvmpipe's sin/cos/tan/sqrt
 //    are not glibc's;
 //  - float32 planet-centred coordinates amplify that where a ray reaches the
@@ -244,13 +261,12 @@ TEST_F(Gpu, HeadlessContextReportsRenderer) {
 //    random cameras and suns (32x24 pixels, outside the tests) the worst
 //    pixel differed by 1.0e-2 in daylight (camera 1 m above the ground,
 //    looking 4° down at a point 15 m away) and 1.8e-2 at night (1e-3 cd/m²).
-//    Sky-only pixels stay near 1e-5.
 // Bounds: 1e-2 per pixel where the ground is in view (what float32 geometry
-// allows in daylight, as all these scenes are, on any GPU whose sin/cos
-// differ from glibc's by an ulp; not just what llvmpipe happens to reach on
-// these scenes), 1e-4 for the sky-only fisheye; and an RMS of 3e-4 over the
-// image (measured <= 1.1e-4), which a systematic error of 0.1 % over a third
-// of the image would already exceed.
+// allows in daylight, on any GPU whose sin/cos differ from glibc's by an ulp;
+// not just what llvmpipe happens to reach on these scenes), 3e-3 for the
+// sky-only fisheye (the sky-view lookup); and an RMS of 1e-3 over the image
+// (measured <= 5.7e-4), which a systematic error of 0.3 % over a third of the
+// image would already exceed.
 // Half-precision textures are compared first with the CPU reading the same
 // tables rounded to half (the renderer rounds on the CPU with
 // glm::packHalf1x16, as this test does; the transmittance stays float in
@@ -258,8 +274,8 @@ TEST_F(Gpu, HeadlessContextReportsRenderer) {
 // 11-bit significands (2^-11 = 5e-4 per texel, several lookups per pixel):
 // RMS 1e-3, max 1e-2 as above.
 constexpr double kGroundMaxRelative = 1e-2;
-constexpr double kSkyMaxRelative = 1e-4;
-constexpr double kRmsRelative = 3e-4;
+constexpr double kSkyMaxRelative = 3e-3;
+constexpr double kRmsRelative = 1e-3;
 constexpr double kHalfVsFloatMaxRelative = 1e-2;
 constexpr double kHalfVsFloatRmsRelative = 1e-3;
 

@@ -24,6 +24,10 @@
 #include "atmos/image.hpp"
 #include "atmos/tables.hpp"
 
+namespace atmos::physics {
+struct AtmosphereParams;
+}
+
 namespace atmos {
 
 enum class Projection {
@@ -120,7 +124,9 @@ class Renderer {
 
  private:
   GlContext& context_;
-  std::uint32_t program_ = 0;
+  std::uint32_t program_ = 0;        // render pass, camera in the atmosphere (reads the sky-view table)
+  std::uint32_t space_program_ = 0;  // render pass, camera above the atmosphere
+  std::unique_ptr<physics::AtmosphereParams> params_;
   std::uint32_t vertex_array_ = 0;
   // transmittance, scattering, single aerosol, irradiance, multiple scattering
   std::uint32_t textures_[5] = {0, 0, 0, 0, 0};
@@ -132,7 +138,6 @@ class Renderer {
   std::uint32_t tile_texture_ = 0;
   int tile_width_ = 0;
   int tile_height_ = 0;
-  double top_radius_ = 0.0;                   // m, the atmosphere's (the sky-view pass runs below it)
   float radiance_to_srgb_[9] = {};            // column-major mat3
   bool software_rasterizer_ = false;          // time with the wall clock, not timer queries
   double last_frame_ms_ = 0.0;

@@ -9,7 +9,9 @@ layout(binding = 1) uniform sampler3D scattering_texture;
 layout(binding = 2) uniform sampler3D single_aerosol_texture;
 layout(binding = 3) uniform sampler2D irradiance_texture;
 layout(binding = 4) uniform sampler3D multiple_scattering_texture;
-// This frame's sky-view table (sky_view.frag.glsl).
+// This frame's sky-view table (sky_view.frag.glsl). SKY_VIEW_CAMERA (true or
+// false, defined by gpu/shader_source.cpp) selects the program variant: true
+// for cameras in the atmosphere (camera_uses_sky_view), which read the table.
 layout(binding = 5) uniform sampler2D sky_view_rayleigh_texture;
 layout(binding = 6) uniform sampler2D sky_view_aerosol_texture;
 
@@ -43,7 +45,8 @@ void main() {
   }
   vec3 radiance = radiance_along_view_ray(ATMOSPHERE, transmittance_texture, scattering_texture,
                                           single_aerosol_texture, multiple_scattering_texture, irradiance_texture,
-                                          sky_view_rayleigh_texture, sky_view_aerosol_texture, true, camera, view_ray,
+                                          sky_view_rayleigh_texture, sky_view_aerosol_texture, SKY_VIEW_CAMERA, camera,
+                                          view_ray,
                                           sun_direction, true);
   frag_color = vec4(radiance_to_srgb * radiance, 1.0);
 }

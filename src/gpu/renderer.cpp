@@ -330,8 +330,10 @@ namespace {
 
 void delete_gl_objects(GLuint& program, GLuint& vertex_array, GLuint (&textures)[5], GLuint& query,
                        GLuint& framebuffer, GLuint& tile_texture, GLuint& sky_view_program,
-                       GLuint& sky_view_framebuffer, GLuint (&sky_view_textures)[2]) {
+                       GLuint& sky_view_framebuffer, GLuint (&sky_view_textures)[2], GLuint& space_program) {
   if (sky_view_program != 0) glDeleteProgram(sky_view_program);
+  if (space_program != 0) glDeleteProgram(space_program);
+  space_program = 0;
   if (sky_view_framebuffer != 0) glDeleteFramebuffers(1, &sky_view_framebuffer);
   glDeleteTextures(2, sky_view_textures);
   sky_view_program = sky_view_framebuffer = 0;
@@ -354,7 +356,7 @@ Renderer::Renderer(GlContext& context, const Atmosphere& atmosphere, const Table
   check_tables(atmosphere, tables);
   const physics::AtmosphereParams params = physics::make_atmosphere_params(atmosphere, tables.sizes, 0);
   const glm::mat3 matrix = srgb_matrix(tables);
-  top_radius_ = double(params.top_radius);
+  params_ = std::make_unique<physics::AtmosphereParams>(params);
   for (int c = 0; c < 3; ++c)
     for (int r = 0; r < 3; ++r) radiance_to_srgb_[3 * c + r] = matrix[c][r];
 
@@ -364,7 +366,8 @@ Renderer::Renderer(GlContext& context, const Atmosphere& atmosphere, const Table
   try {
     gpu::AssembledSource vertex;
     vertex.append("vertex shader", gpu::fullscreen_vertex_shader_source());
-    program_ = link_program(vertex, gpu::render_fragment_shader_source(params));
+    program_ = link_program(vertex, gpu::render_fragment_shader_source(params, true));
+    space_program_ = link_program(vertex, gpu::render_fragment_shader_source(params, false));
     sky_view_program_ = link_program(vertex, gpu::sky_view_fragment_shader_source(params));
     // The sky-view table: recomputed by every render(), read with GL_LINEAR
     // + CLAMP_TO_EDGE like the precomputed tables.
@@ -412,7 +415,7 @@ Renderer::Renderer(GlContext& context, const Atmosphere& atmosphere, const Table
     last_frame_ms_ = last_sky_view_ms_ = 0.0;
   } catch (...) {
     delete_gl_objects(program_, vertex_array_, textures_, timer_query_, framebuffer_, tile_texture_,
-                      sky_view_program_, sky_view_framebuffer_, sky_view_textures_);
+                      sky_view_program_, sky_view_framebuffer_, sky_view_textures_, space_program_);
     throw;
   }
 }
@@ -424,7 +427,7 @@ Renderer::~Renderer() {
     return;  // the context is current elsewhere: its objects die with it
   }
   delete_gl_objects(program_, vertex_array_, textures_, timer_query_, framebuffer_, tile_texture_,
-                      sky_view_program_, sky_view_framebuffer_, sky_view_textures_);
+                      sky_view_program_, sky_view_framebuffer_, sky_view_textures_, space_program_);
 }
 
 Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
@@ -466,15 +469,15 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   glDisable(GL_DITHER);
   glDisable(GL_FRAMEBUFFER_SRGB);
 
-  // Pass 1: this frame's sky-view table (the low-sun single scattering), for
-  // cameras in the atmosphere (see sky_radiance).
+  // Pass 1: this frame's sky-view table, for cameras in the atmosphere (see
+  // sky_radiance); the test is the shared function's, on the same floats.
   double gpu_ms = 0.0;
-  // (A margin over the shader's float test: an unneeded pass costs nothing wrong.)
-  if (glm::length(glm::dvec3(frame.position)) <= top_radius_ * (1.0 + 1e-6)) {
+  const bool sky_view_camera = physics::camera_uses_sky_view(*params_, frame.position);
+  if (sky_view_camera) {
     glUseProgram(sky_view_program_);
     glProgramUniform3f(sky_view_program_, 0, frame.position.x, frame.position.y, frame.position.z);
     glProgramUniform3f(sky_view_program_, 7, sun.x, sun.y, sun.z);
-    glBindTextureUnit(0, textures_[0]);
+    for (GLuint unit = 0; unit < 5; ++unit) glBindTextureUnit(unit, textures_[unit]);
     glBindFramebuffer(GL_FRAMEBUFFER, sky_view_framebuffer_);
     glViewport(0, 0, SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT);
     const auto start = std::chrono::steady_clock::now();
@@ -493,16 +496,17 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   last_sky_view_ms_ = gpu_ms;
 
   // Pass 2: the image, in tiles.
-  glUseProgram(program_);
-  glProgramUniform3f(program_, 0, frame.position.x, frame.position.y, frame.position.z);
-  glProgramUniform3f(program_, 1, frame.right.x, frame.right.y, frame.right.z);
-  glProgramUniform3f(program_, 2, frame.up.x, frame.up.y, frame.up.z);
-  glProgramUniform3f(program_, 3, frame.forward.x, frame.forward.y, frame.forward.z);
-  glProgramUniform1f(program_, 4, frame.fov_deg);
-  glProgramUniform1i(program_, 5, frame.projection);
-  glProgramUniform2f(program_, 6, frame.image_size.x, frame.image_size.y);
-  glProgramUniform3f(program_, 7, sun.x, sun.y, sun.z);
-  glProgramUniformMatrix3fv(program_, 9, 1, GL_FALSE, radiance_to_srgb_);
+  const GLuint program = sky_view_camera ? program_ : space_program_;
+  glUseProgram(program);
+  glProgramUniform3f(program, 0, frame.position.x, frame.position.y, frame.position.z);
+  glProgramUniform3f(program, 1, frame.right.x, frame.right.y, frame.right.z);
+  glProgramUniform3f(program, 2, frame.up.x, frame.up.y, frame.up.z);
+  glProgramUniform3f(program, 3, frame.forward.x, frame.forward.y, frame.forward.z);
+  glProgramUniform1f(program, 4, frame.fov_deg);
+  glProgramUniform1i(program, 5, frame.projection);
+  glProgramUniform2f(program, 6, frame.image_size.x, frame.image_size.y);
+  glProgramUniform3f(program, 7, sun.x, sun.y, sun.z);
+  glProgramUniformMatrix3fv(program, 9, 1, GL_FALSE, radiance_to_srgb_);
   for (GLuint unit = 0; unit < 5; ++unit) glBindTextureUnit(unit, textures_[unit]);
   glBindTextureUnit(5, sky_view_textures_[0]);
   glBindTextureUnit(6, sky_view_textures_[1]);
@@ -521,7 +525,7 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
       const int w = std::min(kTileSize, width - x0);
       const int h = std::min(kTileSize, height - y0);
       glViewport(0, 0, w, h);
-      glProgramUniform2f(program_, 8, float(x0), float(y0 + h));
+      glProgramUniform2f(program, 8, float(x0), float(y0 + h));
       if (software_rasterizer_) {
         const auto start = std::chrono::steady_clock::now();
         glDrawArrays(GL_TRIANGLES, 0, 3);
@@ -571,13 +575,15 @@ Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camer
   // The sky-view table, texel by texel as the sky-view pass computes it.
   std::vector<glm::vec3> sky_view_rayleigh(size_t(SKY_VIEW_WIDTH) * SKY_VIEW_HEIGHT);
   std::vector<glm::vec3> sky_view_aerosol(sky_view_rayleigh.size());
-  if (glm::length(glm::dvec3(frame.position)) <= double(params.top_radius) * (1.0 + 1e-6)) {
+  const bool sky_view_camera = physics::camera_uses_sky_view(params, frame.position);
+  if (sky_view_camera) {
     tbb::parallel_for(0, SKY_VIEW_HEIGHT, [&](int y) {
       for (int x = 0; x < SKY_VIEW_WIDTH; ++x) {
         const glm::vec2 uv((float(x) + 0.5f) / float(SKY_VIEW_WIDTH), (float(y) + 0.5f) / float(SKY_VIEW_HEIGHT));
         const size_t i = size_t(y) * SKY_VIEW_WIDTH + size_t(x);
-        physics::compute_sky_view_texel(params, samplers.transmittance, frame.position, sun, uv,
-                                        sky_view_rayleigh[i], sky_view_aerosol[i]);
+        physics::compute_sky_view_texel(params, samplers.transmittance, samplers.scattering, samplers.single_aerosol,
+                                        samplers.multiple_scattering, frame.position, sun, uv, sky_view_rayleigh[i],
+                                        sky_view_aerosol[i]);
       }
     });
   }
@@ -602,7 +608,7 @@ Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camer
           const glm::vec3 radiance = physics::radiance_along_view_ray(
               params, samplers.transmittance, samplers.scattering, samplers.single_aerosol,
               samplers.multiple_scattering, samplers.indirect_irradiance, sky_view_rayleigh_sampler,
-              sky_view_aerosol_sampler, true, frame.position, view_ray, sun, true);
+              sky_view_aerosol_sampler, sky_view_camera, frame.position, view_ray, sun, true);
           rgb = matrix * radiance;
         }
         dst[3 * x + 0] = rgb.x;

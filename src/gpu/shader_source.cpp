@@ -115,6 +115,8 @@ AssembledSource shared_fragment_shader_source(const physics::AtmosphereParams& p
   s.append("header", "#version 450 core\n");
   // The GLSL meaning of the subset macros (the C++ one is in physics/shader_cpp.hpp).
   s.append("macros", "#define IN(T) in T\n#define OUT(T) out T\n#define INOUT(T) inout T\n#define INLINE\n");
+  // Shaders only run the run-time integration (see RAY_MAP_CAPACITY).
+  s.append("capacities", "#define RAY_ARRAYS_FOR_RUNTIME\n");
   s.append("definitions.glsl", embedded("src/physics/definitions.glsl"));
   s.append("ATMOSPHERE", atmosphere_params_glsl(params));
   s.append("functions.glsl", embedded("src/physics/functions.glsl"));
@@ -123,8 +125,9 @@ AssembledSource shared_fragment_shader_source(const physics::AtmosphereParams& p
 
 }  // namespace
 
-AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& params) {
+AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& params, bool sky_view_camera) {
   AssembledSource s = shared_fragment_shader_source(params);
+  s.append("variant", std::string("#define SKY_VIEW_CAMERA ") + (sky_view_camera ? "true" : "false") + "\n");
   s.append("camera.glsl", embedded("src/gpu/camera.glsl"));
   s.append("render.frag.glsl", embedded("src/gpu/render.frag.glsl"));
   return s;

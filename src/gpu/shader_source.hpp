@@ -38,8 +38,9 @@ struct AssembledSource {
 
 // The fragment shader: "#version 450 core", the GLSL meaning of the subset
 // macros, definitions.glsl, ATMOSPHERE, functions.glsl, camera.glsl and
-// render.frag.glsl.
-AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& params);
+// render.frag.glsl; `sky_view_camera`: the variant for cameras in the
+// atmosphere, which reads the sky-view table (see sky_radiance).
+AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& params, bool sky_view_camera);
 
 // The fragment shader of the sky-view pass: the same shared part, then
 // sky_view.frag.glsl.

@@ -417,21 +417,43 @@ INLINE bool sun_needs_disc_average(IN(AtmosphereParams) atmosphere, float mu_s, 
 // chord of relative length sqrt(1 - x²); with x = cos θ the visible part
 // (x above the horizon) is θ in [0, θ_h] and the disc average of f is
 //   (2 / π) ∫_0^θ_h sin²θ f(cos θ) dθ,
-// integrated by 4-point Gauss-Legendre. Returns the zenith cosine of the
-// node and its weight (the weights sum to the visible fraction).
+// integrated by the midpoint rule on SUN_DISC_NODES intervals — for the
+// whole disc (θ_h = π) the integrand is periodic and the rule gives the
+// disc's moments exactly (mean offset 0, variance alpha² / 4; 4-point
+// Gauss-Legendre is off by 12 % in the variance, which is what the average
+// is for); for part of the disc the weights are rescaled to sum to the exact
+// visible fraction. Returns the zenith cosine of the node and its weight. The node's sine of elevation is
+// sin(e + δ) = mu_s cos δ + sqrt(1 - mu_s²) sin δ with δ = alpha cos θ <= 0.3°,
+// where cos δ = 1 - δ²/2 and sin δ = δ to 1e-9; and for a disc wholly above
+// the horizon (the common case) cos θ and sin θ are constants: no
+// trigonometry, which the precomputation calls for most texels near the
+// horizon.
 INLINE float sun_disc_node(IN(AtmosphereParams) atmosphere, float mu_s, float mu_h, int k, OUT(float) weight) {
   float alpha = atmosphere.sun_angular_radius;
-  float elevation = asin(clamp_cosine(mu_s));
-  float x_h = clamp((asin(clamp_cosine(mu_h)) - elevation) / alpha, -1.0f, 1.0f);
-  float theta_h = acos(x_h);
-  // Gauss-Legendre nodes and weights on [-1, 1].
-  float node = (k == 0 || k == 3) ? 0.8611363116f : 0.3399810436f;
-  float w = (k == 0 || k == 3) ? 0.3478548451f : 0.6521451549f;
-  if (k < 2) node = -node;
-  float theta = 0.5f * theta_h * (1.0f + node);
-  float sin_theta = sin(theta);
-  weight = w * 0.5f * theta_h * sin_theta * sin_theta * (2.0f / PI);
-  return clamp_cosine(sin(elevation + alpha * cos(theta)));
+  // cos θ_k and sin θ_k for θ_h = π: θ_k = 22.5°, 67.5°, 112.5°, 157.5°.
+  bool outer = k == 0 || k == 3;
+  float cos_theta = outer ? 0.9238795325f : 0.3826834324f;
+  float sin_theta = outer ? 0.3826834324f : 0.9238795325f;
+  if (k >= 2) cos_theta = -cos_theta;
+  float theta_h = PI;
+  if (mu_s - mu_h <= alpha) {
+    // Part of the disc may be below the horizon (|d mu / d angle| <= 1).
+    float x_h = clamp((asin(clamp_cosine(mu_h)) - asin(clamp_cosine(mu_s))) / alpha, -1.0f, 1.0f);
+    theta_h = acos(x_h);
+    float theta = theta_h * (float(k) + 0.5f) / float(SUN_DISC_NODES);
+    cos_theta = cos(theta);
+    sin_theta = sin(theta);
+  }
+  weight = theta_h / float(SUN_DISC_NODES) * sin_theta * sin_theta * (2.0f / PI);
+  if (theta_h < PI && theta_h > 1e-4f) {
+    // Rescale to the exact visible fraction, (θ_h - sin θ_h cos θ_h) / π;
+    // the midpoint sum of sin² is N / 2 - sin 2θ_h / (4 sin(θ_h / N)).
+    float n = float(SUN_DISC_NODES);
+    float midpoint_sum = theta_h / n * (2.0f / PI) * (0.5f * n - sin(2.0f * theta_h) / (4.0f * sin(theta_h / n)));
+    weight *= (theta_h - 0.5f * sin(2.0f * theta_h)) / PI / midpoint_sum;
+  }
+  float delta = alpha * cos_theta;
+  return clamp_cosine(mu_s * (1.0f - 0.5f * delta * delta) + safe_sqrt(1.0f - mu_s * mu_s) * delta);
 }
 
 // Transmittance from radius r to the sun, including the planet's shadow:
@@ -482,14 +504,28 @@ INLINE vec3 irradiance_lookup(IN(AtmosphereParams) atmosphere, IN(sampler2D) irr
 
 // Number of Simpson intervals along a ray for single scattering (whose
 // integrand has the sharp edge of the planet's shadow) and for multiple
-// scattering (smooth), and of trapezoid steps for the optical depth between
-// two nodes.
-#define SINGLE_SCATTERING_INTERVALS 40
+// scattering (smooth).
+#define SINGLE_SCATTERING_INTERVALS 32
 #define MULTIPLE_SCATTERING_INTERVALS 16
 #define MAX_RAY_NODES 41
-#define OPTICAL_DEPTH_SUBSTEPS 4
 // Cells of the piecewise-linear importance density that places the nodes.
 #define RAY_MAP_CELLS 128
+// The run-time integration of single scattering (scattering_along_ray):
+// fewer nodes, placed by the integrand itself (sunlit_ray_map).
+#define RUNTIME_SINGLE_SCATTERING_INTERVALS 16
+#define RUNTIME_RAY_MAP_CELLS 32
+// Array capacities of RayMap and RayNodes: the precomputation's sizes, unless
+// RAY_ARRAYS_FOR_RUNTIME is defined (the shaders, which only run the run-time
+// integration: every fragment holds these arrays in private memory, and a
+// software rasteriser spends more time on 129-element arrays than on the
+// integration itself). The integration does not depend on the capacity.
+#ifdef RAY_ARRAYS_FOR_RUNTIME
+#define RAY_MAP_CAPACITY RUNTIME_RAY_MAP_CELLS
+#define RAY_NODES_CAPACITY (RUNTIME_SINGLE_SCATTERING_INTERVALS + 1)
+#else
+#define RAY_MAP_CAPACITY RAY_MAP_CELLS
+#define RAY_NODES_CAPACITY MAX_RAY_NODES
+#endif
 // Share of the nodes of the sunlit map spread uniformly (see sunlit_ray_map).
 #ifndef SUNLIT_FLOOR_FRACTION
 #define SUNLIT_FLOOR_FRACTION 0.1f
@@ -511,7 +547,7 @@ INLINE float simpson_weight(int i, int n, float dt) {
 // the nodes are placed at equal steps of the cumulative integral of an
 // importance density w(t) plus a uniform floor: with t = t(s) and
 // dt/ds = W / w(t), the integrand in s is f / w, which is smooth wherever f
-// follows w. w is piecewise linear on `cells` (<= RAY_MAP_CELLS) equal cells,
+// follows w. w is piecewise linear on `cells` (<= RAY_MAP_CAPACITY) equal cells,
 // and t(s) inverts its exact (piecewise quadratic) integral, so that dt/ds is
 // the true derivative of the map. Two importance densities:
 //  - extinction_ray_map: the extinction, for integrands that follow the
@@ -522,22 +558,31 @@ INLINE float simpson_weight(int i, int n, float dt) {
 //    which follows the planet's shadow and the reddened grazing sunlight.
 struct RayNodes {
   int count;
-  float t[MAX_RAY_NODES];
-  vec3 weight[MAX_RAY_NODES];
+  float t[RAY_NODES_CAPACITY];
+  vec3 weight[RAY_NODES_CAPACITY];
 };
 
 struct RayMap {
   int cells;
   float cell;  // cell length, m
-  float w[RAY_MAP_CELLS + 1];
+  float w[RAY_MAP_CAPACITY + 1];
+  // The extinction at the cell boundaries and the optical depth from the
+  // start to them (trapezoids), which give the transmittance at the nodes
+  // too (extinction linear within a cell).
+  vec3 extinction[RAY_MAP_CAPACITY + 1];
+  vec3 optical_depth[RAY_MAP_CAPACITY + 1];
 };
 
 INLINE RayMap extinction_ray_map(IN(AtmosphereParams) atmosphere, float r, float mu, float d, int cells) {
   RayMap map;
   map.cells = cells;
   map.cell = d / float(cells);
+  vec3 optical_depth = vec3(0.0f);
   for (int k = 0; k <= cells; ++k) {
     vec3 e = extinction_at(atmosphere, clamp_radius(atmosphere, radius_along_ray(r, mu, float(k) * map.cell)));
+    if (k > 0) optical_depth += 0.5f * (map.extinction[k - 1] + e) * map.cell;
+    map.extinction[k] = e;
+    map.optical_depth[k] = optical_depth;
     map.w[k] = e.x + e.y + e.z;
   }
   return map;
@@ -559,6 +604,8 @@ INLINE RayMap sunlit_ray_map(IN(AtmosphereParams) atmosphere, IN(sampler2D) tran
     medium_at(atmosphere, r_t, beta_rayleigh, beta_aerosol, extinction);
     if (k > 0) optical_depth += 0.5f * (previous_extinction + extinction) * map.cell;
     previous_extinction = extinction;
+    map.extinction[k] = extinction;
+    map.optical_depth[k] = optical_depth;
     vec3 f = (beta_rayleigh + beta_aerosol) * exp(-optical_depth) *
              transmittance_to_sun(atmosphere, transmittance_texture, r_t,
                                   clamp_cosine(mu_s_along_ray(r, mu_s, nu, t, r_t)));
@@ -567,13 +614,12 @@ INLINE RayMap sunlit_ray_map(IN(AtmosphereParams) atmosphere, IN(sampler2D) tran
   return map;
 }
 
-INLINE RayNodes ray_integration_nodes_from_map(IN(AtmosphereParams) atmosphere, float r, float mu, float d,
-                                               IN(RayMap) map, float floor_fraction, int intervals) {
+INLINE RayNodes ray_integration_nodes_from_map(float d, IN(RayMap) map, float floor_fraction, int intervals) {
   RayNodes nodes;
   nodes.count = intervals + 1;
   if (!(d > 0.0f)) {
     // A ray of zero length (leaving the top straight away): nothing to integrate.
-    for (int i = 0; i < MAX_RAY_NODES; ++i) {
+    for (int i = 0; i < RAY_NODES_CAPACITY; ++i) {
       nodes.t[i] = 0.0f;
       nodes.weight[i] = vec3(0.0f);
     }
@@ -581,8 +627,8 @@ INLINE RayNodes ray_integration_nodes_from_map(IN(AtmosphereParams) atmosphere, 
   }
   int cells = map.cells;
   float cell = map.cell;
-  float w[RAY_MAP_CELLS + 1];
-  float cumulative[RAY_MAP_CELLS + 1];
+  float w[RAY_MAP_CAPACITY + 1];
+  float cumulative[RAY_MAP_CAPACITY + 1];
   float mean = 0.0f;
   for (int k = 0; k <= cells; ++k) mean += map.w[k] * ((k == 0 || k == cells) ? 0.5f : 1.0f) / float(cells);
   float floor_density = floor_fraction * mean + 1e-30f;
@@ -593,7 +639,6 @@ INLINE RayNodes ray_integration_nodes_from_map(IN(AtmosphereParams) atmosphere, 
   }
   float total = cumulative[cells];
   int k = 0;
-  vec3 optical_depth = vec3(0.0f);
   for (int i = 0; i <= intervals; ++i) {
     float target = total * float(i) / float(intervals);
     while (k < cells - 1 && cumulative[k + 1] < target) ++k;
@@ -604,13 +649,11 @@ INLINE RayNodes ray_integration_nodes_from_map(IN(AtmosphereParams) atmosphere, 
     float t = i == intervals ? d : float(k) * cell + x;
     float density = w[k] + a * x;
     nodes.t[i] = t;
-    // Nodes can be many cells apart where w is small (the dense, dark
-    // bottom of a ray in the planet's shadow): the optical depth between
-    // them keeps the resolution of the cells.
-    if (i > 0)
-      optical_depth += optical_depth_along_ray(
-          atmosphere, r, mu, nodes.t[i - 1], t,
-          OPTICAL_DEPTH_SUBSTEPS * int(min(ceil((t - nodes.t[i - 1]) / cell), float(RAY_MAP_CELLS))));
+    // The optical depth from the cells (nodes can be many cells apart where
+    // w is small, e.g. the dense, dark bottom of a ray in the planet's
+    // shadow: the transmittance keeps the resolution of the cells).
+    vec3 e = map.extinction[k] + (map.extinction[k + 1] - map.extinction[k]) * (x / cell);
+    vec3 optical_depth = map.optical_depth[k] + 0.5f * (map.extinction[k] + e) * x;
     float weight = simpson_weight(i, intervals, 1.0f / float(intervals)) * total / density;
     nodes.weight[i] = exp(-optical_depth) * weight;
   }
@@ -623,8 +666,7 @@ INLINE RayNodes ray_integration_nodes_from_map(IN(AtmosphereParams) atmosphere, 
 INLINE RayNodes ray_integration_nodes(IN(AtmosphereParams) atmosphere, float r, float mu,
                                       bool ray_r_mu_intersects_ground, int intervals) {
   float d = distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ray_r_mu_intersects_ground);
-  return ray_integration_nodes_from_map(atmosphere, r, mu, d, extinction_ray_map(atmosphere, r, mu, d, RAY_MAP_CELLS),
-                                        0.25f, intervals);
+  return ray_integration_nodes_from_map(d, extinction_ray_map(atmosphere, r, mu, d, RAY_MAP_CELLS), 0.25f, intervals);
 }
 
 // Direct ground irradiance: the sun's irradiance on a horizontal surface at
@@ -682,8 +724,7 @@ INLINE void integrate_single_scattering(IN(AtmosphereParams) atmosphere, IN(samp
                                         float mu, float mu_s, float nu, float d, int intervals, int cells,
                                         OUT(vec3) rayleigh, OUT(vec3) aerosol) {
   RayNodes nodes = ray_integration_nodes_from_map(
-      atmosphere, r, mu, d, sunlit_ray_map(atmosphere, transmittance_texture, r, mu, mu_s, nu, d, cells),
-      SUNLIT_FLOOR_FRACTION, intervals);
+      d, sunlit_ray_map(atmosphere, transmittance_texture, r, mu, mu_s, nu, d, cells), SUNLIT_FLOOR_FRACTION, intervals);
   single_scattering_over_nodes(atmosphere, transmittance_texture, r, mu, mu_s, nu, nodes, rayleigh, aerosol);
 }
 
@@ -869,16 +910,13 @@ INLINE bool enter_atmosphere(IN(AtmosphereParams) atmosphere, INOUT(vec3) camera
 // fraction of a degree (the planet's shadow and the grazing, reddened
 // sunlight): the interpolation is then off by up to 60 %. Where the sun is
 // lower than LOW_SUN_MU_S_TABLE at some point of the view ray, single
-// scattering is integrated along the ray at run time instead
-// (integrate_single_scattering, nodes placed by the integrand), and only the
-// smooth multiple scattering is read from its table; between
-// LOW_SUN_MU_S_MARCHED and LOW_SUN_MU_S_TABLE the two are blended so that no
-// seam appears when the sun moves. Above, the tables agree with the
-// reference to about 1 %.
+// scattering is integrated along the ray instead (integrate_single_scattering,
+// nodes placed by the integrand), and only the smooth multiple scattering is
+// read from its table; between LOW_SUN_MU_S_MARCHED and LOW_SUN_MU_S_TABLE the
+// two are blended so that no seam appears when the sun moves. Above, the
+// tables agree with the reference to about 1 %.
 #define LOW_SUN_MU_S_MARCHED 0.1045285f  // sin 6°
 #define LOW_SUN_MU_S_TABLE 0.1736482f    // sin 10°
-#define RUNTIME_SINGLE_SCATTERING_INTERVALS 16
-#define RUNTIME_RAY_MAP_CELLS 32
 
 // Zenith cosine of the sun at the far end (distance d) of the ray (r, mu).
 INLINE float mu_s_at_ray_end(float r, float mu, float mu_s, float nu, float d) {
@@ -902,12 +940,50 @@ INLINE bool ray_in_planet_shadow(IN(AtmosphereParams) atmosphere, float mu_s, fl
   return max(mu_s, mu_s_end) < atmosphere.mu_s_min;
 }
 
-// The sky-view table: the low-sun single scattering for one camera and sun,
-// recomputed every frame (the idea of Hillaire 2020's sky-view LUT). The
-// run-time integration above costs ~50 evaluations of the medium and of the
-// transmittance to the sun per ray — seconds per frame for a full screen on
-// a software rasteriser. For a given camera and sun a view ray is fixed by its
-// direction, so a small 2D table over directions, with mu_s exact, holds it:
+// The light scattered towards the start of the ray (r, mu) along it up to
+// the ground or the top (d is that distance), without phase functions, in
+// the form of the tables: `rayleigh` = single Rayleigh + multiple / P_R,
+// `aerosol` = single aerosol; phase_weighted_scattering() gives the radiance.
+// From the 4D tables with the sun high, integrated along the ray (single
+// scattering) with the sun low, blended in between.
+INLINE void scattering_along_ray(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
+                                 IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
+                                 IN(sampler3D) multiple_scattering_texture, float r, float mu, float mu_s, float nu,
+                                 bool ray_r_mu_intersects_ground, float d, OUT(vec3) rayleigh, OUT(vec3) aerosol) {
+  float mu_s_end = mu_s_at_ray_end(r, mu, mu_s, nu, d);
+  float low_sun = low_sun_weight(mu_s, mu_s_end);
+  rayleigh = vec3(0.0f);
+  aerosol = vec3(0.0f);
+  if (low_sun < 1.0f) {
+    rayleigh = (1.0f - low_sun) *
+               scattering_lookup(atmosphere, scattering_texture, r, mu, mu_s, nu, ray_r_mu_intersects_ground);
+    aerosol = (1.0f - low_sun) *
+              scattering_lookup(atmosphere, single_aerosol_texture, r, mu, mu_s, nu, ray_r_mu_intersects_ground);
+  }
+  if (low_sun > 0.0f) {
+    vec3 single_rayleigh = vec3(0.0f);
+    vec3 single_aerosol = vec3(0.0f);
+    // Nothing to integrate on the night side.
+    if (!ray_in_planet_shadow(atmosphere, mu_s, mu_s_end)) {
+      integrate_single_scattering(atmosphere, transmittance_texture, r, mu, mu_s, nu, d,
+                                  RUNTIME_SINGLE_SCATTERING_INTERVALS, RUNTIME_RAY_MAP_CELLS, single_rayleigh,
+                                  single_aerosol);
+    }
+    vec3 multiple =
+        scattering_lookup(atmosphere, multiple_scattering_texture, r, mu, mu_s, nu, ray_r_mu_intersects_ground);
+    rayleigh += low_sun * (single_rayleigh + multiple);
+    aerosol += low_sun * single_aerosol;
+  }
+}
+
+// The sky-view table: scattering_along_ray for one camera and sun, over view
+// directions, recomputed every frame (the idea of Hillaire 2020's sky-view
+// LUT). Integrating a low-sun ray costs ~50 evaluations of the medium and of
+// the transmittance to the sun — seconds per frame for a full screen on a
+// software rasteriser. But for a given camera and sun a view ray is fixed by
+// its direction, so a small 2D table over directions holds the result, with
+// mu_s exact; the render pass then reads 2 texels per pixel instead of the
+// 4 (3D) texels of the 4D tables. Parameterisation:
 //  - x: azimuth phi in [0, π] from the sun's vertical plane (the radiance is
 //    symmetric about it), linear;
 //  - y: view zenith angle, split at the ground's horizon like the scattering
@@ -915,29 +991,32 @@ INLINE bool ray_in_planet_shadow(IN(AtmosphereParams) atmosphere, float mu_s, fl
 //    discontinuity falls between texels), each half with texels concentrated
 //    towards the horizon (x = sqrt of the normalised angle from it), between
 //    the nadir and the horizon for ground rays and between the horizon and
-//    the zenith (or, for a camera above the atmosphere, the top's limb) for
-//    the others — the table follows the planet's apparent size, from 1 m to
-//    hundreds of planet radii.
-// Texels hold single Rayleigh and single aerosol scattering without phase
-// functions, integrated as integrate_single_scattering does.
+//    the zenith for the others.
+// Texels hold the phase-free values of scattering_along_ray (phase
+// functions are applied per pixel, so the sun's aerosol halo stays sharp).
+// Used for cameras in the atmosphere: from space, the lit atmosphere near the
+// terminator spans a few degrees of view and the table blurs it (30 % errors
+// at 2 planet radii), so rays are evaluated one by one there.
 #define SKY_VIEW_WIDTH 96
-#define SKY_VIEW_HEIGHT 128
+#define SKY_VIEW_HEIGHT 256
 
 struct SkyViewFrame {
   vec3 zenith;          // unit vector from the planet centre to the camera
   vec3 sun_side;        // horizontal unit vector towards the sun's azimuth
   vec3 across;          // zenith x sun_side
   float theta_horizon;  // view zenith angle of the ground's horizon
-  float theta_top;      // view zenith angle of the top's limb (camera above the atmosphere), else 0
 };
 
-// `camera` relative to the planet centre, as in radiance_along_view_ray (a
-// camera below the ground counts as standing on it).
+// Whether a camera (relative to the planet centre) uses the sky-view table.
+INLINE bool camera_uses_sky_view(IN(AtmosphereParams) atmosphere, vec3 camera) {
+  return length(camera) <= atmosphere.top_radius;
+}
+
+// `camera` relative to the planet centre, at or above the ground.
 INLINE SkyViewFrame sky_view_frame(IN(AtmosphereParams) atmosphere, vec3 camera, vec3 sun_direction) {
   SkyViewFrame frame;
-  float length_camera = length(camera);
-  float r = max(length_camera, atmosphere.bottom_radius);
-  frame.zenith = camera / length_camera;
+  float r = length(camera);
+  frame.zenith = camera / r;
   vec3 side = sun_direction - frame.zenith * dot(sun_direction, frame.zenith);
   if (dot(side, side) < 1e-10f) {
     // Sun at the zenith or nadir: every azimuth is the same, pick one.
@@ -946,8 +1025,9 @@ INLINE SkyViewFrame sky_view_frame(IN(AtmosphereParams) atmosphere, vec3 camera,
   }
   frame.sun_side = normalize(side);
   frame.across = cross(frame.zenith, frame.sun_side);
-  frame.theta_horizon = PI - asin(min(atmosphere.bottom_radius / r, 1.0f));
-  frame.theta_top = r > atmosphere.top_radius ? PI - asin(atmosphere.top_radius / r) : 0.0f;
+  // pi/2 + the horizon's dip, asin(rho / r): accurate near the ground, where
+  // asin(R / r) ~ asin(1 - 3e-7) would lose most of its digits.
+  frame.theta_horizon = 0.5f * PI + asin(horizon_length(atmosphere, r) / r);
   return frame;
 }
 
@@ -961,7 +1041,7 @@ INLINE vec2 sky_view_uv(IN(SkyViewFrame) frame, vec3 view_ray, bool ground) {
     float x = safe_sqrt((theta - frame.theta_horizon) / max(PI - frame.theta_horizon, 1e-7f));
     v = 0.5f - 0.5f * texture_coord_from_unit_range(min(x, 1.0f), SKY_VIEW_HEIGHT / 2);
   } else {
-    float x = safe_sqrt((frame.theta_horizon - theta) / max(frame.theta_horizon - frame.theta_top, 1e-7f));
+    float x = safe_sqrt((frame.theta_horizon - theta) / frame.theta_horizon);
     v = 0.5f + 0.5f * texture_coord_from_unit_range(min(x, 1.0f), SKY_VIEW_HEIGHT / 2);
   }
   return vec2(texture_coord_from_unit_range(phi / PI, SKY_VIEW_WIDTH), v);
@@ -977,43 +1057,47 @@ INLINE vec3 sky_view_direction(IN(SkyViewFrame) frame, vec2 uv, OUT(bool) ground
     theta = frame.theta_horizon + x * x * (PI - frame.theta_horizon);
   } else {
     float x = unit_range_from_texture_coord(2.0f * uv.y - 1.0f, SKY_VIEW_HEIGHT / 2);
-    theta = frame.theta_horizon - x * x * (frame.theta_horizon - frame.theta_top);
+    theta = frame.theta_horizon * (1.0f - x * x);
   }
   float phi = PI * unit_range_from_texture_coord(uv.x, SKY_VIEW_WIDTH);
   return frame.zenith * cos(theta) + (frame.sun_side * cos(phi) + frame.across * sin(phi)) * sin(theta);
 }
 
-// One texel of the sky-view table (uv at its centre): single Rayleigh and
-// single aerosol scattering, without phase functions, of its view ray.
+// A camera below the ground counts as standing on it (as in
+// radiance_along_view_ray).
+INLINE vec3 camera_above_ground(IN(AtmosphereParams) atmosphere, vec3 camera) {
+  float r = length(camera);
+  return r < atmosphere.bottom_radius ? camera * (atmosphere.bottom_radius / r) : camera;
+}
+
+// One texel of the sky-view table of a camera in the atmosphere (uv at the
+// texel centre): scattering_along_ray for its view direction.
 INLINE void compute_sky_view_texel(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
-                                   vec3 camera, vec3 sun_direction, vec2 uv, OUT(vec3) rayleigh, OUT(vec3) aerosol) {
-  rayleigh = vec3(0.0f);
-  aerosol = vec3(0.0f);
-  float camera_r = length(camera);
-  if (camera_r < atmosphere.bottom_radius) camera = camera * (atmosphere.bottom_radius / camera_r);
+                                   IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
+                                   IN(sampler3D) multiple_scattering_texture, vec3 camera, vec3 sun_direction,
+                                   vec2 uv, OUT(vec3) rayleigh, OUT(vec3) aerosol) {
+  camera = camera_above_ground(atmosphere, camera);
   SkyViewFrame frame = sky_view_frame(atmosphere, camera, sun_direction);
   bool ground;
   vec3 view_ray = sky_view_direction(frame, uv, ground);
-  vec3 start = camera;
-  if (!enter_atmosphere(atmosphere, start, view_ray)) return;
-  float r = clamp_radius(atmosphere, length(start));
-  float mu = clamp_cosine(dot(start, view_ray) / r);
-  float mu_s = clamp_cosine(dot(start, sun_direction) / r);
+  float r = clamp_radius(atmosphere, length(camera));
+  float mu = clamp_cosine(dot(camera, view_ray) / r);
+  float mu_s = clamp_cosine(dot(camera, sun_direction) / r);
   float nu = clamp_cosine(dot(view_ray, sun_direction));
   float d = distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ground);
-  integrate_single_scattering(atmosphere, transmittance_texture, r, mu, mu_s, nu, d,
-                              RUNTIME_SINGLE_SCATTERING_INTERVALS, RUNTIME_RAY_MAP_CELLS, rayleigh, aerosol);
+  scattering_along_ray(atmosphere, transmittance_texture, scattering_texture, single_aerosol_texture,
+                       multiple_scattering_texture, r, mu, mu_s, nu, ground, d, rayleigh, aerosol);
 }
 
 // Radiance scattered towards the camera along the view ray up to the top of
 // the atmosphere or the ground (seed 000 eq. 3.13), and the transmittance of
 // that path. Excludes the sun disc and the light reflected by the ground.
-// The low-sun single scattering comes from the sky-view table of this camera
-// and sun when `use_sky_view` (the renderers) and the camera is in the
-// atmosphere; else it is integrated for this ray alone (the CPU sky model,
-// exact; and cameras in space, where the lit part of the atmosphere near the
-// terminator spans a few degrees of view, too sharp for the table: 30 %
-// errors at 2 planet radii).
+// With `use_sky_view` (the renderers, for a camera in the atmosphere: see
+// camera_uses_sky_view) the scattering comes from this frame's sky-view
+// table; otherwise scattering_along_ray evaluates the ray itself (the CPU sky
+// model; cameras in space). Shaders pass a constant, so that the compiler
+// drops the path not taken: software rasterisers run both sides of a branch,
+// and all iterations of a loop of constant length.
 INLINE vec3 sky_radiance(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
                          IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
                          IN(sampler3D) multiple_scattering_texture, IN(sampler2D) sky_view_rayleigh_texture,
@@ -1032,33 +1116,18 @@ INLINE vec3 sky_radiance(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmit
   } else {
     transmittance = transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, mu);
   }
-  float d = distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ground);
-  float mu_s_end = mu_s_at_ray_end(r, mu, mu_s, nu, d);
-  float low_sun = low_sun_weight(mu_s, mu_s_end);
-  vec3 radiance = vec3(0.0f);
-  if (low_sun < 1.0f) {
-    vec3 scattering = scattering_lookup(atmosphere, scattering_texture, r, mu, mu_s, nu, ground);
-    vec3 single_aerosol = scattering_lookup(atmosphere, single_aerosol_texture, r, mu, mu_s, nu, ground);
-    radiance += (1.0f - low_sun) * phase_weighted_scattering(atmosphere, scattering, single_aerosol, nu);
+  vec3 rayleigh;
+  vec3 aerosol;
+  if (use_sky_view) {
+    vec2 uv = sky_view_uv(sky_view_frame(atmosphere, camera, sun_direction), view_ray, ground);
+    rayleigh = vec3(texture(sky_view_rayleigh_texture, uv));
+    aerosol = vec3(texture(sky_view_aerosol_texture, uv));
+  } else {
+    scattering_along_ray(atmosphere, transmittance_texture, scattering_texture, single_aerosol_texture,
+                         multiple_scattering_texture, r, mu, mu_s, nu, ground,
+                         distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ground), rayleigh, aerosol);
   }
-  if (low_sun > 0.0f) {
-    vec3 single_rayleigh = vec3(0.0f);
-    vec3 single_aerosol = vec3(0.0f);
-    if (ray_in_planet_shadow(atmosphere, mu_s, mu_s_end)) {
-      // Nothing to integrate: the night side.
-    } else if (use_sky_view && length(camera) <= atmosphere.top_radius) {
-      vec2 uv = sky_view_uv(sky_view_frame(atmosphere, camera, sun_direction), view_ray, ground);
-      single_rayleigh = vec3(texture(sky_view_rayleigh_texture, uv));
-      single_aerosol = vec3(texture(sky_view_aerosol_texture, uv));
-    } else {
-      integrate_single_scattering(atmosphere, transmittance_texture, r, mu, mu_s, nu, d,
-                                  RUNTIME_SINGLE_SCATTERING_INTERVALS, RUNTIME_RAY_MAP_CELLS, single_rayleigh,
-                                  single_aerosol);
-    }
-    vec3 multiple = scattering_lookup(atmosphere, multiple_scattering_texture, r, mu, mu_s, nu, ground);
-    radiance += low_sun * phase_weighted_scattering(atmosphere, single_rayleigh + multiple, single_aerosol, nu);
-  }
-  return radiance;
+  return phase_weighted_scattering(atmosphere, rayleigh, aerosol, nu);
 }
 
 // Irradiance on a surface at radius r whose local zenith is `up`, with
@@ -1102,8 +1171,7 @@ INLINE vec3 radiance_along_view_ray(IN(AtmosphereParams) atmosphere, IN(sampler2
                                     IN(sampler2D) sky_view_rayleigh_texture, IN(sampler2D) sky_view_aerosol_texture,
                                     bool use_sky_view, vec3 camera, vec3 view_ray, vec3 sun_direction,
                                     bool include_sun_disc) {
-  float camera_r = length(camera);
-  if (camera_r < atmosphere.bottom_radius) camera = camera * (atmosphere.bottom_radius / camera_r);
+  camera = camera_above_ground(atmosphere, camera);
   vec3 transmittance;
   vec3 radiance = sky_radiance(atmosphere, transmittance_texture, scattering_texture, single_aerosol_texture,
                                multiple_scattering_texture, sky_view_rayleigh_texture, sky_view_aerosol_texture,
