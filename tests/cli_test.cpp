@@ -101,6 +101,13 @@ TEST(Cli, UsageErrorsAreOneLineWithExitCode2) {
   expect_usage_error("render --orders 0" + kSmall, "--orders");
   expect_usage_error("render --position 0,0,10" + kSmall, "inside the planet");
   expect_usage_error("sample --sun-elevation abc", "sun-elevation");
+  expect_usage_error("precompute --wavelengths 2" + kSmall, "--wavelengths");
+  expect_usage_error("precompute --wavelengths 49" + kSmall, "--wavelengths");
+  expect_usage_error("precompute --orders automatic" + kSmall, "--orders");
+  expect_usage_error("precompute --density-scale 0" + kSmall, "--density-scale");
+  expect_usage_error("precompute --density-scale -3" + kSmall, "--density-scale");
+  expect_usage_error("precompute --solar lamp" + kSmall, "--solar");
+  expect_usage_error("sample --reference --orders auto" + kSmall, "--orders");
   expect_usage_error("nosuchcommand", "nosuchcommand");
 }
 
@@ -208,6 +215,41 @@ TEST(Cli, SampleWritesCsvWithDocumentedColumns) {
   const CliRun bad = atmos_cli("sample" + kSmall, "azimuth_deg,elevation_deg\n10,abc\n");
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.err.find("stdin:2"), std::string::npos) << bad.err;
+}
+
+// Spectral mode from the command line (issue 3): the sample columns are the
+// colour ones (the tables hold colour, not per-wavelength radiance), the
+// reference agrees with the tables, precompute reports the convergence of
+// auto orders, and the solar and density options apply.
+TEST(Cli, SpectralSampleAndPrecompute) {
+  const std::string dirs = "azimuth_deg,elevation_deg\n0,90\n180,10\n";
+  const CliRun tables = atmos_cli("sample --wavelengths 6 --sun-elevation 30" + kSmall, dirs);
+  ASSERT_EQ(tables.code, 0) << tables.err;
+  std::string header, trailer;
+  const auto rows = parse_csv(tables.out, header, trailer);
+  EXPECT_EQ(header, "azimuth_deg,elevation_deg,luminance_cd_m2,red,green,blue");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_GT(rows[0][5], rows[0][3]) << "zenith: blue above red";
+  const CliRun reference =
+      atmos_cli("sample --reference --paths 4000 --orders 4 --wavelengths 6 --sun-elevation 30" + kSmall, dirs);
+  ASSERT_EQ(reference.code, 0) << reference.err;
+  const auto reference_rows = parse_csv(reference.out, header, trailer);
+  ASSERT_EQ(reference_rows.size(), 2u);
+  // Small tables: a few per cent.
+  EXPECT_NEAR(rows[0][2], reference_rows[0][2], 0.05 * reference_rows[0][2]);
+
+  const CliRun automatic = atmos_cli("precompute --orders auto --wavelengths 6 --no-cache" + kSmall);
+  ASSERT_EQ(automatic.code, 0) << automatic.err;
+  EXPECT_NE(automatic.out.find("channels        linear sRGB"), std::string::npos) << automatic.out;
+  EXPECT_NE(automatic.out.find("order 2 "), std::string::npos) << automatic.out;
+
+  const CliRun blackbody = atmos_cli("sample --solar blackbody:4000 --sun-elevation 30" + kSmall, dirs);
+  ASSERT_EQ(blackbody.code, 0) << blackbody.err;
+  const auto red_sun = parse_csv(blackbody.out, header, trailer);
+  EXPECT_LT(red_sun[0][5] / red_sun[0][3], 0.8 * rows[0][5] / rows[0][3]) << "a 4000 K sun makes a less blue sky";
+  const CliRun thin = atmos_cli("sample --density-scale 0.1 --sun-elevation 30" + kSmall, dirs);
+  ASSERT_EQ(thin.code, 0) << thin.err;
+  EXPECT_LT(parse_csv(thin.out, header, trailer)[0][2], 0.3 * rows[0][2]) << "a tenth of the air: a darker zenith";
 }
 
 TEST(Cli, SampleLooksAtTheSunWithTheSunsOwnAngles) {

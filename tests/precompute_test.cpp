@@ -165,13 +165,14 @@ TEST(Tables, AllTablesFiniteAndNonNegative) {
     options.sizes = small_sizes();
     options.scattering_orders = 4;
     const atmos::Tables tables = atmos::precompute_tables(atmos::load_atmosphere(planet), options);
-    ASSERT_EQ(tables.sets.size(), 1u);
-    const auto& s = tables.sets[0];
+    const auto& s = tables.set;
     expect_finite(s.transmittance, "transmittance");
     expect_finite(s.direct_irradiance, "direct_irradiance");
     expect_finite(s.indirect_irradiance, "indirect_irradiance");
     expect_finite(s.scattering, "scattering");
     expect_finite(s.single_aerosol, "single_aerosol");
+    expect_finite(s.multiple_scattering, "multiple_scattering");
+    expect_finite(tables.spectral_optical_depth, "spectral_transmittance");
     for (const auto& t : s.transmittance) EXPECT_LE(t.x, 1.0f);
   }
 }
@@ -185,11 +186,11 @@ TEST(Tables, MoreOrdersAddLight) {
     options.scattering_orders = k;
     const atmos::Tables t = atmos::precompute_tables(earth, options);
     double sum = 0.0;
-    for (const auto& v : t.sets[0].scattering) sum += v.y;
+    for (const auto& v : t.set.scattering) sum += v.y;
     EXPECT_GT(sum, previous) << "K = " << k;
     previous = sum;
     double irradiance = 0.0;
-    for (const auto& v : t.sets[0].indirect_irradiance) irradiance += v.y;
+    for (const auto& v : t.set.indirect_irradiance) irradiance += v.y;
     if (k == 1) EXPECT_EQ(irradiance, 0.0);  // one order: no sky light on the ground yet
     else EXPECT_GT(irradiance, 0.0);
   }
@@ -232,8 +233,8 @@ TEST_F(Cache, ComputesThenHits) {
   EXPECT_TRUE(std::filesystem::exists(first.path));
   const auto second = atmos::load_or_precompute_tables(earth, options, dir.string());
   EXPECT_EQ(second.status, atmos::CacheStatus::hit);
-  EXPECT_EQ(second.tables.sets[0].scattering, first.tables.sets[0].scattering);
-  EXPECT_EQ(second.tables.sets[0].indirect_irradiance, first.tables.sets[0].indirect_irradiance);
+  EXPECT_EQ(second.tables.set.scattering, first.tables.set.scattering);
+  EXPECT_EQ(second.tables.set.indirect_irradiance, first.tables.set.indirect_irradiance);
 }
 
 TEST_F(Cache, KeyChangesWithEveryInput) {
@@ -267,7 +268,7 @@ TEST_F(Cache, CorruptAndTruncatedFilesAreRecomputed) {
   auto again = atmos::load_or_precompute_tables(earth, options, dir.string());
   EXPECT_EQ(again.status, atmos::CacheStatus::recomputed_invalid);
   EXPECT_NE(again.problem.find("checksum"), std::string::npos) << again.problem;
-  EXPECT_EQ(again.tables.sets[0].scattering, first.tables.sets[0].scattering);
+  EXPECT_EQ(again.tables.set.scattering, first.tables.set.scattering);
   // Truncate.
   std::filesystem::resize_file(first.path, size - 100);
   again = atmos::load_or_precompute_tables(earth, options, dir.string());
@@ -288,7 +289,7 @@ TEST_F(Cache, UnwritableDirectoryStillReturnsTables) {
   const auto result = atmos::load_or_precompute_tables(earth, options, "/proc/atmos-cannot-write-here");
   EXPECT_EQ(result.status, atmos::CacheStatus::computed);
   EXPECT_FALSE(result.problem.empty());
-  EXPECT_EQ(result.tables.sets.size(), 1u);
+  EXPECT_FALSE(result.tables.set.scattering.empty());
 }
 
 }  // namespace

@@ -67,14 +67,25 @@ std::vector<double> parse_numbers(const std::string& text, size_t count, const s
 // Options shared by the commands that need tables.
 struct TableOptions {
   std::string planet = "earth";
-  int orders = 4;
+  std::string orders = "4";
   std::string tables = "default";
   std::string cache_dir;
   bool no_cache = false;
+  int wavelengths = 0;  // 0: the planet file's
+  double density_scale = 1.0;
+  std::string solar;  // empty: the planet file's
 
   void add(CLI::App& app) {
-    app.add_option("--planet", planet, "Preset name (earth, mars) or planet JSON file")->capture_default_str();
-    app.add_option("--orders", orders, "Scattering orders K >= 1")->capture_default_str();
+    app.add_option("--planet", planet, "Preset name (" + preset_list() + ") or planet JSON file")->capture_default_str();
+    app.add_option("--orders", orders,
+                   "Scattering orders: K >= 1, or auto (until an order adds < 0.1 % of the light; at most 64)")
+        ->capture_default_str();
+    app.add_option("--wavelengths", wavelengths,
+                   "Working wavelengths N in [3, 48]: 3 = fast mode (680, 550, 440 nm), more = spectral over "
+                   "360-830 nm (default: the planet file's)");
+    app.add_option("--density-scale", density_scale, "Multiply the density of every constituent by X (0.1 to 100...)")
+        ->capture_default_str();
+    app.add_option("--solar", solar, "Solar spectrum shape: table (ASTM E490) or blackbody:T (kelvin)");
     app.add_option("--tables", tables, "Table sizes: default (256x64, 64x16, 8x32x128x32) or small (for tests)")
         ->check(CLI::IsMember({"default", "small"}))
         ->capture_default_str();
@@ -82,10 +93,52 @@ struct TableOptions {
     app.add_flag("--no-cache", no_cache, "Always precompute; neither read nor write the cache");
   }
 
+  static std::string preset_list() {
+    std::string names;
+    for (const auto& n : atmos::preset_names()) names += (names.empty() ? "" : ", ") + n;
+    return names;
+  }
+
+  // The planet with the wavelength, density and solar options applied.
+  atmos::Atmosphere atmosphere() const {
+    if (wavelengths != 0 && (wavelengths < 3 || wavelengths > 48))
+      throw UsageError("--wavelengths must be in [3, 48], got " + std::to_string(wavelengths));
+    if (!(density_scale > 0.0 && density_scale <= 1e4))
+      throw UsageError("--density-scale must be in (0, 10000], got " + std::to_string(density_scale));
+    atmos::Atmosphere a = atmos::load_atmosphere(planet);
+    if (wavelengths != 0) a.wavelengths_nm = atmos::spectral_wavelengths(wavelengths);
+    if (density_scale != 1.0) atmos::scale_density(a, density_scale);
+    if (!solar.empty()) {
+      if (solar != "table" && solar.rfind("blackbody:", 0) != 0)
+        throw UsageError("--solar must be table or blackbody:T, got \"" + solar + "\"");
+      atmos::set_solar_spectrum(a, solar);
+    }
+    a.validate();
+    return a;
+  }
+
+  // Orders for the reference (which has no auto mode).
+  int fixed_orders() const {
+    if (orders == "auto") throw UsageError("--orders auto applies to the tables; give the reference a number K");
+    return parse_orders();
+  }
+
+  int parse_orders() const {
+    char* end = nullptr;
+    const long k = std::strtol(orders.c_str(), &end, 10);
+    if (end == orders.c_str() || *end != '\0' || k < 1 || k > 100)
+      throw UsageError("--orders must be auto or an integer in [1, 100], got \"" + orders + "\"");
+    return int(k);
+  }
+
   atmos::PrecomputeOptions precompute_options() const {
-    if (orders < 1 || orders > 100) throw UsageError("--orders must be in [1, 100]");
     atmos::PrecomputeOptions o;
-    o.scattering_orders = orders;
+    if (orders == "auto") {
+      o.auto_orders = true;
+      o.scattering_orders = 64;
+    } else {
+      o.scattering_orders = parse_orders();
+    }
     if (tables == "small") o.sizes = atmos::TableSizes{64, 16, 32, 8, 4, 16, 32, 8};
     return o;
   }
@@ -112,7 +165,7 @@ struct LoadedTables {
 
 LoadedTables load_tables(const TableOptions& t, bool quiet = false) {
   LoadedTables out;
-  out.atmosphere = atmos::load_atmosphere(t.planet);
+  out.atmosphere = t.atmosphere();
   atmos::PrecomputeOptions options = t.precompute_options();
   if (!quiet) attach_progress(options);
   if (t.no_cache) {
@@ -306,7 +359,12 @@ int run_precompute(const TableOptions& t) {
   std::printf("scattering      %d x %d x %d x %d (nu x mu_s x mu x r), stored as 3D %d x %d x %d, Rayleigh+multiple and single aerosol\n",
               s.scattering_nu, s.scattering_mu_s, s.scattering_mu, s.scattering_r, loaded.tables.scattering_width(),
               loaded.tables.scattering_height(), loaded.tables.scattering_depth());
+  std::printf("channels        %s\n", loaded.tables.wavelengths_nm.size() == 3
+                                         ? "the three wavelengths"
+                                         : "linear sRGB (spectral precomputation, CIE 1931 2 deg observer)");
   std::printf("cache           %s\n", loaded.status.c_str());
+  for (const auto& c : loaded.tables.convergence)
+    std::printf("order %-3d       adds %.3e of the light gathered so far\n", c.order, c.relative);
   if (loaded.tables.timings.empty()) std::printf("steps           none computed: the cache file is valid\n");
   for (const auto& step : loaded.tables.timings) std::printf("time %-22s %8.3f s\n", step.name.c_str(), step.seconds);
   std::printf("time total                   %8.3f s\n", seconds);
@@ -354,6 +412,9 @@ std::vector<std::pair<double, double>> read_directions(std::istream& in, const s
 }
 
 int run_sample(const SampleOptions& o, const TableOptions& t) {
+  // Options first, so that a bad flag is reported before stdin is read.
+  if (o.reference) (void)t.fixed_orders();
+  const atmos::Atmosphere atmosphere = t.atmosphere();
   if (!(o.altitude >= 0.0) || o.altitude > 1e12) throw UsageError("--altitude must be in [0, 1e12] metres");
   if (o.sun_elevation < -90.0 || o.sun_elevation > 90.0) throw UsageError("--sun-elevation must be in [-90, 90]");
   if (o.paths < 2 || o.paths > 100000000) throw UsageError("--paths must be in [2, 1e8]");
@@ -365,56 +426,76 @@ int run_sample(const SampleOptions& o, const TableOptions& t) {
     if (!in) throw Error("cannot read directions file " + o.directions);
     directions = read_directions(in, o.directions);
   }
-  const atmos::Atmosphere atmosphere = atmos::load_atmosphere(t.planet);
   const glm::dvec3 observer = atmos::observer_position(atmosphere, o.altitude);
   const glm::dvec3 sun = atmos::direction_from_azimuth_elevation(o.sun_azimuth, o.sun_elevation);
   const auto& w = atmosphere.wavelengths_nm;
-  if (w.size() != 3) throw Error("atmos sample supports three working wavelengths");
-  const glm::dmat3 to_srgb(atmos::radiance_to_srgb_matrix({w[0], w[1], w[2]}));
+  // Three wavelengths: the tables' channels are the radiance at them, printed
+  // as radiance_<λ>nm columns. Spectral: the tables hold colour; the
+  // reference gives every wavelength, converted with the same CIE weights.
+  const bool three = w.size() == 3;
+  const std::vector<glm::dvec3> weights = atmos::spectral_to_srgb_weights(w);
+  auto srgb_of_spectrum = [&](const std::vector<double>& values) {
+    glm::dvec3 rgb(0.0);
+    for (size_t i = 0; i < values.size(); ++i) rgb += weights[i] * values[i];
+    return rgb;
+  };
 
   std::optional<LoadedTables> loaded;
   std::unique_ptr<atmos::SkyModel> model;
   atmos::ReferenceOptions ref;
-  ref.scattering_orders = t.orders;
   ref.paths = o.paths;
   if (!o.reference) {
     loaded = load_tables(t, true);
     model = std::make_unique<atmos::SkyModel>(atmosphere, loaded->tables);
-  } else if (t.orders < 1 || t.orders > 100) {
-    throw UsageError("--orders must be in [1, 100]");
+  } else {
+    ref.scattering_orders = t.fixed_orders();
   }
 
   std::printf("azimuth_deg,elevation_deg,luminance_cd_m2,red,green,blue");
-  for (double l : w) std::printf(",radiance_%gnm", l);
+  if (three)
+    for (double l : w) std::printf(",radiance_%gnm", l);
   std::printf("\n");
   for (const auto& [az, el] : directions) {
     const glm::dvec3 view = atmos::direction_from_azimuth_elevation(az, el);
-    glm::dvec3 spectral;
+    glm::dvec3 rgb, spectral(0.0);
     if (o.reference) {
       const atmos::ReferenceResult r = atmos::reference_radiance(atmosphere, observer, view, sun, ref);
-      spectral = {r.radiance[0], r.radiance[1], r.radiance[2]};
+      rgb = srgb_of_spectrum(r.radiance);
+      if (three) spectral = {r.radiance[0], r.radiance[1], r.radiance[2]};
     } else {
-      spectral = model->radiance(observer, view, sun, o.sun_disc);
+      const glm::dvec3 channels = model->radiance(observer, view, sun, o.sun_disc);
+      rgb = model->to_srgb(channels);
+      spectral = channels;
     }
-    const glm::dvec3 rgb = to_srgb * spectral;
-    std::printf("%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", az, el, atmos::srgb_luminance(rgb), rgb.x, rgb.y,
-                rgb.z, spectral.x, spectral.y, spectral.z);
+    std::printf("%.6g,%.6g,%.6g,%.6g,%.6g,%.6g", az, el, atmos::srgb_luminance(rgb), rgb.x, rgb.y, rgb.z);
+    if (three) std::printf(",%.6g,%.6g,%.6g", spectral.x, spectral.y, spectral.z);
+    std::printf("\n");
   }
   // Irradiance on a horizontal surface at the observer, as a trailing comment.
-  glm::dvec3 sun_e, sky_e;
+  glm::dvec3 sun_rgb, sky_rgb, sun_e(0.0), sky_e(0.0);
   if (o.reference) {
     atmos::ReferenceOptions direct = ref;
     direct.scattering_orders = 1;
     const atmos::ReferenceResult total = atmos::reference_horizontal_irradiance(atmosphere, observer, sun, ref);
     const atmos::ReferenceResult sun_only = atmos::reference_horizontal_irradiance(atmosphere, observer, sun, direct);
-    sun_e = {sun_only.radiance[0], sun_only.radiance[1], sun_only.radiance[2]};
-    sky_e = glm::dvec3(total.radiance[0], total.radiance[1], total.radiance[2]) - sun_e;
+    std::vector<double> sky(w.size());
+    for (size_t i = 0; i < w.size(); ++i) sky[i] = total.radiance[i] - sun_only.radiance[i];
+    sun_rgb = srgb_of_spectrum(sun_only.radiance);
+    sky_rgb = srgb_of_spectrum(sky);
+    if (three) {
+      sun_e = {sun_only.radiance[0], sun_only.radiance[1], sun_only.radiance[2]};
+      sky_e = {sky[0], sky[1], sky[2]};
+    }
   } else {
     model->horizontal_irradiance(observer, sun, sun_e, sky_e);
+    sun_rgb = model->to_srgb(sun_e);
+    sky_rgb = model->to_srgb(sky_e);
   }
-  const double sun_lux = atmos::srgb_luminance(to_srgb * sun_e), sky_lux = atmos::srgb_luminance(to_srgb * sky_e);
-  std::printf("# horizontal_illuminance_lux=%.6g sun_lux=%.6g sky_lux=%.6g irradiance_W_m2_nm=%.6g;%.6g;%.6g\n",
-              sun_lux + sky_lux, sun_lux, sky_lux, sun_e.x + sky_e.x, sun_e.y + sky_e.y, sun_e.z + sky_e.z);
+  const double sun_lux = atmos::srgb_luminance(sun_rgb), sky_lux = atmos::srgb_luminance(sky_rgb);
+  std::printf("# horizontal_illuminance_lux=%.6g sun_lux=%.6g sky_lux=%.6g", sun_lux + sky_lux, sun_lux, sky_lux);
+  if (three)
+    std::printf(" irradiance_W_m2_nm=%.6g;%.6g;%.6g", sun_e.x + sky_e.x, sun_e.y + sky_e.y, sun_e.z + sky_e.z);
+  std::printf("\n");
   return 0;
 }
 
@@ -422,13 +503,24 @@ int run_sample(const SampleOptions& o, const TableOptions& t) {
 // bench
 
 int run_bench(const TableOptions& t, const std::string& size) {
-  const atmos::Atmosphere atmosphere = atmos::load_atmosphere(t.planet);
+  const atmos::Atmosphere atmosphere = t.atmosphere();
   atmos::PrecomputeOptions options = t.precompute_options();
   const auto start = std::chrono::steady_clock::now();
   const atmos::Tables tables = atmos::precompute_tables(atmosphere, options);
   const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   for (const auto& step : tables.timings) std::printf("precompute.%s\t%.3f\ts\n", step.name.c_str(), step.seconds);
   std::printf("precompute.total\t%.3f\ts\n", total);
+  std::fflush(stdout);
+  // The spectral figure of issue 3: 15 wavelengths, 6 orders, default sizes.
+  atmos::Atmosphere spectral_atmosphere = atmosphere;
+  spectral_atmosphere.wavelengths_nm = atmos::spectral_wavelengths(15);
+  atmos::PrecomputeOptions spectral_options = options;
+  spectral_options.scattering_orders = 6;
+  spectral_options.auto_orders = false;
+  const auto spectral_start = std::chrono::steady_clock::now();
+  const atmos::Tables spectral_tables = atmos::precompute_tables(spectral_atmosphere, spectral_options);
+  std::printf("precompute.spectral15.orders6\t%.3f\ts\n",
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - spectral_start).count());
   std::fflush(stdout);
 
   const auto [w, h] = parse_size(size);
@@ -448,6 +540,22 @@ int run_bench(const TableOptions& t, const std::string& size) {
   std::sort(sky_view_times.begin(), sky_view_times.end());
   std::printf("render.%dx%d\t%.1f\tms\n", w, h, times[times.size() / 2]);
   std::printf("render.sky_view\t%.1f\tms\n", sky_view_times[sky_view_times.size() / 2]);
+  // Twilight with the spectral tables: the sky-view pass integrates the low
+  // sun's single scattering at all 15 wavelengths.
+  atmos::Renderer spectral_renderer(*context, spectral_atmosphere, spectral_tables);
+  const glm::dvec3 low_sun = atmos::direction_from_azimuth_elevation(150.0, -3.0);
+  spectral_renderer.render(camera, low_sun);
+  times.clear();
+  sky_view_times.clear();
+  for (int i = 0; i < 3; ++i) {
+    spectral_renderer.render(camera, low_sun);
+    times.push_back(spectral_renderer.last_frame_ms());
+    sky_view_times.push_back(spectral_renderer.last_sky_view_ms());
+  }
+  std::sort(times.begin(), times.end());
+  std::sort(sky_view_times.begin(), sky_view_times.end());
+  std::printf("render.spectral15.twilight.%dx%d\t%.1f\tms\n", w, h, times[1]);
+  std::printf("render.spectral15.twilight.sky_view\t%.1f\tms\n", sky_view_times[1]);
   return 0;
 }
 

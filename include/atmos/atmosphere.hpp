@@ -29,6 +29,9 @@ class Spectrum {
   Spectrum() = default;
   Spectrum(std::vector<double> wavelengths_nm, std::vector<double> values);
   static Spectrum constant(double value);
+  Spectrum scaled(double factor) const;
+  // ∫ from a to b of the piecewise-linear spectrum (constant beyond its ends).
+  double integral(double from_nm, double to_nm) const;
 
   double at(double wavelength_nm) const;
   bool empty() const { return values_.empty(); }
@@ -91,6 +94,28 @@ struct Atmosphere {
   // one aerosol component so that its phase function can be applied per pixel).
   PhaseFunction aerosol_phase() const;
 };
+
+// Working wavelengths for `count` >= 3 (at most 48): 3 gives the fast
+// three-wavelength mode (680, 550, 440 nm: tables hold radiance at those
+// wavelengths); more give a spectral precomputation at `count` wavelengths
+// evenly spaced over 360–830 nm, converted to colour through the CIE 1931
+// observer (seed 004 §4.4).
+std::vector<double> spectral_wavelengths(int count);
+
+// Multiplies the number density of every constituent by `factor` (> 0): the
+// same planet with a thinner or denser atmosphere (seed 004 Fig. 4).
+void scale_density(Atmosphere& atmosphere, double factor);
+
+// The extraterrestrial solar spectrum of ASTM E490-00a at 1 au
+// (data/spectra/solar_irradiance.csv, 280.5–2500 nm), W m^-2 nm^-1.
+Spectrum solar_spectrum_table();
+
+// Planck's law scaled to a total (all wavelengths) irradiance, W m^-2 nm^-1.
+Spectrum blackbody_spectrum(double temperature_k, double total_irradiance_w_m2);
+
+// Replaces the shape of the solar spectrum, keeping its irradiance over
+// 360–830 nm: `spec` is "table" (ASTM E490) or "blackbody:T" (T in K).
+void set_solar_spectrum(Atmosphere& atmosphere, const std::string& spec);
 
 // Built-in planets: "earth", "mars". Files in data/planets/<name>.json.
 std::vector<std::string> preset_names();

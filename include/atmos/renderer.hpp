@@ -94,9 +94,9 @@ class GlContext {
 // Renders images of one atmosphere from its tables on the GPU.
 class Renderer {
  public:
-  // Uploads the tables (tables.sets must hold exactly one wavelength triple,
-  // the atmosphere's first) and compiles the shader with the atmosphere's
-  // parameters built in. Throws atmos::Error on mismatched tables or on
+  // Uploads the tables (computed for the atmosphere's wavelengths, three or
+  // spectral) and compiles the shader with the atmosphere's parameters built
+  // in. Throws atmos::Error on mismatched tables or on
   // shader compile/link errors (with the first lines of the info log).
   // `context` must outlive the renderer.
   Renderer(GlContext& context, const Atmosphere& atmosphere, const Tables& tables,
@@ -128,8 +128,9 @@ class Renderer {
   std::uint32_t space_program_ = 0;  // render pass, camera above the atmosphere
   std::unique_ptr<physics::AtmosphereParams> params_;
   std::uint32_t vertex_array_ = 0;
-  // transmittance, scattering, single aerosol, irradiance, multiple scattering
-  std::uint32_t textures_[5] = {0, 0, 0, 0, 0};
+  // transmittance, scattering, single aerosol, irradiance, multiple
+  // scattering, spectral transmittance (bound to unit 7)
+  std::uint32_t textures_[6] = {0, 0, 0, 0, 0, 0};
   std::uint32_t timer_query_ = 0;
   std::uint32_t sky_view_program_ = 0;
   std::uint32_t sky_view_framebuffer_ = 0;

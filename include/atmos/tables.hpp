@@ -29,9 +29,14 @@ struct TableSizes {
   bool operator==(const TableSizes&) const = default;
 };
 
+// Scattering orders: a fixed count, or `auto`: orders are added until the
+// last one adds less than `auto_orders_tolerance` of the luminance gathered so
+// far (at most `scattering_orders`, the cap, in that case).
 struct PrecomputeOptions {
   TableSizes sizes;
   int scattering_orders = 4;  // K >= 1: light scattered (or reflected by the ground) at most K times
+  bool auto_orders = false;
+  double auto_orders_tolerance = 1e-3;
   // Called from the calling thread with the name of the running step and the
   // fraction of the whole precomputation done, in [0, 1].
   std::function<void(const std::string& step, double fraction)> progress;
@@ -43,10 +48,12 @@ struct StepTiming {
   double seconds = 0.0;
 };
 
-// The tables of one triple of working wavelengths; texels are radiance or
-// irradiance at those wavelengths (vec3 channel i = wavelength i).
+// The render tables (one texture set, whatever the number of wavelengths).
+// Their three channels are the radiance at the three working wavelengths
+// (three-wavelength mode), or linear sRGB / 683 (spectral mode: every
+// wavelength triple converted and summed; see physics/definitions.glsl).
 struct TableSet {
-  std::vector<glm::vec3> transmittance;        // transmittance_mu x transmittance_r: transmittance to the top
+  std::vector<glm::vec3> transmittance;        // transmittance_mu x transmittance_r: transmittance to the top (spectral mode: of sunlight, sRGB(sun x T) / sRGB(sun)); for engines, the run time uses spectral_optical_depth
   std::vector<glm::vec3> direct_irradiance;    // irradiance_mu_s x irradiance_r: sun on a horizontal surface, W m^-2 nm^-1
   std::vector<glm::vec3> indirect_irradiance;  // same layout: sky light of orders 1..K-1 on a horizontal surface
   std::vector<glm::vec3> scattering;           // 3D: single Rayleigh + (orders 2..K) / Rayleigh phase, W m^-2 sr^-1 nm^-1 per unit phase
@@ -54,13 +61,30 @@ struct TableSet {
   std::vector<glm::vec3> multiple_scattering;  // 3D: orders 2..K / Rayleigh phase (zero for K = 1), for the low-sun path
 };
 
+// Convergence of the orders: the luminance (cd/m², or its channel sum in
+// three-wavelength mode) that order n adds, summed over the scattering table.
+struct OrderContribution {
+  int order = 0;
+  double added = 0.0;     // what this order adds
+  double relative = 0.0;  // added / everything up to and including this order
+};
+
 struct Tables {
   TableSizes sizes;
-  int scattering_orders = 0;
-  std::vector<double> wavelengths_nm;  // three per set
-  std::vector<TableSet> sets;          // one per wavelength triple
-  std::vector<StepTiming> timings;     // filled by precompute_tables (empty when loaded from the cache)
+  int scattering_orders = 0;           // the orders computed (with auto orders: where it stopped)
+  std::vector<double> wavelengths_nm;  // the N working wavelengths
+  TableSet set;                        // the render tables
+  // The optical depth to the top of the atmosphere at every wavelength
+  // triple (T = exp(-depth); see transmittance_to_top_atmosphere_boundary),
+  // triple k being the k-th of ceil(N / 3) tables side by side:
+  // (transmittance_mu * ceil(N / 3)) x transmittance_r texels. The run time
+  // computes every transmittance from it, spectrally, and integrates the
+  // low-sun single scattering with it.
+  std::vector<glm::vec3> spectral_optical_depth;
+  std::vector<OrderContribution> convergence;  // orders 2..K (filled by precompute_tables)
+  std::vector<StepTiming> timings;             // filled by precompute_tables (empty when loaded from the cache)
 
+  int spectral_sets() const { return int((wavelengths_nm.size() + 2) / 3); }
   int scattering_width() const { return sizes.scattering_nu * sizes.scattering_mu_s; }
   int scattering_height() const { return sizes.scattering_mu; }
   int scattering_depth() const { return sizes.scattering_r; }
@@ -68,6 +92,11 @@ struct Tables {
 
 // Computes all tables on the CPU with all cores (TBB).
 Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& options);
+
+// Throws Error unless `tables` were computed for the wavelengths of
+// `atmosphere` and hold as many texels as their sizes say (what the renderers
+// and the sky model check before reading them).
+void check_tables_match(const Atmosphere& atmosphere, const Tables& tables);
 
 // Disk cache. The file name is a hash of every input of the tables and of the
 // format version; the file itself repeats the key and carries a checksum, so a

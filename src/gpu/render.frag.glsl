@@ -14,6 +14,8 @@ layout(binding = 4) uniform sampler3D multiple_scattering_texture;
 // for cameras in the atmosphere (camera_uses_sky_view), which read the table.
 layout(binding = 5) uniform sampler2D sky_view_rayleigh_texture;
 layout(binding = 6) uniform sampler2D sky_view_aerosol_texture;
+// The transmittance of every wavelength triple (SPECTRAL), side by side.
+layout(binding = 7) uniform sampler2D spectral_transmittance_texture;
 
 layout(location = 0) uniform vec3 camera;           // m, planet-centred
 layout(location = 1) uniform vec3 camera_right;
@@ -43,7 +45,7 @@ void main() {
     frag_color = vec4(0.0, 0.0, 0.0, 1.0);
     return;
   }
-  vec3 radiance = radiance_along_view_ray(ATMOSPHERE, transmittance_texture, scattering_texture,
+  vec3 radiance = radiance_along_view_ray(ATMOSPHERE, SPECTRAL, spectral_transmittance_texture, scattering_texture,
                                           single_aerosol_texture, multiple_scattering_texture, irradiance_texture,
                                           sky_view_rayleigh_texture, sky_view_aerosol_texture, SKY_VIEW_CAMERA, camera,
                                           view_ray,

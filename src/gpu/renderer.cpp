@@ -90,32 +90,7 @@ glm::vec3 sun_vector(const glm::dvec3& sun_direction) {
   return glm::vec3(glm::normalize(sun_direction));
 }
 
-// The renderers read one wavelength triple, the atmosphere's first, in the
-// layout of TableSizes; anything else would be read out of bounds or with the
-// wrong colour matrix.
-void check_tables(const Atmosphere& atmosphere, const Tables& tables) {
-  if (tables.sets.size() != 1)
-    throw Error("the renderer needs tables of exactly one wavelength triple, these have " +
-                std::to_string(tables.sets.size()));
-  tables.sizes.validate();
-  if (tables.wavelengths_nm.size() != 3 || atmosphere.wavelengths_nm.size() < 3 ||
-      !std::equal(tables.wavelengths_nm.begin(), tables.wavelengths_nm.end(), atmosphere.wavelengths_nm.begin()))
-    throw Error("the tables were not computed for the wavelengths of atmosphere '" + atmosphere.name + "'");
-  const TableSizes& s = tables.sizes;
-  const TableSet& t = tables.sets[0];
-  const size_t transmittance = size_t(s.transmittance_mu) * size_t(s.transmittance_r);
-  const size_t irradiance = size_t(s.irradiance_mu_s) * size_t(s.irradiance_r);
-  const size_t scattering =
-      size_t(tables.scattering_width()) * size_t(tables.scattering_height()) * size_t(tables.scattering_depth());
-  if (t.transmittance.size() != transmittance || t.indirect_irradiance.size() != irradiance ||
-      t.scattering.size() != scattering || t.single_aerosol.size() != scattering ||
-      t.multiple_scattering.size() != scattering)
-    throw Error("the tables hold fewer or more texels than their sizes say");
-}
-
-glm::mat3 srgb_matrix(const Tables& tables) {
-  return radiance_to_srgb_matrix({tables.wavelengths_nm[0], tables.wavelengths_nm[1], tables.wavelengths_nm[2]});
-}
+glm::mat3 srgb_matrix(const Tables& tables) { return physics::channels_to_srgb_matrix(tables.wavelengths_nm); }
 
 // --- OpenGL helpers -------------------------------------------------------
 
@@ -328,7 +303,7 @@ void validate_camera(const Camera& camera) {
 
 namespace {
 
-void delete_gl_objects(GLuint& program, GLuint& vertex_array, GLuint (&textures)[5], GLuint& query,
+void delete_gl_objects(GLuint& program, GLuint& vertex_array, GLuint (&textures)[6], GLuint& query,
                        GLuint& framebuffer, GLuint& tile_texture, GLuint& sky_view_program,
                        GLuint& sky_view_framebuffer, GLuint (&sky_view_textures)[2], GLuint& space_program) {
   if (sky_view_program != 0) glDeleteProgram(sky_view_program);
@@ -340,7 +315,7 @@ void delete_gl_objects(GLuint& program, GLuint& vertex_array, GLuint (&textures)
   for (GLuint& t : sky_view_textures) t = 0;
   if (program != 0) glDeleteProgram(program);
   if (vertex_array != 0) glDeleteVertexArrays(1, &vertex_array);
-  glDeleteTextures(5, textures);
+  glDeleteTextures(6, textures);
   if (query != 0) glDeleteQueries(1, &query);
   if (framebuffer != 0) glDeleteFramebuffers(1, &framebuffer);
   if (tile_texture != 0) glDeleteTextures(1, &tile_texture);
@@ -353,8 +328,9 @@ void delete_gl_objects(GLuint& program, GLuint& vertex_array, GLuint (&textures)
 Renderer::Renderer(GlContext& context, const Atmosphere& atmosphere, const Tables& tables,
                    TexturePrecision precision)
     : context_(context) {
-  check_tables(atmosphere, tables);
-  const physics::AtmosphereParams params = physics::make_atmosphere_params(atmosphere, tables.sizes, 0);
+  check_tables_match(atmosphere, tables);
+  const physics::AtmosphereParams params = physics::make_render_params(atmosphere, tables.sizes);
+  const std::unique_ptr<physics::SpectralSets> spectral = physics::make_spectral_sets(atmosphere, tables.sizes);
   const glm::mat3 matrix = srgb_matrix(tables);
   params_ = std::make_unique<physics::AtmosphereParams>(params);
   for (int c = 0; c < 3; ++c)
@@ -366,9 +342,9 @@ Renderer::Renderer(GlContext& context, const Atmosphere& atmosphere, const Table
   try {
     gpu::AssembledSource vertex;
     vertex.append("vertex shader", gpu::fullscreen_vertex_shader_source());
-    program_ = link_program(vertex, gpu::render_fragment_shader_source(params, true));
-    space_program_ = link_program(vertex, gpu::render_fragment_shader_source(params, false));
-    sky_view_program_ = link_program(vertex, gpu::sky_view_fragment_shader_source(params));
+    program_ = link_program(vertex, gpu::render_fragment_shader_source(params, *spectral, true));
+    space_program_ = link_program(vertex, gpu::render_fragment_shader_source(params, *spectral, false));
+    sky_view_program_ = link_program(vertex, gpu::sky_view_fragment_shader_source(params, *spectral));
     // The sky-view table: recomputed by every render(), read with GL_LINEAR
     // + CLAMP_TO_EDGE like the precomputed tables.
     glCreateTextures(GL_TEXTURE_2D, 2, sky_view_textures_);
@@ -392,7 +368,7 @@ Renderer::Renderer(GlContext& context, const Atmosphere& atmosphere, const Table
       if (renderer_name.find(software) != std::string::npos) software_rasterizer_ = true;
 
     const TableSizes& s = tables.sizes;
-    const TableSet& t = tables.sets[0];
+    const TableSet& t = tables.set;
     const GLenum format = precision == TexturePrecision::half ? GL_RGB16F : GL_RGB32F;
     // Transmittance stays 32-bit whatever the precision (see TexturePrecision).
     textures_[0] = make_texture_2d(s.transmittance_mu, s.transmittance_r, t.transmittance, GL_RGB32F);
@@ -403,6 +379,8 @@ Renderer::Renderer(GlContext& context, const Atmosphere& atmosphere, const Table
     textures_[3] = make_texture_2d(s.irradiance_mu_s, s.irradiance_r, t.indirect_irradiance, format);
     textures_[4] = make_texture_3d(tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
                                    t.multiple_scattering, format);
+    textures_[5] = make_texture_2d(s.transmittance_mu * tables.spectral_sets(), s.transmittance_r,
+                                   tables.spectral_optical_depth, GL_RGB32F);
     check_gl("while uploading the tables");
     // Drivers (llvmpipe's JIT in particular) compile the shader at its first
     // draw; do it now, so that render() and last_frame_ms() time frames, not
@@ -478,6 +456,7 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
     glProgramUniform3f(sky_view_program_, 0, frame.position.x, frame.position.y, frame.position.z);
     glProgramUniform3f(sky_view_program_, 7, sun.x, sun.y, sun.z);
     for (GLuint unit = 0; unit < 5; ++unit) glBindTextureUnit(unit, textures_[unit]);
+    glBindTextureUnit(7, textures_[5]);
     glBindFramebuffer(GL_FRAMEBUFFER, sky_view_framebuffer_);
     glViewport(0, 0, SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT);
     const auto start = std::chrono::steady_clock::now();
@@ -510,6 +489,7 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   for (GLuint unit = 0; unit < 5; ++unit) glBindTextureUnit(unit, textures_[unit]);
   glBindTextureUnit(5, sky_view_textures_[0]);
   glBindTextureUnit(6, sky_view_textures_[1]);
+  glBindTextureUnit(7, textures_[5]);
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
   glPixelStorei(GL_PACK_ROW_LENGTH, 0);
@@ -565,11 +545,12 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
 
 Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camera& camera,
                  const glm::dvec3& sun_direction) {
-  check_tables(atmosphere, tables);
+  check_tables_match(atmosphere, tables);
   const CameraFrame frame = camera_frame(camera);
   const glm::vec3 sun = sun_vector(sun_direction);
-  const physics::AtmosphereParams params = physics::make_atmosphere_params(atmosphere, tables.sizes, 0);
-  const precompute::TableSamplers samplers = precompute::make_samplers(tables, 0);
+  const physics::AtmosphereParams params = physics::make_render_params(atmosphere, tables.sizes);
+  const std::unique_ptr<physics::SpectralSets> spectral = physics::make_spectral_sets(atmosphere, tables.sizes);
+  const precompute::TableSamplers samplers = precompute::make_samplers(tables);
   const glm::mat3 matrix = srgb_matrix(tables);
 
   // The sky-view table, texel by texel as the sky-view pass computes it.
@@ -581,7 +562,8 @@ Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camer
       for (int x = 0; x < SKY_VIEW_WIDTH; ++x) {
         const glm::vec2 uv((float(x) + 0.5f) / float(SKY_VIEW_WIDTH), (float(y) + 0.5f) / float(SKY_VIEW_HEIGHT));
         const size_t i = size_t(y) * SKY_VIEW_WIDTH + size_t(x);
-        physics::compute_sky_view_texel(params, samplers.transmittance, samplers.scattering, samplers.single_aerosol,
+        physics::compute_sky_view_texel(params, *spectral, samplers.spectral_optical_depth, samplers.scattering,
+                                        samplers.single_aerosol,
                                         samplers.multiple_scattering, frame.position, sun, uv, sky_view_rayleigh[i],
                                         sky_view_aerosol[i]);
       }
@@ -606,7 +588,7 @@ Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camer
         glm::vec3 rgb(0.0f);
         if (valid) {
           const glm::vec3 radiance = physics::radiance_along_view_ray(
-              params, samplers.transmittance, samplers.scattering, samplers.single_aerosol,
+              params, *spectral, samplers.spectral_optical_depth, samplers.scattering, samplers.single_aerosol,
               samplers.multiple_scattering, samplers.indirect_irradiance, sky_view_rayleigh_sampler,
               sky_view_aerosol_sampler, sky_view_camera, frame.position, view_ray, sun, true);
           rgb = matrix * radiance;

@@ -19,7 +19,7 @@ namespace {
 static_assert(sizeof(physics::DensityProfile) == 4 * (2 + 2 * MAX_DENSITY_KNOTS),
               "DensityProfile changed: update atmosphere_params_glsl()");
 static_assert(sizeof(physics::AtmosphereParams) ==
-                  4 * (3 + 2 + 2 * 3 + 2 + 8) + MAX_CONSTITUENTS * (sizeof(physics::DensityProfile) + 4 * (3 + 3 + 1)),
+                  4 * (3 + 2 + 2 * 3 + 2 + 8 + 2) + MAX_CONSTITUENTS * (sizeof(physics::DensityProfile) + 4 * (3 + 3 + 1)),
               "AtmosphereParams changed: update atmosphere_params_glsl()");
 
 std::string glsl_int(int value) { return std::to_string(value); }
@@ -64,9 +64,12 @@ std::string glsl_float(float value) {
   return s;
 }
 
-std::string atmosphere_params_glsl(const physics::AtmosphereParams& p) {
+namespace {
+
+// "AtmosphereParams(...)", every field in declaration order.
+std::string atmosphere_params_expression(const physics::AtmosphereParams& p) {
   const int n = MAX_CONSTITUENTS;
-  std::string s = "const AtmosphereParams ATMOSPHERE = AtmosphereParams(\n";
+  std::string s = "AtmosphereParams(\n";
   s += "    " + glsl_float(p.bottom_radius) + ", " + glsl_float(p.top_radius) + ", " + glsl_int(p.constituent_count) +
        ",\n";
   s += "    " + glsl_array("DensityProfile", n, [&](int i) { return glsl_density_profile(p.density[i]); }) + ",\n";
@@ -79,8 +82,31 @@ std::string atmosphere_params_glsl(const physics::AtmosphereParams& p) {
   s += "    " + glsl_int(p.transmittance_mu_size) + ", " + glsl_int(p.transmittance_r_size) + ", " +
        glsl_int(p.irradiance_mu_s_size) + ", " + glsl_int(p.irradiance_r_size) + ", " +
        glsl_int(p.scattering_nu_size) + ", " + glsl_int(p.scattering_mu_s_size) + ", " +
-       glsl_int(p.scattering_mu_size) + ", " + glsl_int(p.scattering_r_size) + ");\n";
+       glsl_int(p.scattering_mu_size) + ", " + glsl_int(p.scattering_r_size) + ",\n";
+  s += "    " + glsl_int(p.transmittance_tile) + ", " + glsl_int(p.transmittance_tiles) + ")";
   return s;
+}
+
+std::string glsl_mat3(const physics::mat3& m) {
+  std::string s = "mat3(";
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) s += glsl_float(m[c][r]) + (c == 2 && r == 2 ? ")" : ", ");
+  return s;
+}
+
+}  // namespace
+
+std::string atmosphere_params_glsl(const physics::AtmosphereParams& p) {
+  return "const AtmosphereParams ATMOSPHERE = " + atmosphere_params_expression(p) + ";\n";
+}
+
+std::string spectral_sets_glsl(const physics::SpectralSets& sets) {
+  // The shaders' SPECTRAL_SET_CAPACITY is the actual count (see
+  // shared_fragment_shader_source).
+  const int n = sets.count;
+  return "const SpectralSets SPECTRAL = SpectralSets(" + glsl_int(n) + ",\n" +
+         glsl_array("AtmosphereParams", n, [&](int i) { return atmosphere_params_expression(sets.set[i]); }) +
+         ",\n" + glsl_array("mat3", n, [&](int i) { return glsl_mat3(sets.to_channels[i]); }) + ");\n";
 }
 
 std::string fullscreen_vertex_shader_source() {
@@ -110,31 +136,36 @@ std::string AssembledSource::locate(int line) const {
 // locate() maps back to the files.
 namespace {
 
-AssembledSource shared_fragment_shader_source(const physics::AtmosphereParams& params) {
+AssembledSource shared_fragment_shader_source(const physics::AtmosphereParams& params,
+                                              const physics::SpectralSets& spectral) {
   AssembledSource s;
   s.append("header", "#version 450 core\n");
   // The GLSL meaning of the subset macros (the C++ one is in physics/shader_cpp.hpp).
   s.append("macros", "#define IN(T) in T\n#define OUT(T) out T\n#define INOUT(T) inout T\n#define INLINE\n");
   // Shaders only run the run-time integration (see RAY_MAP_CAPACITY).
-  s.append("capacities", "#define RAY_ARRAYS_FOR_RUNTIME\n");
+  s.append("capacities", "#define RAY_ARRAYS_FOR_RUNTIME\n#define SPECTRAL_SET_CAPACITY " +
+                             std::to_string(spectral.count) + "\n");
   s.append("definitions.glsl", embedded("src/physics/definitions.glsl"));
   s.append("ATMOSPHERE", atmosphere_params_glsl(params));
+  s.append("SPECTRAL", spectral_sets_glsl(spectral));
   s.append("functions.glsl", embedded("src/physics/functions.glsl"));
   return s;
 }
 
 }  // namespace
 
-AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& params, bool sky_view_camera) {
-  AssembledSource s = shared_fragment_shader_source(params);
+AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& params,
+                                              const physics::SpectralSets& spectral, bool sky_view_camera) {
+  AssembledSource s = shared_fragment_shader_source(params, spectral);
   s.append("variant", std::string("#define SKY_VIEW_CAMERA ") + (sky_view_camera ? "true" : "false") + "\n");
   s.append("camera.glsl", embedded("src/gpu/camera.glsl"));
   s.append("render.frag.glsl", embedded("src/gpu/render.frag.glsl"));
   return s;
 }
 
-AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams& params) {
-  AssembledSource s = shared_fragment_shader_source(params);
+AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams& params,
+                                                const physics::SpectralSets& spectral) {
+  AssembledSource s = shared_fragment_shader_source(params, spectral);
   s.append("sky_view.frag.glsl", embedded("src/gpu/sky_view.frag.glsl"));
   return s;
 }

@@ -18,6 +18,9 @@ std::string glsl_float(float value);
 // parameters as a GLSL constant, so that the shader compiler folds them.
 std::string atmosphere_params_glsl(const physics::AtmosphereParams& params);
 
+// "const SpectralSets SPECTRAL = ...;" for the wavelength triples.
+std::string spectral_sets_glsl(const physics::SpectralSets& sets);
+
 // The vertex shader: one triangle covering the viewport, from gl_VertexID.
 std::string fullscreen_vertex_shader_source();
 
@@ -40,10 +43,12 @@ struct AssembledSource {
 // macros, definitions.glsl, ATMOSPHERE, functions.glsl, camera.glsl and
 // render.frag.glsl; `sky_view_camera`: the variant for cameras in the
 // atmosphere, which reads the sky-view table (see sky_radiance).
-AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& params, bool sky_view_camera);
+AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& params,
+                                              const physics::SpectralSets& spectral, bool sky_view_camera);
 
 // The fragment shader of the sky-view pass: the same shared part, then
 // sky_view.frag.glsl.
-AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams& params);
+AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams& params,
+                                                const physics::SpectralSets& spectral);
 
 }  // namespace atmos::gpu

@@ -9,6 +9,7 @@ layout(binding = 0) uniform sampler2D transmittance_texture;
 layout(binding = 1) uniform sampler3D scattering_texture;
 layout(binding = 2) uniform sampler3D single_aerosol_texture;
 layout(binding = 4) uniform sampler3D multiple_scattering_texture;
+layout(binding = 7) uniform sampler2D spectral_transmittance_texture;
 
 layout(location = 0) uniform vec3 camera;         // m, planet-centred
 layout(location = 7) uniform vec3 sun_direction;  // unit vector towards the sun
@@ -22,7 +23,8 @@ void main() {
   vec2 uv = gl_FragCoord.xy / vec2(float(SKY_VIEW_WIDTH), float(SKY_VIEW_HEIGHT));
   vec3 rayleigh;
   vec3 aerosol;
-  compute_sky_view_texel(ATMOSPHERE, transmittance_texture, scattering_texture, single_aerosol_texture,
+  compute_sky_view_texel(ATMOSPHERE, SPECTRAL, spectral_transmittance_texture, scattering_texture,
+                         single_aerosol_texture,
                          multiple_scattering_texture, camera, sun_direction, uv, rayleigh, aerosol);
   rayleigh_out = vec4(rayleigh, 1.0);
   aerosol_out = vec4(aerosol, 1.0);

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -60,6 +62,7 @@ double unit_factor(const std::string& kind, const std::string& unit, const std::
       {"spectral_irradiance", {{"W/m^2/nm", 1.0}}},
       {"irradiance", {{"W/m^2", 1.0}}},
       {"temperature", {{"K", 1.0}}},
+      {"distance", {{"au", 1.495978707e11}, {"km", 1e3}, {"m", 1.0}}},
       {"dimensionless", {{"1", 1.0}}},
   };
   const auto& units = table.at(kind);
@@ -100,6 +103,16 @@ double blackbody_irradiance(double wavelength_nm, double temperature, double tot
 
 Spectrum parse_spectrum(const json& q, const std::string& kind, const std::vector<double>& wavelengths,
                         const std::string& origin, const std::string& path) {
+  if (q.is_object() && q.contains("table")) {
+    // A measured spectrum at 1 au, scaled to the planet's distance (1 / d²).
+    if (kind != "spectral_irradiance") fail(origin, path + ": a table is only valid for solar_irradiance");
+    check_keys(q, {"table", "distance"}, origin, path);
+    if (!q.at("table").is_string() || q.at("table").get<std::string>() != "astm_e490")
+      fail(origin, path + ".table must be \"astm_e490\"");
+    const double d = scalar(q, "distance", "distance", origin, path) / 1.495978707e11;
+    if (!(d > 0.0)) fail(origin, path + ".distance must be positive");
+    return solar_spectrum_table().scaled(1.0 / (d * d));
+  }
   if (q.is_object() && q.contains("blackbody")) {
     if (kind != "spectral_irradiance") fail(origin, path + ": a blackbody is only valid for solar_irradiance");
     check_keys(q, {"blackbody"}, origin, path);
@@ -108,13 +121,7 @@ Spectrum parse_spectrum(const json& q, const std::string& kind, const std::vecto
     const double t = scalar(b, "temperature", "temperature", origin, path + ".blackbody");
     const double total = scalar(b, "total_irradiance", "irradiance", origin, path + ".blackbody");
     if (t <= 0.0 || total <= 0.0) fail(origin, path + ".blackbody needs a positive temperature and total");
-    std::vector<double> l, v;
-    // Sampled over the whole range validate() accepts for working wavelengths.
-    for (double w = 200.0; w <= 2000.0; w += 2.0) {
-      l.push_back(w);
-      v.push_back(blackbody_irradiance(w, t, total));
-    }
-    return Spectrum(l, v);
+    return blackbody_spectrum(t, total);
   }
   check_keys(q, {"unit", "value", "values", "wavelengths_nm", "power_law"}, origin, path);
   const double factor = unit_factor(kind, unit_of(q, origin, path), origin, path);
@@ -260,8 +267,7 @@ PhaseFunction Atmosphere::aerosol_phase() const {
 void Atmosphere::validate() const {
   auto bad = [&](const std::string& what) { throw Error(origin + ": " + what); };
   if (wavelengths_nm.empty()) bad("no working wavelengths");
-  if (wavelengths_nm.size() % 3 != 0)
-    bad("the number of working wavelengths must be a multiple of 3 (they are processed in triples)");
+  if (wavelengths_nm.size() < 3 || wavelengths_nm.size() > 48) bad("the number of working wavelengths must be in [3, 48]");
   for (double w : wavelengths_nm)
     if (!std::isfinite(w) || w < 200.0 || w > 2000.0) bad("wavelength " + std::to_string(w) + " nm is outside 200-2000 nm");
   if (!std::isfinite(bottom_radius_m) || bottom_radius_m <= 0.0) bad("bottom_radius must be positive");
@@ -369,6 +375,88 @@ Atmosphere parse_atmosphere(const std::string& json_text, const std::string& ori
   }
   a.validate();
   return a;
+}
+
+Spectrum Spectrum::scaled(double factor) const {
+  std::vector<double> v = values_;
+  for (double& x : v) x *= factor;
+  return Spectrum(wavelengths_nm_, v);
+}
+
+double Spectrum::integral(double from_nm, double to_nm) const {
+  // Trapezoids on the samples inside, plus the pieces up to the bounds.
+  std::vector<double> points = {from_nm};
+  for (double l : wavelengths_nm_)
+    if (l > from_nm && l < to_nm) points.push_back(l);
+  points.push_back(to_nm);
+  double sum = 0.0;
+  for (size_t i = 1; i < points.size(); ++i) sum += 0.5 * (at(points[i - 1]) + at(points[i])) * (points[i] - points[i - 1]);
+  return sum;
+}
+
+std::vector<double> spectral_wavelengths(int count) {
+  if (count < 3 || count > 48) throw Error("the number of wavelengths must be in [3, 48], got " + std::to_string(count));
+  if (count == 3) return {680.0, 550.0, 440.0};
+  std::vector<double> out;
+  for (int i = 0; i < count; ++i) out.push_back(360.0 + (830.0 - 360.0) * double(i) / double(count - 1));
+  return out;
+}
+
+void scale_density(Atmosphere& atmosphere, double factor) {
+  if (!std::isfinite(factor) || factor <= 0.0 || factor > 1e4)
+    throw Error("the density scale must be in (0, 10000], got " + std::to_string(factor));
+  for (Constituent& c : atmosphere.constituents) {
+    c.scattering = c.scattering.scaled(factor);
+    c.absorption = c.absorption.scaled(factor);
+  }
+}
+
+Spectrum solar_spectrum_table() {
+  static const Spectrum table = [] {
+    const char* text = io::embedded_file("data/spectra/solar_irradiance.csv");
+    if (text == nullptr) throw Error("the solar spectrum is not embedded in this build");
+    std::istringstream in(text);
+    std::string line;
+    std::vector<double> l, v;
+    while (std::getline(in, line)) {
+      if (line.empty() || line[0] == '#' || line[0] == 'w') continue;
+      double a, b;
+      if (std::sscanf(line.c_str(), "%lf,%lf", &a, &b) != 2) throw Error("malformed solar spectrum line: " + line);
+      l.push_back(a);
+      v.push_back(b);
+    }
+    return Spectrum(l, v);
+  }();
+  return table;
+}
+
+Spectrum blackbody_spectrum(double temperature_k, double total_irradiance_w_m2) {
+  if (!(temperature_k > 0.0 && temperature_k < 1e6) || !(total_irradiance_w_m2 > 0.0))
+    throw Error("a blackbody needs a positive temperature and total irradiance");
+  std::vector<double> l, v;
+  // Sampled over the whole range validate() accepts for working wavelengths.
+  for (double w = 200.0; w <= 2000.0; w += 2.0) {
+    l.push_back(w);
+    v.push_back(blackbody_irradiance(w, temperature_k, total_irradiance_w_m2));
+  }
+  return Spectrum(l, v);
+}
+
+void set_solar_spectrum(Atmosphere& atmosphere, const std::string& spec) {
+  Spectrum shape;
+  if (spec == "table") {
+    shape = solar_spectrum_table();
+  } else if (spec.rfind("blackbody:", 0) == 0) {
+    char* end = nullptr;
+    const double t = std::strtod(spec.c_str() + 10, &end);
+    if (end == spec.c_str() + 10 || *end != '\0' || !(t >= 1000.0 && t <= 100000.0))
+      throw Error("--solar blackbody:T needs a temperature T in [1000, 100000] K, got \"" + spec + "\"");
+    shape = blackbody_spectrum(t, 1.0);
+  } else {
+    throw Error("the solar spectrum must be \"table\" or \"blackbody:T\", got \"" + spec + "\"");
+  }
+  const double visible = atmosphere.solar_irradiance.integral(360.0, 830.0);
+  atmosphere.solar_irradiance = shape.scaled(visible / shape.integral(360.0, 830.0));
 }
 
 Atmosphere load_atmosphere(const std::string& name_or_path) {

@@ -13,6 +13,15 @@
 //
 // Units: lengths in metres, coefficients in m^-1, angles as cosines, spectral
 // quantities per working wavelength (three at a time, one per vec3 channel).
+//
+// Channels. The precomputation works on triples of wavelengths ("sets"). With
+// one set (the three-wavelength mode) the tables' three channels ARE those
+// wavelengths. With several (spectral mode, seed 004 §4.4) every linear
+// quantity — scattered radiance, irradiance — is converted set by set to
+// linear sRGB and summed, so that the run time reads one set of textures
+// whose channels are linear sRGB divided by 683 lm/W (radiometric units,
+// which keep 16-bit float textures far from overflow); see
+// channels_to_srgb_matrix in physics/parameters.hpp.
 
 #define MAX_CONSTITUENTS 4
 #define MAX_DENSITY_KNOTS 8
@@ -59,4 +68,28 @@ struct AtmosphereParams {
   int scattering_mu_s_size;
   int scattering_mu_size;
   int scattering_r_size;
+
+  // The transmittance texture these parameters read: `transmittance_tiles`
+  // tables side by side, this one being tile `transmittance_tile` (see
+  // transmittance_uv_from_r_mu). 1 and 0 for the render tables; the spectral
+  // sets read tile k of the spectral transmittance texture.
+  int transmittance_tile;
+  int transmittance_tiles;
+};
+
+// Most wavelength triples a spectral precomputation may use (48 wavelengths).
+// The shaders define the actual count instead (gpu/shader_source.cpp).
+#ifndef SPECTRAL_SET_CAPACITY
+#define SPECTRAL_SET_CAPACITY 16
+#endif
+
+// The medium at each wavelength triple, for what the run time computes
+// spectrally (the low-sun single scattering, scattering_along_ray): set k
+// has its own coefficients and solar irradiance, reads tile k of the spectral
+// transmittance texture, and `to_channels[k]` converts its radiance to the
+// tables' channels (the identity in the three-wavelength mode).
+struct SpectralSets {
+  int count;
+  AtmosphereParams set[SPECTRAL_SET_CAPACITY];
+  mat3 to_channels[SPECTRAL_SET_CAPACITY];
 };

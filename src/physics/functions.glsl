@@ -182,12 +182,17 @@ INLINE vec2 transmittance_uv_from_r_mu(IN(AtmosphereParams) atmosphere, float r,
   float d_max = rho + H;
   float x_mu = clamp((d - d_min) / (d_max - d_min), 0.0f, 1.0f);
   float x_r = rho / H;
-  return vec2(texture_coord_from_unit_range(x_mu, atmosphere.transmittance_mu_size),
+  // Tile `transmittance_tile` of `transmittance_tiles` side by side: texel
+  // centres map to texel centres, so linear filtering never mixes tiles.
+  float u = texture_coord_from_unit_range(x_mu, atmosphere.transmittance_mu_size);
+  return vec2((float(atmosphere.transmittance_tile) + u) / float(atmosphere.transmittance_tiles),
               texture_coord_from_unit_range(x_r, atmosphere.transmittance_r_size));
 }
 
 INLINE void r_mu_from_transmittance_uv(IN(AtmosphereParams) atmosphere, vec2 uv, OUT(float) r, OUT(float) mu) {
-  float x_mu = unit_range_from_texture_coord(uv.x, atmosphere.transmittance_mu_size);
+  float x_mu = unit_range_from_texture_coord(uv.x * float(atmosphere.transmittance_tiles) -
+                                                 float(atmosphere.transmittance_tile),
+                                             atmosphere.transmittance_mu_size);
   float x_r = unit_range_from_texture_coord(uv.y, atmosphere.transmittance_r_size);
   float H = horizon_length_at_top(atmosphere);
   float rho = H * x_r;
@@ -346,27 +351,39 @@ INLINE void r_mu_s_from_irradiance_uv(IN(AtmosphereParams) atmosphere, vec2 uv, 
 // 5. Table lookups
 // ===========================================================================
 
-INLINE vec3 transmittance_to_top_atmosphere_boundary(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
-                                                     float r, float mu) {
+// The transmittance table holds the optical depth τ to the top of the
+// atmosphere (seed 000 eq. 3.8), T = exp(-τ). Storing τ rather than T makes
+// the transmittance of part of a ray a difference of two lookups,
+// exp(-(τ_a - τ_b)), instead of a ratio T_a / T_b that is 0 / 0 wherever a
+// dense atmosphere (Venus, 30x Earth in the blue) makes both underflow; and τ
+// is the smoother function of the two to interpolate.
+INLINE vec3 optical_depth_to_top_atmosphere_boundary(IN(AtmosphereParams) atmosphere,
+                                                     IN(sampler2D) transmittance_texture, float r, float mu) {
   return vec3(texture(transmittance_texture, transmittance_uv_from_r_mu(atmosphere, r, mu)));
 }
 
+INLINE vec3 transmittance_to_top_atmosphere_boundary(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
+                                                     float r, float mu) {
+  return exp(-optical_depth_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, mu));
+}
+
 // Transmittance between the start of the ray (r, mu) and the point at
-// distance d along it, as a ratio of two table values (transmittance
-// composes multiplicatively). Rays that hit the ground are reversed so that
-// both lookups are of rays that do not.
+// distance d along it, from two table values (optical depth is additive
+// along a ray). Rays that hit the ground are reversed so that both lookups
+// are of rays that do not.
 INLINE vec3 transmittance_along_ray(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture, float r,
                                     float mu, float d, bool ray_r_mu_intersects_ground) {
   float r_d = clamp_radius(atmosphere, radius_along_ray(r, mu, d));
   float mu_d = clamp_cosine(mu_along_ray(r, mu, d, r_d));
+  vec3 optical_depth;
   if (ray_r_mu_intersects_ground) {
-    return min(transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r_d, -mu_d) /
-                   transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, -mu),
-               vec3(1.0f));
+    optical_depth = optical_depth_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r_d, -mu_d) -
+                    optical_depth_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, -mu);
+  } else {
+    optical_depth = optical_depth_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, mu) -
+                    optical_depth_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r_d, mu_d);
   }
-  return min(transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, mu) /
-                 transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r_d, mu_d),
-             vec3(1.0f));
+  return exp(-max(optical_depth, vec3(0.0f)));
 }
 
 // Transmittance between the start of the ray (r, mu) and the ground, for a
@@ -377,10 +394,10 @@ INLINE vec3 transmittance_to_ground(IN(AtmosphereParams) atmosphere, IN(sampler2
                                     float mu) {
   float d = distance_to_bottom_atmosphere_boundary(atmosphere, r, mu);
   float mu_d = clamp_cosine((r * mu + d) / atmosphere.bottom_radius);
-  return min(transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, atmosphere.bottom_radius,
-                                                      -mu_d) /
-                 transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, -mu),
-             vec3(1.0f));
+  vec3 optical_depth =
+      optical_depth_to_top_atmosphere_boundary(atmosphere, transmittance_texture, atmosphere.bottom_radius, -mu_d) -
+      optical_depth_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, -mu);
+  return exp(-max(optical_depth, vec3(0.0f)));
 }
 
 // Fraction of the solar disc above the horizon seen from radius r: the area
@@ -945,11 +962,16 @@ INLINE bool ray_in_planet_shadow(IN(AtmosphereParams) atmosphere, float mu_s, fl
 // the form of the tables: `rayleigh` = single Rayleigh + multiple / P_R,
 // `aerosol` = single aerosol; phase_weighted_scattering() gives the radiance.
 // From the 4D tables with the sun high, integrated along the ray (single
-// scattering) with the sun low, blended in between.
-INLINE void scattering_along_ray(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
-                                 IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
-                                 IN(sampler3D) multiple_scattering_texture, float r, float mu, float mu_s, float nu,
-                                 bool ray_r_mu_intersects_ground, float d, OUT(vec3) rayleigh, OUT(vec3) aerosol) {
+// scattering) with the sun low, blended in between. The integration runs
+// once per wavelength triple of `spectral` (each with its own medium and
+// tile of `spectral_transmittance_texture`) and is converted to the tables'
+// channels, so that twilight colours are those of the spectrum, not of three
+// samples of it.
+INLINE void scattering_along_ray(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                 IN(sampler2D) spectral_transmittance_texture, IN(sampler3D) scattering_texture,
+                                 IN(sampler3D) single_aerosol_texture, IN(sampler3D) multiple_scattering_texture,
+                                 float r, float mu, float mu_s, float nu, bool ray_r_mu_intersects_ground, float d,
+                                 OUT(vec3) rayleigh, OUT(vec3) aerosol) {
   float mu_s_end = mu_s_at_ray_end(r, mu, mu_s, nu, d);
   float low_sun = low_sun_weight(mu_s, mu_s_end);
   rayleigh = vec3(0.0f);
@@ -965,15 +987,58 @@ INLINE void scattering_along_ray(IN(AtmosphereParams) atmosphere, IN(sampler2D) 
     vec3 single_aerosol = vec3(0.0f);
     // Nothing to integrate on the night side.
     if (!ray_in_planet_shadow(atmosphere, mu_s, mu_s_end)) {
-      integrate_single_scattering(atmosphere, transmittance_texture, r, mu, mu_s, nu, d,
-                                  RUNTIME_SINGLE_SCATTERING_INTERVALS, RUNTIME_RAY_MAP_CELLS, single_rayleigh,
-                                  single_aerosol);
+      for (int k = 0; k < spectral.count; ++k) {
+        vec3 set_rayleigh;
+        vec3 set_aerosol;
+        integrate_single_scattering(spectral.set[k], spectral_transmittance_texture, r, mu, mu_s, nu, d,
+                                    RUNTIME_SINGLE_SCATTERING_INTERVALS, RUNTIME_RAY_MAP_CELLS, set_rayleigh,
+                                    set_aerosol);
+        single_rayleigh += spectral.to_channels[k] * set_rayleigh;
+        single_aerosol += spectral.to_channels[k] * set_aerosol;
+      }
     }
     vec3 multiple =
         scattering_lookup(atmosphere, multiple_scattering_texture, r, mu, mu_s, nu, ray_r_mu_intersects_ground);
     rayleigh += low_sun * (single_rayleigh + multiple);
     aerosol += low_sun * single_aerosol;
   }
+}
+
+// Transmittance in the tables' channels, from each wavelength triple's own
+// (exact, multiplicative) transmittance T_k weighted by sunlight:
+//   T_c = Σ_k (M_k (E_k ⊙ T_k))_c / (Σ_k M_k E_k)_c,
+// with M_k = spectral.to_channels[k] and E_k the solar irradiance at triple
+// k's wavelengths. In the three-wavelength mode this is T itself; in the
+// spectral mode it is the factor that turns the sun's colour into the
+// colour of the transmitted sun exactly (its disc, and its direct light on
+// the ground), and approximates the attenuation of other colours (the lit
+// ground behind the aerial perspective) by that of sunlight, as the tables'
+// three channels must. It is a weighted mean of per-wavelength values, not a
+// ratio of means (which a path split in two would need, and which is
+// undefined where a reddened sun's blue falls out of the sRGB gamut); it is
+// clamped at 0 for that case. `path`: to the top of the atmosphere (mu: a
+// ray that does not hit the ground), to the ground (a ray that does), or to
+// the sun (mu = mu_s; averaged over the solar disc, with the planet's
+// shadow).
+#define PATH_TO_TOP 0
+#define PATH_TO_GROUND 1
+#define PATH_TO_SUN 2
+
+INLINE vec3 channel_transmittance(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                  IN(sampler2D) spectral_transmittance_texture, int path, float r, float mu) {
+  vec3 sum = vec3(0.0f);
+  for (int k = 0; k < spectral.count; ++k) {
+    vec3 t;
+    if (path == PATH_TO_GROUND) {
+      t = transmittance_to_ground(spectral.set[k], spectral_transmittance_texture, r, mu);
+    } else if (path == PATH_TO_SUN) {
+      t = transmittance_to_sun(spectral.set[k], spectral_transmittance_texture, r, mu);
+    } else {
+      t = transmittance_to_top_atmosphere_boundary(spectral.set[k], spectral_transmittance_texture, r, mu);
+    }
+    sum += spectral.to_channels[k] * (spectral.set[k].solar_irradiance * t);
+  }
+  return max(sum / max(atmosphere.solar_irradiance, vec3(1e-30f)), vec3(0.0f));
 }
 
 // The sky-view table: scattering_along_ray for one camera and sun, over view
@@ -1072,7 +1137,8 @@ INLINE vec3 camera_above_ground(IN(AtmosphereParams) atmosphere, vec3 camera) {
 
 // One texel of the sky-view table of a camera in the atmosphere (uv at the
 // texel centre): scattering_along_ray for its view direction.
-INLINE void compute_sky_view_texel(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
+INLINE void compute_sky_view_texel(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                   IN(sampler2D) spectral_transmittance_texture,
                                    IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
                                    IN(sampler3D) multiple_scattering_texture, vec3 camera, vec3 sun_direction,
                                    vec2 uv, OUT(vec3) rayleigh, OUT(vec3) aerosol) {
@@ -1085,8 +1151,9 @@ INLINE void compute_sky_view_texel(IN(AtmosphereParams) atmosphere, IN(sampler2D
   float mu_s = clamp_cosine(dot(camera, sun_direction) / r);
   float nu = clamp_cosine(dot(view_ray, sun_direction));
   float d = distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ground);
-  scattering_along_ray(atmosphere, transmittance_texture, scattering_texture, single_aerosol_texture,
-                       multiple_scattering_texture, r, mu, mu_s, nu, ground, d, rayleigh, aerosol);
+  scattering_along_ray(atmosphere, spectral, spectral_transmittance_texture, scattering_texture,
+                       single_aerosol_texture, multiple_scattering_texture, r, mu, mu_s, nu, ground, d, rayleigh,
+                       aerosol);
 }
 
 // Radiance scattered towards the camera along the view ray up to the top of
@@ -1098,7 +1165,8 @@ INLINE void compute_sky_view_texel(IN(AtmosphereParams) atmosphere, IN(sampler2D
 // model; cameras in space). Shaders pass a constant, so that the compiler
 // drops the path not taken: software rasterisers run both sides of a branch,
 // and all iterations of a loop of constant length.
-INLINE vec3 sky_radiance(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
+INLINE vec3 sky_radiance(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                         IN(sampler2D) spectral_transmittance_texture,
                          IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
                          IN(sampler3D) multiple_scattering_texture, IN(sampler2D) sky_view_rayleigh_texture,
                          IN(sampler2D) sky_view_aerosol_texture, bool use_sky_view, vec3 camera, vec3 view_ray,
@@ -1112,9 +1180,10 @@ INLINE vec3 sky_radiance(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmit
   float nu = clamp_cosine(dot(view_ray, sun_direction));
   bool ground = ray_intersects_ground(atmosphere, r, mu);
   if (ground) {
-    transmittance = transmittance_to_ground(atmosphere, transmittance_texture, r, mu);
+    transmittance =
+        channel_transmittance(atmosphere, spectral, spectral_transmittance_texture, PATH_TO_GROUND, r, mu);
   } else {
-    transmittance = transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, mu);
+    transmittance = channel_transmittance(atmosphere, spectral, spectral_transmittance_texture, PATH_TO_TOP, r, mu);
   }
   vec3 rayleigh;
   vec3 aerosol;
@@ -1123,8 +1192,8 @@ INLINE vec3 sky_radiance(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmit
     rayleigh = vec3(texture(sky_view_rayleigh_texture, uv));
     aerosol = vec3(texture(sky_view_aerosol_texture, uv));
   } else {
-    scattering_along_ray(atmosphere, transmittance_texture, scattering_texture, single_aerosol_texture,
-                         multiple_scattering_texture, r, mu, mu_s, nu, ground,
+    scattering_along_ray(atmosphere, spectral, spectral_transmittance_texture, scattering_texture,
+                         single_aerosol_texture, multiple_scattering_texture, r, mu, mu_s, nu, ground,
                          distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ground), rayleigh, aerosol);
   }
   return phase_weighted_scattering(atmosphere, rayleigh, aerosol, nu);
@@ -1134,22 +1203,26 @@ INLINE vec3 sky_radiance(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmit
 // normal `normal`: returns the sun's, and the sky's in `sky_irradiance`
 // (the horizontal sky irradiance scaled by the fraction of the sky the
 // surface sees, (1 + n.up) / 2).
-INLINE vec3 sun_and_sky_irradiance_at(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
+INLINE vec3 sun_and_sky_irradiance_at(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                      IN(sampler2D) spectral_transmittance_texture,
                                       IN(sampler2D) irradiance_texture, float r, vec3 up, vec3 normal,
                                       vec3 sun_direction, OUT(vec3) sky_irradiance) {
   r = clamp_radius(atmosphere, r);
   float mu_s = clamp_cosine(dot(up, sun_direction));
   sky_irradiance = irradiance_lookup(atmosphere, irradiance_texture, r, mu_s) * (1.0f + dot(normal, up)) * 0.5f;
-  return atmosphere.solar_irradiance * transmittance_to_sun(atmosphere, transmittance_texture, r, mu_s) *
+  return atmosphere.solar_irradiance *
+         channel_transmittance(atmosphere, spectral, spectral_transmittance_texture, PATH_TO_SUN, r, mu_s) *
          max(dot(normal, sun_direction), 0.0f);
 }
 
 // The same for a surface at `point` (relative to the planet centre).
-INLINE vec3 sun_and_sky_irradiance(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
+INLINE vec3 sun_and_sky_irradiance(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                   IN(sampler2D) spectral_transmittance_texture,
                                    IN(sampler2D) irradiance_texture, vec3 point, vec3 normal, vec3 sun_direction,
                                    OUT(vec3) sky_irradiance) {
   float r = length(point);
-  return sun_and_sky_irradiance_at(atmosphere, transmittance_texture, irradiance_texture, r, point / r, normal,
+  return sun_and_sky_irradiance_at(atmosphere, spectral, spectral_transmittance_texture, irradiance_texture, r,
+                                   point / r, normal,
                                    sun_direction, sky_irradiance);
 }
 
@@ -1165,15 +1238,16 @@ INLINE vec3 sun_disc_radiance(IN(AtmosphereParams) atmosphere) {
 // aerial perspective in front of it, plus (optionally) the sun disc.
 // `camera` is relative to the planet centre; a camera below the ground is
 // treated as standing on it.
-INLINE vec3 radiance_along_view_ray(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
-                                    IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
+INLINE vec3 radiance_along_view_ray(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                    IN(sampler2D) spectral_transmittance_texture, IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
                                     IN(sampler3D) multiple_scattering_texture, IN(sampler2D) irradiance_texture,
                                     IN(sampler2D) sky_view_rayleigh_texture, IN(sampler2D) sky_view_aerosol_texture,
                                     bool use_sky_view, vec3 camera, vec3 view_ray, vec3 sun_direction,
                                     bool include_sun_disc) {
   camera = camera_above_ground(atmosphere, camera);
   vec3 transmittance;
-  vec3 radiance = sky_radiance(atmosphere, transmittance_texture, scattering_texture, single_aerosol_texture,
+  vec3 radiance = sky_radiance(atmosphere, spectral, spectral_transmittance_texture,
+                               scattering_texture, single_aerosol_texture,
                                multiple_scattering_texture, sky_view_rayleigh_texture, sky_view_aerosol_texture,
                                use_sky_view, camera, view_ray, sun_direction, transmittance);
   vec3 start = camera;
@@ -1189,7 +1263,8 @@ INLINE vec3 radiance_along_view_ray(IN(AtmosphereParams) atmosphere, IN(sampler2
     vec3 point = start + view_ray * distance_to_bottom_atmosphere_boundary(atmosphere, r, mu);
     vec3 normal = point / length(point);
     vec3 sky_irradiance;
-    vec3 sun_irradiance = sun_and_sky_irradiance_at(atmosphere, transmittance_texture, irradiance_texture,
+    vec3 sun_irradiance = sun_and_sky_irradiance_at(atmosphere, spectral, spectral_transmittance_texture,
+                                                    irradiance_texture,
                                                     atmosphere.bottom_radius, normal, normal, sun_direction,
                                                     sky_irradiance);
     radiance += transmittance * ground_radiance(atmosphere, sun_irradiance + sky_irradiance);

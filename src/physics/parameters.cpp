@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "atmos/colour.hpp"
+
 namespace atmos::physics {
 
 double mu_s_min(const Atmosphere& atmosphere) {
@@ -10,9 +12,36 @@ double mu_s_min(const Atmosphere& atmosphere) {
   return std::cos(M_PI / 2.0 + horizon_dip + margin);
 }
 
-AtmosphereParams make_atmosphere_params(const Atmosphere& atmosphere, const TableSizes& sizes, int set) {
+int spectral_set_count(const std::vector<double>& wavelengths_nm) { return int((wavelengths_nm.size() + 2) / 3); }
+
+std::array<double, 3> set_wavelengths(const std::vector<double>& wavelengths_nm, int set) {
+  std::array<double, 3> w{};
+  for (size_t c = 0; c < 3; ++c) w[c] = wavelengths_nm.at(std::min(3 * size_t(set) + c, wavelengths_nm.size() - 1));
+  return w;
+}
+
+bool srgb_channels(const std::vector<double>& wavelengths_nm) { return wavelengths_nm.size() != 3; }
+
+glm::mat3 set_to_channels(const std::vector<double>& wavelengths_nm, int set) {
+  if (!srgb_channels(wavelengths_nm)) return glm::mat3(1.0f);
+  const std::vector<glm::dvec3> weights = spectral_to_srgb_weights(wavelengths_nm);
+  glm::mat3 m(0.0f);
+  for (size_t c = 0; c < 3; ++c) {
+    const size_t i = 3 * size_t(set) + c;
+    if (i < weights.size()) m[int(c)] = glm::vec3(weights[i] / kMaxLuminousEfficacy);
+  }
+  return m;
+}
+
+glm::mat3 channels_to_srgb_matrix(const std::vector<double>& wavelengths_nm) {
+  if (srgb_channels(wavelengths_nm)) return glm::mat3(float(kMaxLuminousEfficacy));
+  return radiance_to_srgb_matrix({wavelengths_nm[0], wavelengths_nm[1], wavelengths_nm[2]});
+}
+
+AtmosphereParams make_atmosphere_params(const Atmosphere& atmosphere, const TableSizes& sizes, int set,
+                                        int transmittance_tile, int transmittance_tiles) {
   AtmosphereParams p{};
-  const double* w = &atmosphere.wavelengths_nm.at(size_t(3 * set));
+  const std::array<double, 3> w = set_wavelengths(atmosphere.wavelengths_nm, set);
   auto spectrum = [&](const Spectrum& s) {
     return vec3(float(s.at(w[0])), float(s.at(w[1])), float(s.at(w[2])));
   };
@@ -53,7 +82,42 @@ AtmosphereParams make_atmosphere_params(const Atmosphere& atmosphere, const Tabl
   p.scattering_mu_s_size = sizes.scattering_mu_s;
   p.scattering_mu_size = sizes.scattering_mu;
   p.scattering_r_size = sizes.scattering_r;
+  p.transmittance_tile = transmittance_tile;
+  p.transmittance_tiles = transmittance_tiles;
   return p;
+}
+
+AtmosphereParams make_render_params(const Atmosphere& atmosphere, const TableSizes& sizes) {
+  AtmosphereParams p = make_atmosphere_params(atmosphere, sizes, 0);
+  if (!srgb_channels(atmosphere.wavelengths_nm)) return p;
+  glm::dvec3 sun(0.0), reflected(0.0);
+  for (int set = 0; set < spectral_set_count(atmosphere.wavelengths_nm); ++set) {
+    const AtmosphereParams s = make_atmosphere_params(atmosphere, sizes, set);
+    const glm::dmat3 m(set_to_channels(atmosphere.wavelengths_nm, set));
+    sun += m * glm::dvec3(s.solar_irradiance);
+    reflected += m * glm::dvec3(s.ground_albedo * s.solar_irradiance);
+  }
+  p.solar_irradiance = vec3(sun);
+  // Sunlight is inside the sRGB gamut (all channels > 0); the albedo is
+  // clamped to [0, 1] all the same, as a reflectance must be.
+  p.ground_albedo = clamp(vec3(reflected / sun), 0.0f, 1.0f);
+  for (int i = 0; i < MAX_CONSTITUENTS; ++i) p.scattering[i] = p.absorption[i] = vec3(0.0f);
+  return p;
+}
+
+std::unique_ptr<SpectralSets> make_spectral_sets(const Atmosphere& atmosphere, const TableSizes& sizes) {
+  const int count = spectral_set_count(atmosphere.wavelengths_nm);
+  if (count > SPECTRAL_SET_CAPACITY)
+    throw Error("at most " + std::to_string(3 * SPECTRAL_SET_CAPACITY) + " working wavelengths are supported, got " +
+                std::to_string(atmosphere.wavelengths_nm.size()));
+  auto sets = std::make_unique<SpectralSets>();
+  *sets = SpectralSets{};
+  sets->count = count;
+  for (int k = 0; k < count; ++k) {
+    sets->set[k] = make_atmosphere_params(atmosphere, sizes, k, k, count);
+    sets->to_channels[k] = set_to_channels(atmosphere.wavelengths_nm, k);
+  }
+  return sets;
 }
 
 }  // namespace atmos::physics

@@ -1,6 +1,11 @@
 // From an atmos::Atmosphere (spectra, SI units) to the AtmosphereParams of the
-// shared functions, for one triple of working wavelengths.
+// shared functions: one per triple of working wavelengths for the
+// precomputation, and the parameters of the render tables, whose channels
+// are the three wavelengths or linear sRGB (see definitions.glsl, Channels).
 #pragma once
+
+#include <array>
+#include <memory>
 
 #include "atmos/atmosphere.hpp"
 #include "atmos/tables.hpp"
@@ -14,7 +19,41 @@ namespace atmos::physics {
 // the last lit layers.
 double mu_s_min(const Atmosphere& atmosphere);
 
-// The parameters of wavelength triple `set` (wavelengths 3 set .. 3 set + 2).
-AtmosphereParams make_atmosphere_params(const Atmosphere& atmosphere, const TableSizes& sizes, int set);
+// Number of wavelength triples: ceil(N / 3) for N working wavelengths.
+int spectral_set_count(const std::vector<double>& wavelengths_nm);
+
+// The wavelengths of triple `set`: 3 set .. 3 set + 2, the last triple padded
+// by repeating its last wavelength (the padding's conversion weight is 0).
+std::array<double, 3> set_wavelengths(const std::vector<double>& wavelengths_nm, int set);
+
+// Whether tables of these wavelengths hold linear sRGB / 683 (several
+// triples) rather than the radiance at the wavelengths themselves (three).
+bool srgb_channels(const std::vector<double>& wavelengths_nm);
+
+// The matrix that converts radiance at the wavelengths of triple `set` to the
+// tables' channels: the identity for three wavelengths; otherwise that
+// triple's share of the spectrum's linear sRGB (its columns are the weights
+// of spectral_to_srgb_weights / 683; zero for padding).
+glm::mat3 set_to_channels(const std::vector<double>& wavelengths_nm, int set);
+
+// Linear sRGB on the cd/m² scale from the tables' channels.
+glm::mat3 channels_to_srgb_matrix(const std::vector<double>& wavelengths_nm);
+
+// The parameters of wavelength triple `set`, reading tile `transmittance_tile`
+// of a transmittance texture of `transmittance_tiles` tiles.
+AtmosphereParams make_atmosphere_params(const Atmosphere& atmosphere, const TableSizes& sizes, int set,
+                                        int transmittance_tile = 0, int transmittance_tiles = 1);
+
+// The parameters of the render tables (the run time): the geometry and table
+// sizes, and the solar irradiance and ground albedo in the tables' channels
+// (for sRGB channels: the sRGB of the solar spectrum / 683, and the albedo
+// that reflects it, sRGB(albedo x sun) / sRGB(sun)). The medium's
+// coefficients are zero for sRGB channels: everything spectral goes through
+// the SpectralSets.
+AtmosphereParams make_render_params(const Atmosphere& atmosphere, const TableSizes& sizes);
+
+// Every triple, each reading its tile of the spectral transmittance texture
+// (Tables::spectral_transmittance). Large (~40 KB): allocate, don't copy.
+std::unique_ptr<SpectralSets> make_spectral_sets(const Atmosphere& atmosphere, const TableSizes& sizes);
 
 }  // namespace atmos::physics

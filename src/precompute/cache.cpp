@@ -27,7 +27,7 @@ namespace {
 constexpr char kMagic[8] = {'A', 'T', 'M', 'O', 'S', 'T', 'B', 'L'};
 // Bump when the meaning of the tables changes in code that is not one of the
 // hashed sources (src/precompute/*.cpp).
-constexpr std::uint32_t kFormatVersion = 2;
+constexpr std::uint32_t kFormatVersion = 3;
 
 struct Fnv1a {
   std::uint64_t h = 1469598103934665603ull;
@@ -70,12 +70,17 @@ void write_sizes(Fnv1a& h, const TableSizes& s) {
 std::string tables_cache_key(const Atmosphere& a, const PrecomputeOptions& options) {
   Fnv1a h;
   h.value(kFormatVersion);
-  for (const char* source : {"src/physics/definitions.glsl", "src/physics/functions.glsl"}) {
+  // The physics, and the colour matching functions that convert spectral
+  // tables to sRGB.
+  for (const char* source :
+       {"src/physics/definitions.glsl", "src/physics/functions.glsl", "data/spectra/cie1931_2deg.csv"}) {
     const char* text = io::embedded_file(source);
     h.text(text ? text : "");
   }
   write_sizes(h, options.sizes);
   h.value(std::int32_t(options.scattering_orders));
+  h.value(options.auto_orders);
+  if (options.auto_orders) h.value(options.auto_orders_tolerance);
   h.value(a.bottom_radius_m);
   h.value(a.top_radius_m);
   h.value(a.sun_angular_radius_rad);
@@ -121,7 +126,7 @@ std::string read_cache(const std::string& path, const std::string& key, const Pr
   std::stringstream buffer;
   buffer << in.rdbuf();
   const std::string data = buffer.str();
-  const std::size_t header = sizeof kMagic + 4 + 16 + 8 * 4 + 4 + 4 + 4;
+  const std::size_t header = sizeof kMagic + 4 + 16 + 8 * 4 + 4 + 4 + 4 + 4;
   if (data.size() < header + 8) return "truncated header";
   std::size_t pos = 0;
   auto take = [&](void* out, std::size_t n) {
@@ -137,17 +142,22 @@ std::string read_cache(const std::string& path, const std::string& key, const Pr
   char file_key[16];
   take(file_key, 16);
   if (std::string(file_key, 16) != key) return "key mismatch";
-  std::int32_t sizes[8], orders, sets, wavelengths;
+  std::int32_t sizes[8], orders, sets, wavelengths, convergence;
   take(sizes, sizeof sizes);
   take(&orders, 4);
   take(&sets, 4);
   take(&wavelengths, 4);
+  take(&convergence, 4);
   TableSizes s{sizes[0], sizes[1], sizes[2], sizes[3], sizes[4], sizes[5], sizes[6], sizes[7]};
-  if (!(s == options.sizes) || orders != options.scattering_orders ||
-      wavelengths != std::int32_t(atmosphere.wavelengths_nm.size()) || sets * 3 != wavelengths)
+  const bool orders_match = options.auto_orders ? orders >= 1 && orders <= options.scattering_orders
+                                                : orders == options.scattering_orders;
+  if (!(s == options.sizes) || !orders_match || wavelengths != std::int32_t(atmosphere.wavelengths_nm.size()) ||
+      sets != (wavelengths + 2) / 3 || convergence < 0 || convergence > 100)
     return "parameters mismatch";
-  const std::size_t floats = set_floats(s) * std::size_t(sets);
-  const std::size_t expected = header + std::size_t(wavelengths) * 8 + floats * 4 + 8;
+  const std::size_t transmittance_floats = 3 * std::size_t(s.transmittance_mu) * s.transmittance_r;
+  const std::size_t floats = set_floats(s) + transmittance_floats * std::size_t(sets);
+  const std::size_t expected =
+      header + std::size_t(wavelengths) * 8 + std::size_t(convergence) * 20 + floats * 4 + 8;
   if (data.size() != expected)
     return "size " + std::to_string(data.size()) + " bytes, expected " + std::to_string(expected) + " (truncated?)";
   Fnv1a check;
@@ -161,6 +171,15 @@ std::string read_cache(const std::string& path, const std::string& key, const Pr
   tables.scattering_orders = orders;
   tables.wavelengths_nm.resize(std::size_t(wavelengths));
   take(tables.wavelengths_nm.data(), std::size_t(wavelengths) * 8);
+  for (int i = 0; i < convergence; ++i) {
+    OrderContribution c;
+    std::int32_t order;
+    take(&order, 4);
+    take(&c.added, 8);
+    take(&c.relative, 8);
+    c.order = order;
+    tables.convergence.push_back(c);
+  }
   auto take_vec3 = [&](std::vector<glm::vec3>& v, std::size_t count) {
     v.resize(count);
     take(v.data(), count * sizeof(glm::vec3));
@@ -171,14 +190,11 @@ std::string read_cache(const std::string& path, const std::string& key, const Pr
   const std::size_t t = std::size_t(s.transmittance_mu) * s.transmittance_r;
   const std::size_t e = std::size_t(s.irradiance_mu_s) * s.irradiance_r;
   const std::size_t sc = std::size_t(s.scattering_nu) * s.scattering_mu_s * s.scattering_mu * s.scattering_r;
-  for (int i = 0; i < sets; ++i) {
-    TableSet set;
-    if (!take_vec3(set.transmittance, t) || !take_vec3(set.direct_irradiance, e) ||
-        !take_vec3(set.indirect_irradiance, e) || !take_vec3(set.scattering, sc) || !take_vec3(set.single_aerosol, sc) ||
-        !take_vec3(set.multiple_scattering, sc))
-      return "non-finite texels";
-    tables.sets.push_back(std::move(set));
-  }
+  TableSet& set = tables.set;
+  if (!take_vec3(set.transmittance, t) || !take_vec3(set.direct_irradiance, e) ||
+      !take_vec3(set.indirect_irradiance, e) || !take_vec3(set.scattering, sc) || !take_vec3(set.single_aerosol, sc) ||
+      !take_vec3(set.multiple_scattering, sc) || !take_vec3(tables.spectral_optical_depth, t * std::size_t(sets)))
+    return "non-finite texels";
   return "";
 }
 
@@ -193,16 +209,24 @@ std::string write_cache(const std::string& path, const std::string& key, const T
   const std::int32_t sizes[8] = {s.transmittance_mu, s.transmittance_r, s.irradiance_mu_s, s.irradiance_r,
                                  s.scattering_nu,    s.scattering_mu_s, s.scattering_mu,   s.scattering_r};
   put(sizes, sizeof sizes);
-  const std::int32_t orders = tables.scattering_orders, sets = std::int32_t(tables.sets.size()),
-                     wavelengths = std::int32_t(tables.wavelengths_nm.size());
+  const std::int32_t orders = tables.scattering_orders, sets = std::int32_t(tables.spectral_sets()),
+                     wavelengths = std::int32_t(tables.wavelengths_nm.size()),
+                     convergence = std::int32_t(tables.convergence.size());
   put(&orders, 4);
   put(&sets, 4);
   put(&wavelengths, 4);
+  put(&convergence, 4);
   put(tables.wavelengths_nm.data(), tables.wavelengths_nm.size() * 8);
-  for (const auto& set : tables.sets)
-    for (const auto* v : {&set.transmittance, &set.direct_irradiance, &set.indirect_irradiance, &set.scattering,
-                          &set.single_aerosol, &set.multiple_scattering})
-      put(v->data(), v->size() * sizeof(glm::vec3));
+  for (const OrderContribution& c : tables.convergence) {
+    const std::int32_t order = c.order;
+    put(&order, 4);
+    put(&c.added, 8);
+    put(&c.relative, 8);
+  }
+  const TableSet& set = tables.set;
+  for (const auto* v : {&set.transmittance, &set.direct_irradiance, &set.indirect_irradiance, &set.scattering,
+                        &set.single_aerosol, &set.multiple_scattering, &tables.spectral_optical_depth})
+    put(v->data(), v->size() * sizeof(glm::vec3));
   Fnv1a check;
   check.bytes(data.data(), data.size());
   put(&check.h, 8);

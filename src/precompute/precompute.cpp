@@ -2,12 +2,15 @@
 // transmittance, direct irradiance and single scattering, then for each
 // scattering order n = 2..K the scattering density of order n, the sky
 // irradiance of order n - 1 and the multiple scattering of order n.
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <chrono>
 #include <cmath>
 #include <string>
 
+#include "atmos/colour.hpp"
 #include "atmos/tables.hpp"
 #include "physics/parameters.hpp"
 #include "precompute/steps.hpp"
@@ -33,6 +36,53 @@ void TableSizes::validate() const {
   if (texels > 64.0 * 1024 * 1024) throw Error("scattering tables of more than 64 Mi texels are not supported");
 }
 
+void check_tables_match(const Atmosphere& atmosphere, const Tables& tables) {
+  tables.sizes.validate();
+  if (tables.wavelengths_nm != atmosphere.wavelengths_nm)
+    throw Error("the tables were not computed for the wavelengths of atmosphere '" + atmosphere.name + "'");
+  const TableSizes& s = tables.sizes;
+  const TableSet& t = tables.set;
+  const size_t transmittance = size_t(s.transmittance_mu) * size_t(s.transmittance_r);
+  const size_t irradiance = size_t(s.irradiance_mu_s) * size_t(s.irradiance_r);
+  const size_t scattering =
+      size_t(tables.scattering_width()) * size_t(tables.scattering_height()) * size_t(tables.scattering_depth());
+  if (t.transmittance.size() != transmittance || t.indirect_irradiance.size() != irradiance ||
+      t.direct_irradiance.size() != irradiance || t.scattering.size() != scattering ||
+      t.single_aerosol.size() != scattering || t.multiple_scattering.size() != scattering ||
+      tables.spectral_optical_depth.size() != transmittance * size_t(tables.spectral_sets()))
+    throw Error("the tables hold fewer or more texels than their sizes say");
+  if (tables.spectral_sets() > SPECTRAL_SET_CAPACITY)
+    throw Error("the tables have more wavelengths than the run time supports");
+}
+
+namespace {
+
+// Radiance summed over the texels of a scattering table, weighted into
+// luminance by `luminance` (per channel of the set), with the phase function
+// of each texel's nu tile for phase-free tables (`phase` 0: none, 1: Rayleigh,
+// 2: aerosol). A measure of how much light an order adds, for auto orders
+// and the convergence report.
+double luminance_sum(const physics::AtmosphereParams& a, const precompute::Table3D& table, const glm::vec3& luminance,
+                     int phase) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<int>(0, table.depth), 0.0,
+      [&](const tbb::blocked_range<int>& slices, double sum) {
+        for (int z = slices.begin(); z != slices.end(); ++z)
+          for (int y = 0; y < table.height; ++y)
+            for (int x = 0; x < table.width; ++x) {
+              const float nu = physics::scattering_texel_tile_nu(a, physics::vec3(float(x), float(y), float(z)));
+              const float p = phase == 0   ? 1.0f
+                              : phase == 1 ? physics::rayleigh_phase_function(nu)
+                                           : physics::aerosol_phase_function(a, nu);
+              sum += double(glm::dot(luminance, table.at(x, y, z))) * double(p);
+            }
+        return sum;
+      },
+      [](double x, double y) { return x + y; });
+}
+
+}  // namespace
+
 Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& options) {
   using namespace precompute;
   using clock = std::chrono::steady_clock;
@@ -40,14 +90,22 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
   options.sizes.validate();
   const int K = options.scattering_orders;
   if (K < 1 || K > 100) throw Error("scattering orders must be in [1, 100], got " + std::to_string(K));
+  if (options.auto_orders && !(options.auto_orders_tolerance > 0.0 && options.auto_orders_tolerance < 1.0))
+    throw Error("the tolerance of auto orders must be in (0, 1)");
+  const std::vector<double>& wavelengths = atmosphere.wavelengths_nm;
+  const int set_count = physics::spectral_set_count(wavelengths);
+  if (set_count > SPECTRAL_SET_CAPACITY)
+    throw Error("at most " + std::to_string(3 * SPECTRAL_SET_CAPACITY) + " working wavelengths are supported, got " +
+                std::to_string(wavelengths.size()));
+  const bool srgb = physics::srgb_channels(wavelengths);
 
   Tables tables;
   tables.sizes = options.sizes;
-  tables.scattering_orders = K;
-  tables.wavelengths_nm = atmosphere.wavelengths_nm;
-  const int set_count = int(atmosphere.wavelengths_nm.size() / 3);
+  tables.scattering_orders = 1;
+  tables.wavelengths_nm = wavelengths;
 
-  // Relative cost of the steps, for the progress fraction.
+  // Relative cost of the steps, for the progress fraction (with auto orders,
+  // the estimate assumes the cap and the bar jumps at the end).
   const double cost_single = 1.0, cost_order = 1.6;
   const double cost_set = 0.05 + cost_single + cost_order * (K - 1);
   const double cost_total = cost_set * set_count;
@@ -72,8 +130,32 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
     tables.timings.push_back({name, seconds});
   };
 
+  // The render tables accumulate every set's tables in the channels (see
+  // physics/definitions.glsl); the transmittance of sunlight is divided by
+  // the sun's channels at the end.
+  TableSet& out = tables.set;
+  std::vector<glm::vec3> transmitted_sun;
+  glm::vec3 sun_channels(0.0f);
+  const glm::vec3 luminance_of_srgb(0.2126f, 0.7152f, 0.0722f);
+  const glm::mat3 to_srgb = physics::channels_to_srgb_matrix(wavelengths);
+  std::vector<double> added_per_order, total_per_order;
+  // (With three wavelengths the one set is the render tables: moved, not converted.)
+  auto accumulate = [&](std::vector<glm::vec3>& sum, std::vector<glm::vec3>& texels, const glm::mat3& m) {
+    if (!srgb) {
+      sum = std::move(texels);
+      return;
+    }
+    if (sum.empty()) sum.assign(texels.size(), glm::vec3(0.0f));
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size()), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t i = range.begin(); i != range.end(); ++i) sum[i] += m * texels[i];
+    });
+  };
+
   for (int set = 0; set < set_count; ++set) {
     const AtmosphereParams a = physics::make_atmosphere_params(atmosphere, options.sizes, set);
+    const glm::mat3 to_channels = physics::set_to_channels(wavelengths, set);
+    // Luminance per unit of this set's radiance at each of its wavelengths.
+    const glm::vec3 luminance = glm::transpose(to_srgb * to_channels) * luminance_of_srgb;
     Table2D transmittance, direct_irradiance, indirect_irradiance(a.irradiance_mu_s_size, a.irradiance_r_size);
     Table2D delta_irradiance;
     Table3D single_rayleigh, single_aerosol, delta_multiple, density;
@@ -87,6 +169,8 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
     });
     Table3D multiple(single_rayleigh.width, single_rayleigh.height, single_rayleigh.depth);
     delta_multiple = Table3D(single_rayleigh.width, single_rayleigh.height, single_rayleigh.depth);
+    double total = luminance_sum(a, single_rayleigh, luminance, 1) + luminance_sum(a, single_aerosol, luminance, 2);
+    double previous_added = 0.0;
 
     for (int order = 2; order <= K; ++order) {
       timed("scattering_density", cost_order * 0.45, [&](auto&& progress) {
@@ -117,20 +201,74 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
             }
         });
       });
+      const double added = luminance_sum(a, delta_multiple, luminance, 0);
+      // Each order of a physical atmosphere adds less light than the one
+      // before (some escapes to space or is absorbed). An order that adds
+      // more means that the tables' discretisation creates energy: too
+      // dense a medium for the table resolution (measured: 30x Earth from
+      // order 12 with the default sizes, 100x from order 6). Refuse rather
+      // than return tables that grow without bound.
+      if (order > 2 && added > previous_added * (1.0 + 1e-6) && added > 0.0)
+        throw Error(atmosphere.origin + ": scattering order " + std::to_string(order) +
+                    " adds more light than order " + std::to_string(order - 1) +
+                    ": the tables cannot represent an atmosphere this dense (wavelengths " +
+                    std::to_string(int(physics::set_wavelengths(wavelengths, set)[0])) + "-" +
+                    std::to_string(int(physics::set_wavelengths(wavelengths, set)[2])) +
+                    " nm); use fewer orders, a lower --density-scale or larger tables");
+      previous_added = added;
+      total += added;
+      if (added_per_order.size() < size_t(order - 1)) {
+        added_per_order.push_back(0.0);
+        total_per_order.push_back(0.0);
+      }
+      added_per_order[size_t(order - 2)] += added;
+      total_per_order[size_t(order - 2)] += total;
+      tables.scattering_orders = std::max(tables.scattering_orders, order);
+      if (options.auto_orders && std::abs(added) <= options.auto_orders_tolerance * std::abs(total)) {
+        cost_done += cost_order * (K - order);
+        break;
+      }
     }
 
     Table3D scattering = single_rayleigh;
     for (size_t i = 0; i < scattering.texels.size(); ++i) scattering.texels[i] += multiple.texels[i];
 
-    TableSet out;
-    out.transmittance = std::move(transmittance.texels);
-    out.direct_irradiance = std::move(direct_irradiance.texels);
-    out.indirect_irradiance = std::move(indirect_irradiance.texels);
-    out.scattering = std::move(scattering.texels);
-    out.single_aerosol = std::move(single_aerosol.texels);
-    out.multiple_scattering = std::move(multiple.texels);
-    tables.sets.push_back(std::move(out));
+    accumulate(out.direct_irradiance, direct_irradiance.texels, to_channels);
+    accumulate(out.indirect_irradiance, indirect_irradiance.texels, to_channels);
+    accumulate(out.scattering, scattering.texels, to_channels);
+    accumulate(out.single_aerosol, single_aerosol.texels, to_channels);
+    accumulate(out.multiple_scattering, multiple.texels, to_channels);
+    if (srgb) {
+      std::vector<glm::vec3> sun_times_t(transmittance.texels.size());
+      for (size_t i = 0; i < sun_times_t.size(); ++i)
+        sun_times_t[i] = a.solar_irradiance * glm::exp(-transmittance.texels[i]);
+      accumulate(transmitted_sun, sun_times_t, to_channels);
+      sun_channels += to_channels * a.solar_irradiance;
+    } else {
+      out.transmittance.resize(transmittance.texels.size());
+      for (size_t i = 0; i < transmittance.texels.size(); ++i) out.transmittance[i] = glm::exp(-transmittance.texels[i]);
+    }
+    // Triple `set` is tile `set` of the spectral optical depth (rows of
+    // set_count tiles side by side).
+    const int w = transmittance.width, h = transmittance.height;
+    if (tables.spectral_optical_depth.empty())
+      tables.spectral_optical_depth.assign(size_t(w) * size_t(h) * size_t(set_count), glm::vec3(0.0f));
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        tables.spectral_optical_depth[size_t(y) * size_t(w) * size_t(set_count) + size_t(set) * size_t(w) +
+                                      size_t(x)] = transmittance.at(x, y);
   }
+  if (srgb) {
+    // Sunlight is inside the sRGB gamut, so sun_channels > 0; a deeply
+    // reddened transmitted sun can fall outside it (a negative blue), and a
+    // transmittance is in [0, 1].
+    out.transmittance.resize(transmitted_sun.size());
+    for (size_t i = 0; i < transmitted_sun.size(); ++i)
+      out.transmittance[i] = glm::clamp(transmitted_sun[i] / sun_channels, 0.0f, 1.0f);
+  }
+  for (size_t i = 0; i < added_per_order.size(); ++i)
+    tables.convergence.push_back(
+        {int(i) + 2, added_per_order[i], total_per_order[i] != 0.0 ? added_per_order[i] / total_per_order[i] : 0.0});
   return tables;
 }
 

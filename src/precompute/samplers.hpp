@@ -1,5 +1,5 @@
-// Read-only sampler views of a TableSet, for evaluating the shared functions
-// on the CPU (atmos sample, the CPU renderer, tests).
+// Read-only sampler views of the render tables, for evaluating the shared
+// functions on the CPU (atmos sample, the CPU renderer, tests).
 #pragma once
 
 #include "atmos/tables.hpp"
@@ -14,11 +14,12 @@ struct TableSamplers {
   physics::sampler3D scattering;
   physics::sampler3D single_aerosol;
   physics::sampler3D multiple_scattering;
+  physics::sampler2D spectral_optical_depth;  // one tile per wavelength triple (the "transmittance texture" of the functions)
 };
 
-inline TableSamplers make_samplers(const Tables& tables, int set) {
+inline TableSamplers make_samplers(const Tables& tables) {
   const TableSizes& s = tables.sizes;
-  const TableSet& t = tables.sets.at(size_t(set));
+  const TableSet& t = tables.set;
   TableSamplers out;
   out.transmittance = {s.transmittance_mu, s.transmittance_r, t.transmittance.data()};
   out.direct_irradiance = {s.irradiance_mu_s, s.irradiance_r, t.direct_irradiance.data()};
@@ -29,6 +30,8 @@ inline TableSamplers make_samplers(const Tables& tables, int set) {
                         t.single_aerosol.data()};
   out.multiple_scattering = {tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
                              t.multiple_scattering.data()};
+  out.spectral_optical_depth = {s.transmittance_mu * tables.spectral_sets(), s.transmittance_r,
+                                tables.spectral_optical_depth.data()};
   return out;
 }
 

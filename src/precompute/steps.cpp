@@ -118,7 +118,8 @@ class SunTransmittanceAtRadius {
     int x0, x1;
     float fx;
     detail::linear_tap(transmittance_uv_from_r_mu(a_, r_, mu).x, int(row_.size()), x0, x1, fx);
-    return row_[size_t(x0)] * (1.0f - fx) + row_[size_t(x1)] * fx;
+    // The table holds optical depth (transmittance_to_top_atmosphere_boundary).
+    return exp(-(row_[size_t(x0)] * (1.0f - fx) + row_[size_t(x1)] * fx));
   }
 
   const AtmosphereParams& a_;
@@ -256,7 +257,8 @@ Table2D compute_transmittance_table(const AtmosphereParams& a) {
     r_mu_from_transmittance_uv(a, vec2((float(x) + 0.5f) / float(table.width), (float(y) + 0.5f) / float(table.height)),
                                r, mu);
     const float d = distance_to_top_atmosphere_boundary(a, r, mu);
-    table.at(x, y) = exp(-optical_depth_along_ray(a, r, mu, 0.0f, d, kTransmittanceSteps));
+    // The optical depth, not its exponential: see transmittance_to_top_atmosphere_boundary.
+    table.at(x, y) = optical_depth_along_ray(a, r, mu, 0.0f, d, kTransmittanceSteps);
   });
   return table;
 }

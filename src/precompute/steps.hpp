@@ -41,6 +41,9 @@ struct Table3D {
   vec3& at(int x, int y, int z) {
     return texels[(std::size_t(z) * std::size_t(height) + std::size_t(y)) * std::size_t(width) + std::size_t(x)];
   }
+  const vec3& at(int x, int y, int z) const {
+    return texels[(std::size_t(z) * std::size_t(height) + std::size_t(y)) * std::size_t(width) + std::size_t(x)];
+  }
   physics::sampler3D sampler() const { return {width, height, depth, texels.data()}; }
 };
 

@@ -1008,8 +1008,29 @@ double optical_depth(const Atmosphere& atmosphere, double wavelength_nm, const g
 
 }  // namespace reference_detail
 
-ReferenceResult reference_radiance(const Atmosphere& atmosphere, const glm::dvec3& observer, const glm::dvec3& view,
-                                   const glm::dvec3& sun, const ReferenceOptions& options) {
+namespace {
+
+// More wavelengths than one model holds: the estimate in balanced chunks of
+// at most kMaxWavelengths (each its own paths, from the same seed), joined.
+template <typename F>
+ReferenceResult in_wavelength_chunks(const Atmosphere& atmosphere, F&& estimate_chunk) {
+  const size_t n = atmosphere.wavelengths_nm.size();
+  if (n <= size_t(kMaxWavelengths)) return estimate_chunk(atmosphere);
+  const size_t chunks = (n + size_t(kMaxWavelengths) - 1) / size_t(kMaxWavelengths);
+  ReferenceResult out;
+  for (size_t c = 0; c < chunks; ++c) {
+    Atmosphere part = atmosphere;
+    part.wavelengths_nm.assign(atmosphere.wavelengths_nm.begin() + std::ptrdiff_t(c * n / chunks),
+                               atmosphere.wavelengths_nm.begin() + std::ptrdiff_t((c + 1) * n / chunks));
+    const ReferenceResult r = estimate_chunk(part);
+    out.radiance.insert(out.radiance.end(), r.radiance.begin(), r.radiance.end());
+    out.standard_error.insert(out.standard_error.end(), r.standard_error.begin(), r.standard_error.end());
+  }
+  return out;
+}
+
+ReferenceResult radiance_chunk(const Atmosphere& atmosphere, const glm::dvec3& observer, const glm::dvec3& view,
+                               const glm::dvec3& sun, const ReferenceOptions& options) {
   check_options(options);
   const Model m = make_model(atmosphere, true);
   const dvec3 x = check_position(m, observer, "observer");
@@ -1022,8 +1043,8 @@ ReferenceResult reference_radiance(const Atmosphere& atmosphere, const glm::dvec
   });
 }
 
-ReferenceResult reference_irradiance(const Atmosphere& atmosphere, const glm::dvec3& point, const glm::dvec3& normal,
-                                     const glm::dvec3& sun, const ReferenceOptions& options) {
+ReferenceResult irradiance_chunk(const Atmosphere& atmosphere, const glm::dvec3& point, const glm::dvec3& normal,
+                                 const glm::dvec3& sun, const ReferenceOptions& options) {
   check_options(options);
   const Model m = make_model(atmosphere, true);
   const dvec3 x = check_position(m, point, "point");
@@ -1049,6 +1070,20 @@ ReferenceResult reference_irradiance(const Atmosphere& atmosphere, const glm::dv
     for (int l = 0; l < m.n; ++l) out[size_t(l)] += kPi * l_sky[size_t(l)];
     return out;
   });
+}
+
+}  // namespace
+
+ReferenceResult reference_radiance(const Atmosphere& atmosphere, const glm::dvec3& observer, const glm::dvec3& view,
+                                   const glm::dvec3& sun, const ReferenceOptions& options) {
+  return in_wavelength_chunks(
+      atmosphere, [&](const Atmosphere& part) { return radiance_chunk(part, observer, view, sun, options); });
+}
+
+ReferenceResult reference_irradiance(const Atmosphere& atmosphere, const glm::dvec3& point, const glm::dvec3& normal,
+                                     const glm::dvec3& sun, const ReferenceOptions& options) {
+  return in_wavelength_chunks(
+      atmosphere, [&](const Atmosphere& part) { return irradiance_chunk(part, point, normal, sun, options); });
 }
 
 ReferenceResult reference_horizontal_irradiance(const Atmosphere& atmosphere, const glm::dvec3& point,

@@ -10,17 +10,17 @@ namespace atmos {
 
 struct SkyModel::Impl {
   physics::AtmosphereParams params;
+  std::unique_ptr<physics::SpectralSets> spectral;
   precompute::TableSamplers samplers;
   glm::dmat3 to_srgb;
 };
 
 SkyModel::SkyModel(const Atmosphere& atmosphere, const Tables& tables) : impl_(std::make_unique<Impl>()) {
-  if (tables.sets.size() != 1 || tables.wavelengths_nm.size() != 3)
-    throw Error("the CPU sky model needs tables of exactly three working wavelengths");
-  impl_->params = physics::make_atmosphere_params(atmosphere, tables.sizes, 0);
-  impl_->samplers = precompute::make_samplers(tables, 0);
-  impl_->to_srgb = glm::dmat3(radiance_to_srgb_matrix(
-      {tables.wavelengths_nm[0], tables.wavelengths_nm[1], tables.wavelengths_nm[2]}));
+  check_tables_match(atmosphere, tables);
+  impl_->params = physics::make_render_params(atmosphere, tables.sizes);
+  impl_->spectral = physics::make_spectral_sets(atmosphere, tables.sizes);
+  impl_->samplers = precompute::make_samplers(tables);
+  impl_->to_srgb = glm::dmat3(physics::channels_to_srgb_matrix(tables.wavelengths_nm));
 }
 
 SkyModel::~SkyModel() = default;
@@ -32,7 +32,8 @@ glm::dvec3 SkyModel::radiance(const glm::dvec3& observer, const glm::dvec3& view
   // interpolated from a sky-view table: this is the form the reference
   // tests measure).
   const physics::sampler2D no_sky_view{};
-  return glm::dvec3(physics::radiance_along_view_ray(impl_->params, s.transmittance, s.scattering, s.single_aerosol,
+  return glm::dvec3(physics::radiance_along_view_ray(impl_->params, *impl_->spectral, s.spectral_optical_depth,
+                                                     s.scattering, s.single_aerosol,
                                                      s.multiple_scattering, s.indirect_irradiance, no_sky_view,
                                                      no_sky_view, false, glm::vec3(observer), glm::vec3(view),
                                                      glm::vec3(sun), include_sun_disc));
@@ -43,7 +44,8 @@ void SkyModel::horizontal_irradiance(const glm::dvec3& point, const glm::dvec3& 
   const auto& s = impl_->samplers;
   glm::vec3 sky;
   const glm::vec3 p(point);
-  sun_irradiance = glm::dvec3(physics::sun_and_sky_irradiance(impl_->params, s.transmittance, s.indirect_irradiance,
+  sun_irradiance = glm::dvec3(physics::sun_and_sky_irradiance(impl_->params, *impl_->spectral, s.spectral_optical_depth,
+                                                              s.indirect_irradiance,
                                                               p, glm::normalize(p), glm::vec3(sun), sky));
   sky_irradiance = glm::dvec3(sky);
 }
