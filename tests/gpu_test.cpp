@@ -283,21 +283,27 @@ void report(const char* scene, const char* what, const Difference& d) {
               d.max_relative, d.worst_x, d.worst_y, d.worst_cpu, d.worst_gpu, d.rms_relative);
 }
 
-TEST_F(Gpu, FullPrecisionMatchesCpu) {
-  atmos::Renderer renderer(*context_, *earth_, *tables_, TexturePrecision::full);
+// Renders every scene on the GPU and on the CPU and checks the bounds above.
+void expect_gpu_matches_cpu(atmos::Renderer& renderer, const atmos::Atmosphere& atmosphere,
+                            const atmos::Tables& tables, const char* label) {
   for (const Scene& scene : scenes()) {
     const Image gpu = renderer.render(scene.camera, scene.sun);
-    const Image cpu = atmos::render_cpu(*earth_, *tables_, scene.camera, scene.sun);
+    const Image cpu = atmos::render_cpu(atmosphere, tables, scene.camera, scene.sun);
     ASSERT_EQ(gpu.width, cpu.width);
     ASSERT_EQ(gpu.height, cpu.height);
     ASSERT_TRUE(all_finite(gpu)) << scene.name;
     ASSERT_TRUE(all_finite(cpu)) << scene.name;
     const Difference d = compare(gpu, cpu);
-    report(scene.name, "full vs cpu", d);
+    report(scene.name, label, d);
     EXPECT_LE(d.max_relative, scene.sees_ground ? kGroundMaxRelative : kSkyMaxRelative) << scene.name;
     EXPECT_LE(d.rms_relative, kRmsRelative) << scene.name;
     EXPECT_GE(renderer.last_frame_ms(), 0.0);
   }
+}
+
+TEST_F(Gpu, FullPrecisionMatchesCpu) {
+  atmos::Renderer renderer(*context_, *earth_, *tables_, TexturePrecision::full);
+  expect_gpu_matches_cpu(renderer, *earth_, *tables_, "full vs cpu");
 }
 
 // Spectral tables (issue 3: 7 wavelengths, three triples with the last one
@@ -310,16 +316,7 @@ TEST_F(Gpu, SpectralTablesMatchCpu) {
   options.sizes = small_sizes();
   const atmos::Tables tables = atmos::precompute_tables(spectral, options);
   atmos::Renderer renderer(*context_, spectral, tables, TexturePrecision::full);
-  for (const Scene& scene : scenes()) {
-    const Image gpu = renderer.render(scene.camera, scene.sun);
-    const Image cpu = atmos::render_cpu(spectral, tables, scene.camera, scene.sun);
-    ASSERT_TRUE(all_finite(gpu)) << scene.name;
-    ASSERT_TRUE(all_finite(cpu)) << scene.name;
-    const Difference d = compare(gpu, cpu);
-    report(scene.name, "spectral full vs cpu", d);
-    EXPECT_LE(d.max_relative, scene.sees_ground ? kGroundMaxRelative : kSkyMaxRelative) << scene.name;
-    EXPECT_LE(d.rms_relative, kRmsRelative) << scene.name;
-  }
+  expect_gpu_matches_cpu(renderer, spectral, tables, "spectral full vs cpu");
 }
 
 TEST_F(Gpu, HalfPrecisionMatchesCpu) {

@@ -528,34 +528,27 @@ int run_bench(const TableOptions& t, const std::string& size) {
   atmos::Renderer renderer(*context, atmosphere, tables);
   atmos::Camera camera = make_camera(atmos::observer_position(atmosphere, 2.0), 180.0, 10.0, 60.0,
                                      atmos::Projection::perspective, w, h);
-  const glm::dvec3 sun = atmos::direction_from_azimuth_elevation(150.0, 20.0);
-  renderer.render(camera, sun);  // warm-up: shader compilation, texture residency
-  std::vector<double> times, sky_view_times;
-  for (int i = 0; i < 5; ++i) {
-    renderer.render(camera, sun);
-    times.push_back(renderer.last_frame_ms());
-    sky_view_times.push_back(renderer.last_sky_view_ms());
-  }
-  std::sort(times.begin(), times.end());
-  std::sort(sky_view_times.begin(), sky_view_times.end());
-  std::printf("render.%dx%d\t%.1f\tms\n", w, h, times[times.size() / 2]);
-  std::printf("render.sky_view\t%.1f\tms\n", sky_view_times[sky_view_times.size() / 2]);
+  // Median frame and sky-view pass times over `runs` frames after a warm-up
+  // (shader compilation, texture residency), printed as `name`.
+  auto time_frames = [&](atmos::Renderer& r, const glm::dvec3& sun_direction, int runs, const std::string& name) {
+    r.render(camera, sun_direction);
+    std::vector<double> frame, sky_view;
+    for (int i = 0; i < runs; ++i) {
+      r.render(camera, sun_direction);
+      frame.push_back(r.last_frame_ms());
+      sky_view.push_back(r.last_sky_view_ms());
+    }
+    std::sort(frame.begin(), frame.end());
+    std::sort(sky_view.begin(), sky_view.end());
+    std::printf("%s.%dx%d\t%.1f\tms\n", name.c_str(), w, h, frame[frame.size() / 2]);
+    std::printf("%s.sky_view\t%.1f\tms\n", name.c_str(), sky_view[sky_view.size() / 2]);
+    std::fflush(stdout);
+  };
+  time_frames(renderer, atmos::direction_from_azimuth_elevation(150.0, 20.0), 5, "render");
   // Twilight with the spectral tables: the sky-view pass integrates the low
   // sun's single scattering at all 15 wavelengths.
   atmos::Renderer spectral_renderer(*context, spectral_atmosphere, spectral_tables);
-  const glm::dvec3 low_sun = atmos::direction_from_azimuth_elevation(150.0, -3.0);
-  spectral_renderer.render(camera, low_sun);
-  times.clear();
-  sky_view_times.clear();
-  for (int i = 0; i < 3; ++i) {
-    spectral_renderer.render(camera, low_sun);
-    times.push_back(spectral_renderer.last_frame_ms());
-    sky_view_times.push_back(spectral_renderer.last_sky_view_ms());
-  }
-  std::sort(times.begin(), times.end());
-  std::sort(sky_view_times.begin(), sky_view_times.end());
-  std::printf("render.spectral15.twilight.%dx%d\t%.1f\tms\n", w, h, times[1]);
-  std::printf("render.spectral15.twilight.sky_view\t%.1f\tms\n", sky_view_times[1]);
+  time_frames(spectral_renderer, atmos::direction_from_azimuth_elevation(150.0, -3.0), 3, "render.spectral15.twilight");
   return 0;
 }
 
