@@ -233,40 +233,37 @@ TEST_F(SpectralSky, OzoneMakesTheTwilightZenithBluer) {
   EXPECT_GT(with.z / with.x, 1.1 * without.z / without.x);
 }
 
-// Denser atmospheres (seed 004 Fig. 4): 10x Earth needs many orders; auto
-// orders stop when an order adds less than the tolerance, the convergence is
-// reported per order and decreasing, and the tables stay finite. Much denser
-// media (100x) are beyond what the tables resolve today: their orders grow
-// instead of converging (numerical energy gain), and the precomputation says
-// so instead of returning tables that grow without bound. (Issue 3 stays
-// open on this.)
+// Denser atmospheres (seed 004 Fig. 4): 10x and 100x Earth need many
+// orders; auto orders stop when an order adds less than the tolerance, the
+// convergence is reported per order and decreasing (each order adds less
+// light than the one before, as it must where light escapes and is
+// absorbed), and the tables stay finite. (Before the quadrature nodes
+// followed the visible extinction, 30x Earth gained energy at every order.)
 TEST(Spectral, DenseAtmosphereConvergesWithAutoOrders) {
   atmos::PrecomputeOptions options;
   options.sizes = small_sizes();
   options.auto_orders = true;
   options.scattering_orders = 64;
   options.auto_orders_tolerance = 1e-2;
-  atmos::Atmosphere dense = earth_at(6);
-  atmos::scale_density(dense, 10.0);
-  const atmos::Tables t = atmos::precompute_tables(dense, options);
-  EXPECT_GT(t.scattering_orders, 6);
-  EXPECT_LT(t.scattering_orders, 64);
-  ASSERT_EQ(t.convergence.size(), size_t(t.scattering_orders - 1));
-  EXPECT_LE(t.convergence.back().relative, 1e-2);
-  for (size_t i = 1; i < t.convergence.size(); ++i)
-    EXPECT_LT(t.convergence[i].relative, t.convergence[i - 1].relative) << "order " << t.convergence[i].order;
-  for (const glm::vec3& v : t.set.scattering) ASSERT_TRUE(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z));
-
-  atmos::Atmosphere denser = earth_at(3);
-  atmos::scale_density(denser, 100.0);
-  try {
-    atmos::precompute_tables(denser, options);
-    ADD_FAILURE() << "100x Earth: no error";
-  } catch (const atmos::Error& e) {
-    EXPECT_NE(std::string(e.what()).find("cannot represent an atmosphere this dense"), std::string::npos) << e.what();
+  for (double scale : {10.0, 100.0}) {
+    atmos::Atmosphere dense = earth_at(6);
+    atmos::scale_density(dense, scale);
+    const atmos::Tables t = atmos::precompute_tables(dense, options);
+    std::printf("%gx Earth: %d orders\n", scale, t.scattering_orders);
+    EXPECT_GT(t.scattering_orders, 4) << scale;
+    EXPECT_LT(t.scattering_orders, 64) << scale;
+    ASSERT_EQ(t.convergence.size(), size_t(t.scattering_orders - 1));
+    EXPECT_LE(t.convergence.back().relative, 1e-2);
+    for (size_t i = 1; i < t.convergence.size(); ++i) {
+      EXPECT_LT(t.convergence[i].relative, t.convergence[i - 1].relative) << scale << "x, order " << t.convergence[i].order;
+      EXPECT_LT(t.convergence[i].added, t.convergence[i - 1].added) << scale << "x, order " << t.convergence[i].order;
+    }
+    for (const glm::vec3& v : t.set.scattering)
+      ASSERT_TRUE(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z));
   }
-  EXPECT_THROW(atmos::scale_density(dense, 0.0), atmos::Error);
-  EXPECT_THROW(atmos::scale_density(dense, std::nan("")), atmos::Error);
+  atmos::Atmosphere earth = earth_at(3);
+  EXPECT_THROW(atmos::scale_density(earth, 0.0), atmos::Error);
+  EXPECT_THROW(atmos::scale_density(earth, std::nan("")), atmos::Error);
 }
 
 // The solar spectrum: ASTM E490 integrates to its documented 732.9 W m^-2

@@ -567,9 +567,10 @@ INLINE float simpson_weight(int i, int n, float dt) {
 // follows w. w is piecewise linear on `cells` (<= RAY_MAP_CAPACITY) equal cells,
 // and t(s) inverts its exact (piecewise quadratic) integral, so that dt/ds is
 // the true derivative of the map. Two importance densities:
-//  - extinction_ray_map: the extinction, for integrands that follow the
-//    medium whatever the sun (the precomputation, which shares the nodes of a
-//    view ray between all sun directions);
+//  - extinction_ray_map: the extinction times the transmittance from the
+//    start, for integrands that follow the medium whatever the sun (the
+//    precomputation, which shares the nodes of a view ray between all sun
+//    directions);
 //  - sunlit_ray_map: the single-scattering integrand itself (scattering
 //    coefficient x transmittance from the start x transmittance to the sun),
 //    which follows the planet's shadow and the reddened grazing sunlight.
@@ -600,7 +601,13 @@ INLINE RayMap extinction_ray_map(IN(AtmosphereParams) atmosphere, float r, float
     if (k > 0) optical_depth += 0.5f * (map.extinction[k - 1] + e) * map.cell;
     map.extinction[k] = e;
     map.optical_depth[k] = optical_depth;
-    map.w[k] = e.x + e.y + e.z;
+    // The extinction that the start of the ray still sees: in a dense medium
+    // the light scattered towards the start comes from its first optical
+    // depths only, and nodes spread over the rest (each holding many optical
+    // depths) would make the quadrature overestimate it by orders of
+    // magnitude — energy created at every scattering order.
+    vec3 visible = e * exp(-optical_depth);
+    map.w[k] = visible.x + visible.y + visible.z;
   }
   return map;
 }

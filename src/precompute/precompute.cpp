@@ -204,10 +204,10 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
       const double added = luminance_sum(a, delta_multiple, luminance, 0);
       // Each order of a physical atmosphere adds less light than the one
       // before (some escapes to space or is absorbed). An order that adds
-      // more means that the tables' discretisation creates energy: too
-      // dense a medium for the table resolution (measured: 30x Earth from
-      // order 12 with the default sizes, 100x from order 6). Refuse rather
-      // than return tables that grow without bound.
+      // more means that the tables' discretisation creates energy (too dense
+      // a medium for the table resolution: before the quadrature followed the
+      // visible extinction, 30x Earth did from order 12). Refuse rather than
+      // return tables that grow without bound.
       if (order > 2 && added > previous_added * (1.0 + 1e-6) && added > 0.0)
         throw Error(atmosphere.origin + ": scattering order " + std::to_string(order) +
                     " adds more light than order " + std::to_string(order - 1) +
