@@ -1,13 +1,23 @@
 #!/usr/bin/env bash
 # The main job: install what is needed, build, and render the default gallery
-# (noon sky, sunset, all-sky fisheye, the planet from orbit; Earth and Mars)
-# as PNG and OpenEXR files into gallery/.
+# (noon sky, sunset, all-sky fisheye, the planet from orbit) of Earth, the
+# dusty Mars, Titan and Venus, spectral, as PNG and OpenEXR files into
+# gallery/<planet>/ (the images of README.md).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/scripts/setup.sh"
 bash "$root/scripts/build.sh"
+atmos="${ATMOS_BUILD_DIR:-$root/build}/atmos"
 out="${ATMOS_GALLERY_DIR:-$root/gallery}"
-mkdir -p "$out/earth" "$out/mars"
-(cd "$out/earth" && "$root/build/atmos" render --planet earth)
-(cd "$out/mars" && "$root/build/atmos" render --planet mars)
+mkdir -p "$out/earth" "$out/mars" "$out/venus" "$out/titan"
+# Spectral (15 wavelengths), orders until the last adds less than 0.1 %
+# (Earth ~8, Titan ~36; Venus reaches the cap of 64). A few minutes on 2
+# cores, most of it Titan's and Venus's precomputation (cached afterwards).
+for planet in earth mars titan venus; do
+  (cd "$out/$planet" && "$atmos" render --planet "$planet" --wavelengths 15 --orders auto)
+done
+# Under Venus' clouds the gallery exposures show black: the surface sky at
+# EV 5 (its light is underestimated: see README, Planets).
+(cd "$out/venus" && "$atmos" render --planet venus --wavelengths 15 --orders auto --sun-elevation 40 --look 180,10 \
+  --exposure 5 -o surface.png -o surface.exr)
 echo "gallery: $out"

@@ -38,17 +38,20 @@ std::string modified(const std::function<void(nlohmann::json&)>& change) {
   return j.dump();
 }
 
-TEST(Presets, EarthAndMarsLoadWithTheirValues) {
+TEST(Presets, EarthAndMarsThesisLoadWithTheirValues) {
   const atmos::Atmosphere earth = atmos::load_atmosphere("earth");
   EXPECT_DOUBLE_EQ(earth.bottom_radius_m, 6371e3);
   EXPECT_DOUBLE_EQ(earth.top_radius_m, 6471e3);
   ASSERT_EQ(earth.constituents.size(), 3u);
   EXPECT_NEAR(earth.constituents[0].scattering.at(550.0), 1.1483e-5, 1e-9);
   EXPECT_EQ(earth.constituents[2].density.kind, atmos::DensityProfile::Kind::piecewise_linear);
-  // ASTM E490 at 550 nm: the mean of its 549.5 and 550.5 nm rows.
-  EXPECT_NEAR(earth.solar_irradiance.at(550.0), 1.8785, 0.0005);
+  // ASTM E490, its 10 nm mean at 550 nm (the 1 nm rows at 549.5 and 550.5
+  // nm are 1.895 and 1.862).
+  EXPECT_NEAR(earth.solar_irradiance.at(550.0), 1.8727, 0.0005);
 
-  const atmos::Atmosphere mars = atmos::load_atmosphere("mars");
+  // The seed thesis Mars (the physically derived dusty Mars is "mars", see presets_test.cpp).
+  const atmos::Atmosphere mars = atmos::load_atmosphere("mars-thesis");
+  EXPECT_EQ(mars.name, "mars-thesis");
   EXPECT_DOUBLE_EQ(mars.bottom_radius_m, 3386e3);
   EXPECT_DOUBLE_EQ(mars.top_radius_m, 3518e3);
   // Seed 000 §5: betaR = (0.019918, 0.01357, 0.00575) per km at (680, 550, 440) nm.
@@ -74,6 +77,44 @@ TEST(PlanetFile, UserFilesLoadLikePresets) {
   EXPECT_EQ(a.name, "earth");
   const atmos::Atmosphere b = atmos::load_atmosphere(std::string(ATMOS_SOURCE_DIR) + "/data/planets/mars.json");
   EXPECT_EQ(b.name, "mars");
+}
+
+// Coefficients from physical inputs (issue 3, seed 004 eq. 1-2): Rayleigh
+// from the refractive index and number density reproduces the Earth preset's
+// air at 550 nm (computed there from the same n, N and King factor); an
+// absorber from its cross section; an aerosol from Ångström's law.
+TEST(PlanetFile, CoefficientsFromPhysicalInputs) {
+  const auto a = atmos::parse_atmosphere(modified([](nlohmann::json& j) {
+    j["constituents"][0]["scattering"] = {{"rayleigh",
+                                           {{"refractive_index", 1.0002778229},
+                                            {"number_density", {{"value", 2.5469e25}, {"unit", "1/m^3"}}},
+                                            {"king_factor", 1.0480}}}};
+    j["constituents"][1]["scattering"] = {
+        {"angstrom", {{"alpha", 1.3}, {"beta", 0.05}, {"scale_height", {{"value", 1.5}, {"unit", "km"}}}}}};
+    j["constituents"][2]["absorption"] = {{"cross_section", {{"value", 3.5e-21}, {"unit", "cm^2"}}},
+                                          {"number_density", {{"value", 5.37e12}, {"unit", "1/cm^3"}}}};
+  }), "t.json");
+  EXPECT_NEAR(a.constituents[0].scattering.at(550.0), 1.1483e-5, 1e-3 * 1.1483e-5);
+  // λ^-4 (a non-dispersive n).
+  EXPECT_NEAR(a.constituents[0].scattering.at(440.0) / a.constituents[0].scattering.at(880.0), 16.0, 1e-9);
+  EXPECT_NEAR(a.constituents[1].scattering.at(1000.0), 0.05 / 1500.0, 1e-12);
+  EXPECT_NEAR(a.constituents[1].scattering.at(500.0), 0.05 / 1500.0 * std::pow(2.0, 1.3), 1e-10);
+  EXPECT_NEAR(a.constituents[2].absorption.at(600.0), 3.5e-25 * 5.37e18, 1e-12);
+
+  expect_error(modified([](nlohmann::json& j) {
+                 j["constituents"][0]["scattering"] = {
+                     {"rayleigh", {{"refractive_index", 0.9}, {"number_density", {{"value", 1e25}, {"unit", "1/m^3"}}}}}};
+               }),
+               "refractive_index");
+  expect_error(modified([](nlohmann::json& j) {
+                 j["constituents"][1]["scattering"] = {
+                     {"angstrom", {{"alpha", 1.3}, {"beta", -1.0}, {"scale_height", {{"value", 1.5}, {"unit", "km"}}}}}};
+               }),
+               "beta");
+  expect_error(modified([](nlohmann::json& j) {
+                 j["solar_irradiance"] = {{"rayleigh", {{"refractive_index", 1.0003}}}};
+               }),
+               "only valid for coefficients");
 }
 
 TEST(PlanetFile, UnitsAreConverted) {

@@ -4,6 +4,7 @@
 //   atmos precompute  build or verify the table cache, with timings
 //   atmos sample      radiance for directions read as CSV (tables or --reference)
 //   atmos bench       precomputation and render timings, name<TAB>value<TAB>unit
+//   atmos plot-data   CSV files for scripts/plots.py (docs/plots.md)
 //
 // Exit codes: 0 success, 1 runtime error (bad planet file, no OpenGL, I/O),
 // 2 usage error (unknown flag, bad value).
@@ -18,6 +19,7 @@
 #include <iostream>
 #include <optional>
 #include <sstream>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -28,6 +30,7 @@
 #include "atmos/renderer.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "plot_data.hpp"
 
 namespace {
 
@@ -251,9 +254,9 @@ void write_outputs(const atmos::Image& image, const std::vector<std::string>& ou
 
 std::vector<Shot> gallery(const atmos::Atmosphere& a) {
   const glm::dvec3 ground = atmos::observer_position(a, 2.0);
-  // Exposures are set for Earth's sunlight (1.75 W m^-2 nm^-1 at 550 nm) and
-  // shifted by the planet's: Mars' sun is 1.3 stops dimmer.
-  const double ev_shift = std::log2(a.solar_irradiance.at(550.0) / 1.749);
+  // Exposures are set for Earth's sunlight (ASTM E490: 1.873 W m^-2 nm^-1 at
+  // 550 nm) and shifted by the planet's: Mars' sun is 1.2 stops dimmer.
+  const double ev_shift = std::log2(a.solar_irradiance.at(550.0) / 1.873);
   std::vector<Shot> shots;
   shots.push_back({"noon", make_camera(ground, 0.0, 12.0, 75.0, atmos::Projection::perspective, 960, 540),
                    atmos::direction_from_azimuth_elevation(180.0, 70.0), 13.5 + ev_shift});
@@ -552,6 +555,33 @@ int run_bench(const TableOptions& t, const std::string& size) {
   return 0;
 }
 
+// ---------------------------------------------------------------------------
+// plot-data
+
+int run_plot_data(const TableOptions& t, const std::string& out) {
+  namespace pd = atmos_cli::plot_data;
+  // Options and the output directory first: a bad value or path is reported
+  // before the precomputation.
+  const atmos::Atmosphere atmosphere = t.atmosphere();
+  (void)t.precompute_options();
+  pd::prepare_directory(out);
+  auto wrote = [](const std::string& path) {
+    std::printf("wrote %s\n", path.c_str());
+    std::fflush(stdout);
+  };
+  wrote(pd::write_csv(out, "solar.csv", [&](std::ostream& o) { pd::write_solar(o, atmosphere); }));
+  wrote(pd::write_csv(out, "extinction.csv", [&](std::ostream& o) { pd::write_extinction(o, atmosphere); }));
+  wrote(pd::write_csv(out, "transmittance.csv", [&](std::ostream& o) { pd::write_transmittance(o, atmosphere); }));
+  const LoadedTables loaded = load_tables(t);
+  wrote(pd::write_csv(out, "sky.csv", [&](std::ostream& o) { pd::write_sky(o, loaded.atmosphere, loaded.tables); }));
+  wrote(pd::write_csv(out, "convergence.csv", [&](std::ostream& o) { pd::write_convergence(o, loaded.tables); }));
+  const pd::Info info{t.planet, t.tables, t.solar.empty() ? std::string("planet file") : t.solar, t.density_scale};
+  wrote(pd::write_csv(out, "info.csv", [&](std::ostream& o) {
+    pd::write_info(o, loaded.atmosphere, info, loaded.tables.scattering_orders);
+  }));
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -603,10 +633,20 @@ int main(int argc, char** argv) {
   bench_options.add(*bench_cmd);
   bench_cmd->add_option("--size", bench_size, "Render size WxH")->capture_default_str();
 
+  TableOptions plot_options;
+  std::string plot_out;
+  auto* plot_cmd = app.add_subcommand(
+      "plot-data", "Write the CSV files behind the plots (solar spectrum, extinction, transmittance, sky, "
+                   "convergence) into a directory; scripts/plots.py draws them");
+  plot_options.add(*plot_cmd);
+  plot_cmd->add_option("--out", plot_out, "Output directory (created if missing; its parent must exist)")->required();
+
   if (argc > 1 && argv[1][0] != '-') {
     const std::string command = argv[1];
-    if (command != "render" && command != "precompute" && command != "sample" && command != "bench") {
-      std::fprintf(stderr, "atmos: error: unknown command \"%s\" (expected render, precompute, sample or bench)\n",
+    if (command != "render" && command != "precompute" && command != "sample" && command != "bench" &&
+        command != "plot-data") {
+      std::fprintf(stderr,
+                   "atmos: error: unknown command \"%s\" (expected render, precompute, sample, bench or plot-data)\n",
                    command.c_str());
       return 2;
     }
@@ -627,18 +667,20 @@ int main(int argc, char** argv) {
                       &sample.altitude, &sample.sun_elevation, &sample.sun_azimuth})
       finite(*v, "numeric option");
     if (*render_cmd) {
-      // Only the table options may be given for the gallery (e.g. --planet mars).
+      // Only the planet and table options (and --precision, --cpu) may be
+      // given for the gallery (e.g. --planet mars --wavelengths 15).
+      const std::set<std::string> gallery_options = {"--planet",  "--orders",    "--wavelengths", "--density-scale",
+                                                     "--solar",   "--tables",    "--cache-dir",   "--no-cache",
+                                                     "--precision", "--cpu"};
       bool gallery = true;
       for (const auto* opt : render_cmd->get_options())
-        if (opt->count() > 0 && opt->get_name() != "--planet" && opt->get_name() != "--orders" &&
-            opt->get_name() != "--tables" && opt->get_name() != "--cache-dir" && opt->get_name() != "--no-cache" &&
-            opt->get_name() != "--precision" && opt->get_name() != "--cpu")
-          gallery = false;
+        if (opt->count() > 0 && gallery_options.count(opt->get_name()) == 0) gallery = false;
       return run_render(render, table_options, gallery);
     }
     if (*precompute_cmd) return run_precompute(precompute_options);
     if (*sample_cmd) return run_sample(sample, sample_tables);
     if (*bench_cmd) return run_bench(bench_options, bench_size);
+    if (*plot_cmd) return run_plot_data(plot_options, plot_out);
   } catch (const UsageError& e) {
     std::fprintf(stderr, "atmos: error: %s\n", e.what());
     return 2;

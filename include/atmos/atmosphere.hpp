@@ -107,7 +107,9 @@ std::vector<double> spectral_wavelengths(int count);
 void scale_density(Atmosphere& atmosphere, double factor);
 
 // The extraterrestrial solar spectrum of ASTM E490-00a at 1 au
-// (data/spectra/solar_irradiance.csv, 280.5–2500 nm), W m^-2 nm^-1.
+// (data/spectra/solar_irradiance.csv, 280.5–2500 nm), W m^-2 nm^-1, as its
+// 10 nm running mean every 5 nm over 290–2490 nm (the working wavelengths
+// sample it: the 1 nm table's Fraunhofer lines would be picked at random).
 Spectrum solar_spectrum_table();
 
 // Planck's law scaled to a total (all wavelengths) irradiance, W m^-2 nm^-1.
@@ -117,7 +119,8 @@ Spectrum blackbody_spectrum(double temperature_k, double total_irradiance_w_m2);
 // 360–830 nm: `spec` is "table" (ASTM E490) or "blackbody:T" (T in K).
 void set_solar_spectrum(Atmosphere& atmosphere, const std::string& spec);
 
-// Built-in planets: "earth", "mars". Files in data/planets/<name>.json.
+// Built-in planets (data/planets/<name>.json, compiled in): earth, mars (a
+// dusty Mars from measurements), mars-thesis (seed 000 §5), titan, venus.
 std::vector<std::string> preset_names();
 
 // `name_or_path` is a preset name or the path of a planet JSON file.

@@ -63,6 +63,8 @@ double unit_factor(const std::string& kind, const std::string& unit, const std::
       {"irradiance", {{"W/m^2", 1.0}}},
       {"temperature", {{"K", 1.0}}},
       {"distance", {{"au", 1.495978707e11}, {"km", 1e3}, {"m", 1.0}}},
+      {"number_density", {{"1/m^3", 1.0}, {"1/cm^3", 1e6}}},
+      {"area", {{"m^2", 1.0}, {"cm^2", 1e-4}}},
       {"dimensionless", {{"1", 1.0}}},
   };
   const auto& units = table.at(kind);
@@ -102,6 +104,65 @@ double blackbody_irradiance(double wavelength_nm, double temperature, double tot
 }
 
 Spectrum parse_spectrum(const json& q, const std::string& kind, const std::vector<double>& wavelengths,
+                        const std::string& origin, const std::string& path);
+
+// A coefficient (m^-1 at the reference density) from physical inputs, sampled
+// every 1 nm over 200-2000 nm:
+//  - {"rayleigh": {"refractive_index": n, "number_density": N, "king_factor": F}}:
+//    molecular scattering, β(λ) = 8π³ (n² - 1)² F / (3 N λ⁴) (seed 004 eq. 1-2;
+//    n at the reference density, taken as non-dispersive; F = 1 if omitted);
+//  - {"cross_section": σ (area, a value or a spectrum), "number_density": N}:
+//    β(λ) = N σ(λ), e.g. an absorber from measured cross sections;
+//  - {"angstrom": {"alpha": α, "beta": β_A, "scale_height": H}}: an aerosol of
+//    optical depth τ(λ) = β_A (λ / 1 µm)^-α (Ångström's law) spread over an
+//    exponential layer of scale height H: β(λ) = τ(λ) / H at the ground.
+Spectrum parse_physical_coefficient(const json& q, const std::string& origin, const std::string& path) {
+  std::vector<double> l, v;
+  auto sample = [&](auto&& f) {
+    for (double w = 200.0; w <= 2000.0; w += 1.0) {
+      l.push_back(w);
+      v.push_back(f(w));
+    }
+    return Spectrum(l, v);
+  };
+  if (q.contains("rayleigh")) {
+    check_keys(q, {"rayleigh"}, origin, path);
+    const json& r = q.at("rayleigh");
+    const std::string p = path + ".rayleigh";
+    check_keys(r, {"refractive_index", "number_density", "king_factor"}, origin, p);
+    const double n = finite_or_fail(require(r, "refractive_index", origin, p), origin, p + ".refractive_index");
+    const double number = scalar(r, "number_density", "number_density", origin, p);
+    const double king = r.contains("king_factor") ? finite_or_fail(r.at("king_factor"), origin, p + ".king_factor") : 1.0;
+    if (!(n > 1.0 && n < 2.0)) fail(origin, p + ".refractive_index must be in (1, 2)");
+    if (!(number > 0.0)) fail(origin, p + ".number_density must be positive");
+    if (!(king >= 1.0 && king < 2.0)) fail(origin, p + ".king_factor must be in [1, 2)");
+    const double n2 = (n * n - 1.0) * (n * n - 1.0);
+    return sample([&](double w) {
+      const double lambda = w * 1e-9;
+      return 8.0 * M_PI * M_PI * M_PI * n2 * king / (3.0 * number * lambda * lambda * lambda * lambda);
+    });
+  }
+  if (q.contains("cross_section")) {
+    check_keys(q, {"cross_section", "number_density"}, origin, path);
+    const double number = scalar(q, "number_density", "number_density", origin, path);
+    if (!(number > 0.0)) fail(origin, path + ".number_density must be positive");
+    const Spectrum sigma = parse_spectrum(q.at("cross_section"), "area", {550.0}, origin, path + ".cross_section");
+    return sample([&](double w) { return number * sigma.at(w); });
+  }
+  check_keys(q, {"angstrom"}, origin, path);
+  const json& a = q.at("angstrom");
+  const std::string p = path + ".angstrom";
+  check_keys(a, {"alpha", "beta", "scale_height"}, origin, p);
+  const double alpha = finite_or_fail(require(a, "alpha", origin, p), origin, p + ".alpha");
+  const double beta = finite_or_fail(require(a, "beta", origin, p), origin, p + ".beta");
+  const double h = scalar(a, "scale_height", "length", origin, p);
+  if (!(beta >= 0.0)) fail(origin, p + ".beta must be non-negative");
+  if (!(alpha >= -1.0 && alpha <= 4.0)) fail(origin, p + ".alpha must be in [-1, 4]");
+  if (!(h > 0.0)) fail(origin, p + ".scale_height must be positive");
+  return sample([&](double w) { return beta * std::pow(w / 1000.0, -alpha) / h; });
+}
+
+Spectrum parse_spectrum(const json& q, const std::string& kind, const std::vector<double>& wavelengths,
                         const std::string& origin, const std::string& path) {
   if (q.is_object() && q.contains("table")) {
     // A measured spectrum at 1 au, scaled to the planet's distance (1 / d²).
@@ -112,6 +173,10 @@ Spectrum parse_spectrum(const json& q, const std::string& kind, const std::vecto
     const double d = scalar(q, "distance", "distance", origin, path) / 1.495978707e11;
     if (!(d > 0.0)) fail(origin, path + ".distance must be positive");
     return solar_spectrum_table().scaled(1.0 / (d * d));
+  }
+  if (q.is_object() && (q.contains("rayleigh") || q.contains("cross_section") || q.contains("angstrom"))) {
+    if (kind != "inverse_length") fail(origin, path + ": physical inputs are only valid for coefficients");
+    return parse_physical_coefficient(q, origin, path);
   }
   if (q.is_object() && q.contains("blackbody")) {
     if (kind != "spectral_irradiance") fail(origin, path + ": a blackbody is only valid for solar_irradiance");
@@ -325,7 +390,19 @@ void Atmosphere::validate() const {
   }
 }
 
-std::vector<std::string> preset_names() { return {"earth", "mars"}; }
+// Every data/planets/<name>.json compiled into the library.
+std::vector<std::string> preset_names() {
+  const std::string prefix = "data/planets/", suffix = ".json";
+  std::vector<std::string> names;
+  for (int i = 0; i < io::embedded_file_count; ++i) {
+    const std::string path = io::embedded_files[i].path;
+    if (path.rfind(prefix, 0) == 0 && path.size() > prefix.size() + suffix.size() &&
+        path.compare(path.size() - suffix.size(), suffix.size(), suffix) == 0)
+      names.push_back(path.substr(prefix.size(), path.size() - prefix.size() - suffix.size()));
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
 
 Atmosphere parse_atmosphere(const std::string& json_text, const std::string& origin) {
   json doc;
@@ -425,7 +502,18 @@ Spectrum solar_spectrum_table() {
       l.push_back(a);
       v.push_back(b);
     }
-    return Spectrum(l, v);
+    // The table resolves Fraunhofer lines (the Ca II K line halves the
+    // irradiance at 393.4 nm): point samples at a few working wavelengths
+    // would pick lines at random. The spectrum the precomputation samples is
+    // the 10 nm running mean (the resolution of the bins of measured
+    // cross sections, e.g. data/spectra/ozone_cross_section.csv), every 5 nm.
+    const Spectrum raw(l, v);
+    std::vector<double> ls, vs;
+    for (double w = 290.0; w <= 2490.0; w += 5.0) {
+      ls.push_back(w);
+      vs.push_back(raw.integral(w - 5.0, w + 5.0) / 10.0);
+    }
+    return Spectrum(ls, vs);
   }();
   return table;
 }

@@ -138,7 +138,9 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
   glm::vec3 sun_channels(0.0f);
   const glm::vec3 luminance_of_srgb(0.2126f, 0.7152f, 0.0722f);
   const glm::mat3 to_srgb = physics::channels_to_srgb_matrix(wavelengths);
-  std::vector<double> added_per_order, total_per_order;
+  // Per set, the light each order added and the light gathered up to it
+  // (index order - 2), for the convergence report.
+  std::vector<std::vector<double>> set_added, set_total;
   // (With three wavelengths the one set is the render tables: moved, not converted.)
   auto accumulate = [&](std::vector<glm::vec3>& sum, std::vector<glm::vec3>& texels, const glm::mat3& m) {
     if (!srgb) {
@@ -217,12 +219,10 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
                     " nm); use fewer orders, a lower --density-scale or larger tables");
       previous_added = added;
       total += added;
-      if (added_per_order.size() < size_t(order - 1)) {
-        added_per_order.push_back(0.0);
-        total_per_order.push_back(0.0);
-      }
-      added_per_order[size_t(order - 2)] += added;
-      total_per_order[size_t(order - 2)] += total;
+      set_added.resize(size_t(set) + 1);
+      set_total.resize(size_t(set) + 1);
+      set_added[size_t(set)].push_back(added);
+      set_total[size_t(set)].push_back(total);
       tables.scattering_orders = std::max(tables.scattering_orders, order);
       if (options.auto_orders && std::abs(added) <= options.auto_orders_tolerance * std::abs(total)) {
         cost_done += cost_order * (K - order);
@@ -266,9 +266,19 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
     for (size_t i = 0; i < transmitted_sun.size(); ++i)
       out.transmittance[i] = glm::clamp(transmitted_sun[i] / sun_channels, 0.0f, 1.0f);
   }
-  for (size_t i = 0; i < added_per_order.size(); ++i)
-    tables.convergence.push_back(
-        {int(i) + 2, added_per_order[i], total_per_order[i] != 0.0 ? added_per_order[i] / total_per_order[i] : 0.0});
+  // Order n over all sets; a set that stopped earlier (auto orders) adds
+  // nothing more but its light still counts in the total.
+  for (int order = 2; order <= tables.scattering_orders; ++order) {
+    double added = 0.0, total = 0.0;
+    for (size_t k = 0; k < set_added.size(); ++k) {
+      const size_t n = set_added[k].size();
+      if (n == 0) continue;
+      const size_t i = std::min(size_t(order - 2), n - 1);
+      if (size_t(order - 2) < n) added += set_added[k][i];
+      total += set_total[k][i];
+    }
+    tables.convergence.push_back({order, added, total != 0.0 ? added / total : 0.0});
+  }
   return tables;
 }
 
