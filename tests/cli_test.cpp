@@ -13,49 +13,23 @@
 
 #include "atmos/colour.hpp"
 #include "atmos/image.hpp"
+#include "cli_support.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int code = -1;
-  std::string out;
-  std::string err;
-};
+using atmos_test::CliRun;
+using atmos_test::slurp;
 
 fs::path scratch() {
-  static const fs::path dir = [] {
-    fs::path d = fs::temp_directory_path() / ("atmos-cli-test-" + std::to_string(::getpid()));
-    fs::create_directories(d);
-    return d;
-  }();
+  static const fs::path dir = atmos_test::scratch_directory("cli");
   return dir;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
 }
 
 // Runs the CLI with small tables cached in the scratch directory.
 CliRun atmos_cli(const std::string& args, const std::string& stdin_text = "", const std::string& environment = "") {
-  const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt", in = scratch() / "stdin.txt";
-  {
-    std::ofstream f(in);
-    f << stdin_text;
-  }
-  const std::string command = "cd '" + scratch().string() + "' && ATMOS_CACHE_DIR='" + (scratch() / "cache").string() +
-                              "' " + environment + " '" + ATMOS_CLI + "' " + args + " < '" + in.string() + "' > '" + out.string() +
-                              "' 2> '" + err.string() + "'";
-  const int status = std::system(command.c_str());
-  CliRun r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
+  return atmos_test::run_cli(scratch(), args, stdin_text, environment);
 }
 
 int lines(const std::string& s) {

@@ -18,46 +18,22 @@
 #include "atmos/atmosphere.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "cli_support.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 
+using atmos_test::CliRun;
+using atmos_test::slurp;
+
 fs::path scratch() {
-  static const fs::path dir = [] {
-    fs::path d = fs::temp_directory_path() / ("atmos-plot-test-" + std::to_string(::getpid()));
-    fs::create_directories(d);
-    return d;
-  }();
+  static const fs::path dir = atmos_test::scratch_directory("plot");
   return dir;
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-struct CliRun {
-  int code = -1;
-  std::string out;
-  std::string err;
-};
-
 // Runs the CLI in the scratch directory with its own table cache there.
-CliRun atmos_cli(const std::string& args) {
-  const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt";
-  const std::string command = "cd '" + scratch().string() + "' && ATMOS_CACHE_DIR='" + (scratch() / "cache").string() +
-                              "' '" + ATMOS_CLI + "' " + args + " < /dev/null > '" + out.string() + "' 2> '" +
-                              err.string() + "'";
-  const int status = std::system(command.c_str());
-  CliRun r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
-}
+CliRun atmos_cli(const std::string& args) { return atmos_test::run_cli(scratch(), args); }
 
 int lines(const std::string& s) {
   int n = 0;
