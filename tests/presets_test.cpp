@@ -134,7 +134,7 @@ TEST(Presets, VenusAndTitanConvergeWithAutoOrders) {
       EXPECT_LT(t.convergence[i].added, t.convergence[i - 1].added) << "order " << t.convergence[i].order;
     }
     for (const auto* texels : {&t.set.scattering, &t.set.single_aerosol, &t.set.multiple_scattering,
-                               &t.set.direct_irradiance, &t.set.indirect_irradiance, &t.set.transmittance})
+                               &t.set.direct_irradiance, &t.set.indirect_irradiance, &t.spectral_optical_depth})
       for (const glm::vec3& v : *texels)
         ASSERT_TRUE(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && v.x >= 0.0f && v.y >= 0.0f &&
                     v.z >= 0.0f);

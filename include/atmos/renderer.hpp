@@ -40,13 +40,12 @@ enum class Projection {
 
 // Internal format of the scattering and irradiance textures: RGB16F (half
 // the memory and bandwidth, 11 significant bits, rounded on the CPU) or
-// RGB32F. The transmittance texture is RGB32F in both cases: it is small (a
-// few hundred KB, no bandwidth worth saving), functions.glsl divides two of
-// its values for every transmittance along a ray (doubling the relative
-// rounding error), and half floats keep no precision for the long grazing
-// paths: subnormal below 6.1e-5, zero below 6e-8, where the ratio becomes
-// 0/0. Earth's horizontal transmittance at the ground is 1.5e-4 in blue; a
-// hazier or larger atmosphere goes below.
+// RGB32F. The optical-depth texture (the transmittance of every wavelength
+// triple) is RGB32F in both cases: it is small (a few hundred KB, no
+// bandwidth worth saving), and functions.glsl subtracts two of its values for
+// every transmittance along a ray: the depth of a short segment is the
+// difference of two long paths' depths (tens at the horizon), which half
+// floats' 11 bits would lose.
 enum class TexturePrecision { half, full };
 
 struct Camera {
@@ -128,9 +127,8 @@ class Renderer {
   std::uint32_t space_program_ = 0;  // render pass, camera above the atmosphere
   std::unique_ptr<physics::AtmosphereParams> params_;
   std::uint32_t vertex_array_ = 0;
-  // transmittance, scattering, single aerosol, irradiance, multiple
-  // scattering, spectral transmittance (bound to unit 7)
-  std::uint32_t textures_[6] = {0, 0, 0, 0, 0, 0};
+  // spectral optical depth, scattering, single aerosol, irradiance, multiple scattering
+  std::uint32_t textures_[5] = {0, 0, 0, 0, 0};
   std::uint32_t timer_query_ = 0;
   std::uint32_t sky_view_program_ = 0;
   std::uint32_t sky_view_framebuffer_ = 0;

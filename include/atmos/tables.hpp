@@ -53,7 +53,6 @@ struct StepTiming {
 // (three-wavelength mode), or linear sRGB / 683 (spectral mode: every
 // wavelength triple converted and summed; see physics/definitions.glsl).
 struct TableSet {
-  std::vector<glm::vec3> transmittance;        // transmittance_mu x transmittance_r: transmittance to the top (spectral mode: of sunlight, sRGB(sun x T) / sRGB(sun)); for engines, the run time uses spectral_optical_depth
   std::vector<glm::vec3> direct_irradiance;    // irradiance_mu_s x irradiance_r: sun on a horizontal surface, W m^-2 nm^-1
   std::vector<glm::vec3> indirect_irradiance;  // same layout: sky light of orders 1..K-1 on a horizontal surface
   std::vector<glm::vec3> scattering;           // 3D: single Rayleigh + (orders 2..K) / Rayleigh phase, W m^-2 sr^-1 nm^-1 per unit phase

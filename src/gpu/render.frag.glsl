@@ -4,7 +4,8 @@
 // one pixel of the image: its view ray, the radiance reaching the camera along
 // it, and that radiance converted to linear sRGB (cd/m² scale).
 
-layout(binding = 0) uniform sampler2D transmittance_texture;
+// The optical depth of every wavelength triple (SPECTRAL), side by side.
+layout(binding = 0) uniform sampler2D spectral_transmittance_texture;
 layout(binding = 1) uniform sampler3D scattering_texture;
 layout(binding = 2) uniform sampler3D single_aerosol_texture;
 layout(binding = 3) uniform sampler2D irradiance_texture;
@@ -14,8 +15,6 @@ layout(binding = 4) uniform sampler3D multiple_scattering_texture;
 // for cameras in the atmosphere (camera_uses_sky_view), which read the table.
 layout(binding = 5) uniform sampler2D sky_view_rayleigh_texture;
 layout(binding = 6) uniform sampler2D sky_view_aerosol_texture;
-// The transmittance of every wavelength triple (SPECTRAL), side by side.
-layout(binding = 7) uniform sampler2D spectral_transmittance_texture;
 
 layout(location = 0) uniform vec3 camera;           // m, planet-centred
 layout(location = 1) uniform vec3 camera_right;

@@ -303,7 +303,7 @@ void validate_camera(const Camera& camera) {
 
 namespace {
 
-void delete_gl_objects(GLuint& program, GLuint& vertex_array, GLuint (&textures)[6], GLuint& query,
+void delete_gl_objects(GLuint& program, GLuint& vertex_array, GLuint (&textures)[5], GLuint& query,
                        GLuint& framebuffer, GLuint& tile_texture, GLuint& sky_view_program,
                        GLuint& sky_view_framebuffer, GLuint (&sky_view_textures)[2], GLuint& space_program) {
   if (sky_view_program != 0) glDeleteProgram(sky_view_program);
@@ -315,7 +315,7 @@ void delete_gl_objects(GLuint& program, GLuint& vertex_array, GLuint (&textures)
   for (GLuint& t : sky_view_textures) t = 0;
   if (program != 0) glDeleteProgram(program);
   if (vertex_array != 0) glDeleteVertexArrays(1, &vertex_array);
-  glDeleteTextures(6, textures);
+  glDeleteTextures(5, textures);
   if (query != 0) glDeleteQueries(1, &query);
   if (framebuffer != 0) glDeleteFramebuffers(1, &framebuffer);
   if (tile_texture != 0) glDeleteTextures(1, &tile_texture);
@@ -370,8 +370,10 @@ Renderer::Renderer(GlContext& context, const Atmosphere& atmosphere, const Table
     const TableSizes& s = tables.sizes;
     const TableSet& t = tables.set;
     const GLenum format = precision == TexturePrecision::half ? GL_RGB16F : GL_RGB32F;
-    // Transmittance stays 32-bit whatever the precision (see TexturePrecision).
-    textures_[0] = make_texture_2d(s.transmittance_mu, s.transmittance_r, t.transmittance, GL_RGB32F);
+    // The optical depth of every wavelength triple, side by side (32-bit
+    // whatever the precision, see TexturePrecision).
+    textures_[0] = make_texture_2d(s.transmittance_mu * tables.spectral_sets(), s.transmittance_r,
+                                   tables.spectral_optical_depth, GL_RGB32F);
     textures_[1] = make_texture_3d(tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
                                    t.scattering, format);
     textures_[2] = make_texture_3d(tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
@@ -379,8 +381,7 @@ Renderer::Renderer(GlContext& context, const Atmosphere& atmosphere, const Table
     textures_[3] = make_texture_2d(s.irradiance_mu_s, s.irradiance_r, t.indirect_irradiance, format);
     textures_[4] = make_texture_3d(tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
                                    t.multiple_scattering, format);
-    textures_[5] = make_texture_2d(s.transmittance_mu * tables.spectral_sets(), s.transmittance_r,
-                                   tables.spectral_optical_depth, GL_RGB32F);
+    
     check_gl("while uploading the tables");
     // Drivers (llvmpipe's JIT in particular) compile the shader at its first
     // draw; do it now, so that render() and last_frame_ms() time frames, not
@@ -456,7 +457,6 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
     glProgramUniform3f(sky_view_program_, 0, frame.position.x, frame.position.y, frame.position.z);
     glProgramUniform3f(sky_view_program_, 7, sun.x, sun.y, sun.z);
     for (GLuint unit = 0; unit < 5; ++unit) glBindTextureUnit(unit, textures_[unit]);
-    glBindTextureUnit(7, textures_[5]);
     glBindFramebuffer(GL_FRAMEBUFFER, sky_view_framebuffer_);
     glViewport(0, 0, SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT);
     const auto start = std::chrono::steady_clock::now();
@@ -489,7 +489,6 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   for (GLuint unit = 0; unit < 5; ++unit) glBindTextureUnit(unit, textures_[unit]);
   glBindTextureUnit(5, sky_view_textures_[0]);
   glBindTextureUnit(6, sky_view_textures_[1]);
-  glBindTextureUnit(7, textures_[5]);
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
   glPixelStorei(GL_PACK_ROW_LENGTH, 0);

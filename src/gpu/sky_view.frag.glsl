@@ -5,11 +5,10 @@
 // texel of the sky-view table of functions.glsl for this frame's camera and
 // sun (compute_sky_view_texel), read by the render pass.
 
-layout(binding = 0) uniform sampler2D transmittance_texture;
+layout(binding = 0) uniform sampler2D spectral_transmittance_texture;
 layout(binding = 1) uniform sampler3D scattering_texture;
 layout(binding = 2) uniform sampler3D single_aerosol_texture;
 layout(binding = 4) uniform sampler3D multiple_scattering_texture;
-layout(binding = 7) uniform sampler2D spectral_transmittance_texture;
 
 layout(location = 0) uniform vec3 camera;         // m, planet-centred
 layout(location = 7) uniform vec3 sun_direction;  // unit vector towards the sun

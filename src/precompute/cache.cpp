@@ -27,7 +27,7 @@ namespace {
 constexpr char kMagic[8] = {'A', 'T', 'M', 'O', 'S', 'T', 'B', 'L'};
 // Bump when the meaning of the tables changes in code that is not one of the
 // hashed sources (src/precompute/*.cpp).
-constexpr std::uint32_t kFormatVersion = 3;
+constexpr std::uint32_t kFormatVersion = 4;
 
 struct Fnv1a {
   std::uint64_t h = 1469598103934665603ull;
@@ -53,10 +53,9 @@ std::string hex(std::uint64_t v) {
 }
 
 std::size_t set_floats(const TableSizes& s) {
-  const std::size_t t = std::size_t(s.transmittance_mu) * s.transmittance_r;
   const std::size_t e = std::size_t(s.irradiance_mu_s) * s.irradiance_r;
   const std::size_t sc = std::size_t(s.scattering_nu) * s.scattering_mu_s * s.scattering_mu * s.scattering_r;
-  return 3 * (t + 2 * e + 3 * sc);  // transmittance, 2 irradiance, 3 scattering tables
+  return 3 * (2 * e + 3 * sc);  // 2 irradiance, 3 scattering tables
 }
 
 void write_sizes(Fnv1a& h, const TableSizes& s) {
@@ -191,7 +190,7 @@ std::string read_cache(const std::string& path, const std::string& key, const Pr
   const std::size_t e = std::size_t(s.irradiance_mu_s) * s.irradiance_r;
   const std::size_t sc = std::size_t(s.scattering_nu) * s.scattering_mu_s * s.scattering_mu * s.scattering_r;
   TableSet& set = tables.set;
-  if (!take_vec3(set.transmittance, t) || !take_vec3(set.direct_irradiance, e) ||
+  if (!take_vec3(set.direct_irradiance, e) ||
       !take_vec3(set.indirect_irradiance, e) || !take_vec3(set.scattering, sc) || !take_vec3(set.single_aerosol, sc) ||
       !take_vec3(set.multiple_scattering, sc) || !take_vec3(tables.spectral_optical_depth, t * std::size_t(sets)))
     return "non-finite texels";
@@ -224,7 +223,7 @@ std::string write_cache(const std::string& path, const std::string& key, const T
     put(&c.relative, 8);
   }
   const TableSet& set = tables.set;
-  for (const auto* v : {&set.transmittance, &set.direct_irradiance, &set.indirect_irradiance, &set.scattering,
+  for (const auto* v : {&set.direct_irradiance, &set.indirect_irradiance, &set.scattering,
                         &set.single_aerosol, &set.multiple_scattering, &tables.spectral_optical_depth})
     put(v->data(), v->size() * sizeof(glm::vec3));
   Fnv1a check;

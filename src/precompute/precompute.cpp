@@ -46,7 +46,7 @@ void check_tables_match(const Atmosphere& atmosphere, const Tables& tables) {
   const size_t irradiance = size_t(s.irradiance_mu_s) * size_t(s.irradiance_r);
   const size_t scattering =
       size_t(tables.scattering_width()) * size_t(tables.scattering_height()) * size_t(tables.scattering_depth());
-  if (t.transmittance.size() != transmittance || t.indirect_irradiance.size() != irradiance ||
+  if (t.indirect_irradiance.size() != irradiance ||
       t.direct_irradiance.size() != irradiance || t.scattering.size() != scattering ||
       t.single_aerosol.size() != scattering || t.multiple_scattering.size() != scattering ||
       tables.spectral_optical_depth.size() != transmittance * size_t(tables.spectral_sets()))
@@ -131,11 +131,9 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
   };
 
   // The render tables accumulate every set's tables in the channels (see
-  // physics/definitions.glsl); the transmittance of sunlight is divided by
-  // the sun's channels at the end.
+  // physics/definitions.glsl); the transmittance stays per set (the spectral
+  // optical depth, which channel_transmittance weights at run time).
   TableSet& out = tables.set;
-  std::vector<glm::vec3> transmitted_sun;
-  glm::vec3 sun_channels(0.0f);
   const glm::vec3 luminance_of_srgb(0.2126f, 0.7152f, 0.0722f);
   const glm::mat3 to_srgb = physics::channels_to_srgb_matrix(wavelengths);
   // Per set, the light each order added and the light gathered up to it
@@ -238,16 +236,6 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
     accumulate(out.scattering, scattering.texels, to_channels);
     accumulate(out.single_aerosol, single_aerosol.texels, to_channels);
     accumulate(out.multiple_scattering, multiple.texels, to_channels);
-    if (srgb) {
-      std::vector<glm::vec3> sun_times_t(transmittance.texels.size());
-      for (size_t i = 0; i < sun_times_t.size(); ++i)
-        sun_times_t[i] = a.solar_irradiance * glm::exp(-transmittance.texels[i]);
-      accumulate(transmitted_sun, sun_times_t, to_channels);
-      sun_channels += to_channels * a.solar_irradiance;
-    } else {
-      out.transmittance.resize(transmittance.texels.size());
-      for (size_t i = 0; i < transmittance.texels.size(); ++i) out.transmittance[i] = glm::exp(-transmittance.texels[i]);
-    }
     // Triple `set` is tile `set` of the spectral optical depth (rows of
     // set_count tiles side by side).
     const int w = transmittance.width, h = transmittance.height;
@@ -257,14 +245,6 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
       for (int x = 0; x < w; ++x)
         tables.spectral_optical_depth[size_t(y) * size_t(w) * size_t(set_count) + size_t(set) * size_t(w) +
                                       size_t(x)] = transmittance.at(x, y);
-  }
-  if (srgb) {
-    // Sunlight is inside the sRGB gamut, so sun_channels > 0; a deeply
-    // reddened transmitted sun can fall outside it (a negative blue), and a
-    // transmittance is in [0, 1].
-    out.transmittance.resize(transmitted_sun.size());
-    for (size_t i = 0; i < transmitted_sun.size(); ++i)
-      out.transmittance[i] = glm::clamp(transmitted_sun[i] / sun_channels, 0.0f, 1.0f);
   }
   // Order n over all sets; a set that stopped earlier (auto orders) adds
   // nothing more but its light still counts in the total.

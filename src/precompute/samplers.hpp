@@ -8,7 +8,6 @@
 namespace atmos::precompute {
 
 struct TableSamplers {
-  physics::sampler2D transmittance;
   physics::sampler2D direct_irradiance;
   physics::sampler2D indirect_irradiance;
   physics::sampler3D scattering;
@@ -21,7 +20,6 @@ inline TableSamplers make_samplers(const Tables& tables) {
   const TableSizes& s = tables.sizes;
   const TableSet& t = tables.set;
   TableSamplers out;
-  out.transmittance = {s.transmittance_mu, s.transmittance_r, t.transmittance.data()};
   out.direct_irradiance = {s.irradiance_mu_s, s.irradiance_r, t.direct_irradiance.data()};
   out.indirect_irradiance = {s.irradiance_mu_s, s.irradiance_r, t.indirect_irradiance.data()};
   out.scattering = {tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
