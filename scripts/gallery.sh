@@ -20,4 +20,14 @@ done
 # EV 5 (its light is underestimated: see README, Planets).
 (cd "$out/venus" && "$atmos" render --planet venus --wavelengths 15 --orders auto --sun-elevation 40 --look 180,10 \
   --exposure 5 -o surface.png -o surface.exr)
+# The example engine (examples/terrain): its own terrain and objects,
+# composited by the engine plugin (atmos::AtmospherePass), default tables,
+# 1280x720: haze over a valley at noon, light shafts at sunset, the same
+# terrain from 400 km. Each also without the plugin (-raw), for comparison.
+example="${ATMOS_BUILD_DIR:-$root/build}/examples/atmos_example_terrain"
+mkdir -p "$out/plugin"
+for scene in noon-valley sunset-shafts orbit-400km; do
+  (cd "$out/plugin" && "$example" --scene "$scene" -o "$scene.png" -o "$scene.exr" &&
+    "$example" --scene "$scene" --no-atmosphere -o "$scene-raw.png")
+done
 echo "gallery: $out"

@@ -9,6 +9,8 @@
 // Exit codes: 0 success, 1 runtime error (bad planet file, no OpenGL, I/O),
 // 2 usage error (unknown flag, bad value).
 #include <CLI/CLI.hpp>
+#include <epoxy/gl.h>
+#include <glm/gtc/matrix_transform.hpp>
 #include <unistd.h>
 
 #include <algorithm>
@@ -27,6 +29,7 @@
 #include "atmos/colour.hpp"
 #include "atmos/image.hpp"
 #include "atmos/reference.hpp"
+#include "atmos/plugin.hpp"
 #include "atmos/renderer.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
@@ -505,6 +508,84 @@ int run_sample(const SampleOptions& o, const TableOptions& t) {
 // ---------------------------------------------------------------------------
 // bench
 
+// The engine plugin over a synthetic engine frame: a camera 300 m above the
+// ground looking 3° down, the engine's ground (the sphere) and a few round
+// hills in its depth buffer (standard depth, as a GL_DEPTH_COMPONENT32F
+// texture) and a grey lit colour; sky above. Median GPU times of 5 frames
+// after a warm-up, by day and at sunset (sun 4° high: the low-sun variant).
+void bench_plugin(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, int w, int h) {
+  const double R = atmosphere.bottom_radius_m;
+  const glm::dvec3 camera(0.0, 0.0, R + 300.0);
+  const glm::dvec3 forward = glm::normalize(glm::dvec3(0.0, 1.0, -std::tan(glm::radians(3.0))));
+  atmos::FrameInput input;
+  input.width = w;
+  input.height = h;
+  input.view = glm::lookAt(camera, camera + forward, glm::dvec3(0.0, 0.0, 1.0));
+  input.projection = glm::perspective(glm::radians(60.0), double(w) / double(h), 0.5, 1e7);
+  input.timed = true;
+  struct Sphere {
+    glm::dvec3 centre;
+    double radius;
+  };
+  const std::vector<Sphere> scene = {{{0.0, 0.0, 0.0}, R},
+                                     {{-3e3, 12e3, R - 4e3}, 5e3},
+                                     {{9e3, 30e3, R - 8e3}, 10e3},
+                                     {{-20e3, 60e3, R - 15e3}, 18e3}};
+  std::vector<float> depth(size_t(w) * size_t(h), 1.0f);
+  const glm::dmat4 view_projection = input.projection * input.view;
+  const glm::dmat4 inverse = glm::inverse(view_projection);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const glm::dvec4 p = inverse * glm::dvec4((x + 0.5) / w * 2.0 - 1.0, (y + 0.5) / h * 2.0 - 1.0, -1.0, 1.0);
+      const glm::dvec3 ray = glm::normalize(glm::dvec3(p) / p.w - camera);
+      double nearest = -1.0;
+      for (const Sphere& sphere : scene) {
+        const glm::dvec3 oc = camera - sphere.centre;
+        const double b = glm::dot(oc, ray), c = glm::dot(oc, oc) - sphere.radius * sphere.radius;
+        const double disc = b * b - c;
+        if (disc < 0.0) continue;
+        const double t = -b - std::sqrt(disc);
+        if (t > 0.0 && (nearest < 0.0 || t < nearest)) nearest = t;
+      }
+      if (nearest < 0.0) continue;
+      const glm::dvec4 clip = view_projection * glm::dvec4(camera + ray * nearest, 1.0);
+      depth[size_t(y) * size_t(w) + size_t(x)] = float(0.5 * clip.z / clip.w + 0.5);
+    }
+  const std::vector<float> colour(size_t(w) * size_t(h) * 4, 400.0f);
+  GLuint textures[2] = {0, 0};
+  glCreateTextures(GL_TEXTURE_2D, 2, textures);
+  glTextureStorage2D(textures[0], 1, GL_DEPTH_COMPONENT32F, w, h);
+  glTextureSubImage2D(textures[0], 0, 0, 0, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
+  glTextureStorage2D(textures[1], 1, GL_RGBA16F, w, h);
+  glTextureSubImage2D(textures[1], 0, 0, 0, w, h, GL_RGBA, GL_FLOAT, colour.data());
+  input.depth = textures[0];
+  input.colour = textures[1];
+  atmos::AtmospherePass pass(atmosphere, tables, atmos::PlanetFrame{});
+  for (const auto& [name, elevation] : {std::pair<const char*, double>{"plugin", 35.0}, {"plugin.sunset", 4.0}}) {
+    input.sun_direction = atmos::direction_from_azimuth_elevation(20.0, elevation);
+    pass.render(input);  // warm-up: compiles this variant
+    std::vector<double> total, sky_view, volume, composite;
+    for (int i = 0; i < 5; ++i) {
+      pass.render(input);
+      const atmos::PassTimings& t = pass.last_timings();
+      total.push_back(t.total_ms());
+      sky_view.push_back(t.sky_view_ms);
+      volume.push_back(t.volume_ms);
+      composite.push_back(t.composite_ms);
+    }
+    auto median = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      return v[v.size() / 2];
+    };
+    std::printf("%s.%dx%d\t%.1f\tms\n", name, w, h, median(total));
+    std::printf("%s.sky_view\t%.1f\tms\n", name, median(sky_view));
+    std::printf("%s.volume\t%.1f\tms\n", name, median(volume));
+    std::printf("%s.composite\t%.1f\tms\n", name, median(composite));
+    std::fflush(stdout);
+  }
+  glDeleteTextures(2, textures);
+}
+
 int run_bench(const TableOptions& t, const std::string& size) {
   const atmos::Atmosphere atmosphere = t.atmosphere();
   atmos::PrecomputeOptions options = t.precompute_options();
@@ -552,6 +633,7 @@ int run_bench(const TableOptions& t, const std::string& size) {
   // sun's single scattering at all 15 wavelengths.
   atmos::Renderer spectral_renderer(*context, spectral_atmosphere, spectral_tables);
   time_frames(spectral_renderer, atmos::direction_from_azimuth_elevation(150.0, -3.0), 3, "render.spectral15.twilight");
+  bench_plugin(atmosphere, tables, w, h);
   return 0;
 }
 

@@ -89,6 +89,29 @@ ReferenceResult reference_irradiance(const Atmosphere& atmosphere, const glm::dv
 ReferenceResult reference_horizontal_irradiance(const Atmosphere& atmosphere, const glm::dvec3& point,
                                                 const glm::dvec3& sun, const ReferenceOptions& options);
 
+// Radiance arriving at `observer` (m) from the straight segment between the
+// observer and `point` (m): the light scattered towards the observer by the
+// atmosphere between them, with at most K interactions, as
+// reference_radiance counts them (the first interaction on the segment,
+// later ones anywhere, the ground included). The light of the point itself
+// (a surface there, or the atmosphere beyond it) is NOT included: this is
+// the in-scatter of aerial perspective, to be added to the point's own
+// radiance times reference_transmittance(observer, point). Only the part of
+// the segment inside the atmosphere counts (an observer outside starts
+// where the segment enters it). observer == point gives 0. Throws Error as
+// reference_radiance does, and if the point is below the ground or the
+// segment passes below it (by more than 1 mm).
+ReferenceResult reference_radiance_to_point(const Atmosphere& atmosphere, const glm::dvec3& observer,
+                                            const glm::dvec3& point, const glm::dvec3& sun,
+                                            const ReferenceOptions& options);
+
+// Transmittance exp(-τ(λ)) of the straight segment from `from` to `to` (m),
+// one value per working wavelength (τ as reference_detail::optical_depth:
+// only the part inside the atmosphere counts). Deterministic (quadrature).
+// Throws Error if the segment passes below the ground by more than 1 mm.
+std::vector<double> reference_transmittance(const Atmosphere& atmosphere, const glm::dvec3& from,
+                                            const glm::dvec3& to);
+
 // Building blocks of the reference, exposed for its unit tests.
 namespace reference_detail {
 

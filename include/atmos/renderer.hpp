@@ -24,8 +24,9 @@
 #include "atmos/image.hpp"
 #include "atmos/tables.hpp"
 
-namespace atmos::physics {
-struct AtmosphereParams;
+namespace atmos::gpu {
+class GpuTables;
+class GpuTimer;
 }
 
 namespace atmos {
@@ -122,23 +123,17 @@ class Renderer {
   double last_sky_view_ms() const { return last_sky_view_ms_; }
 
  private:
+  void release();
   GlContext& context_;
+  std::unique_ptr<gpu::GpuTables> tables_;   // the tables and the sky-view table
+  std::unique_ptr<gpu::GpuTimer> timer_;
   std::uint32_t program_ = 0;        // render pass, camera in the atmosphere (reads the sky-view table)
   std::uint32_t space_program_ = 0;  // render pass, camera above the atmosphere
-  std::unique_ptr<physics::AtmosphereParams> params_;
   std::uint32_t vertex_array_ = 0;
-  // spectral optical depth, scattering, single aerosol, irradiance, multiple scattering
-  std::uint32_t textures_[5] = {0, 0, 0, 0, 0};
-  std::uint32_t timer_query_ = 0;
-  std::uint32_t sky_view_program_ = 0;
-  std::uint32_t sky_view_framebuffer_ = 0;
-  std::uint32_t sky_view_textures_[2] = {0, 0};  // single Rayleigh, single aerosol (RGBA32F)
   std::uint32_t framebuffer_ = 0;             // one RGBA32F tile, reused while large enough
   std::uint32_t tile_texture_ = 0;
   int tile_width_ = 0;
   int tile_height_ = 0;
-  float radiance_to_srgb_[9] = {};            // column-major mat3
-  bool software_rasterizer_ = false;          // time with the wall clock, not timer queries
   double last_frame_ms_ = 0.0;
   double last_sky_view_ms_ = 0.0;
 };

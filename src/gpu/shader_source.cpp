@@ -149,6 +149,7 @@ AssembledSource shared_fragment_shader_source(const physics::AtmosphereParams& p
   s.append("ATMOSPHERE", atmosphere_params_glsl(params));
   s.append("SPECTRAL", spectral_sets_glsl(spectral));
   s.append("functions.glsl", embedded("src/physics/functions.glsl"));
+  s.append("aerial_perspective.glsl", embedded("src/physics/aerial_perspective.glsl"));
   return s;
 }
 
@@ -168,6 +169,45 @@ AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams&
   AssembledSource s = shared_fragment_shader_source(params, spectral);
   s.append("sky_view.frag.glsl", embedded("src/gpu/sky_view.frag.glsl"));
   return s;
+}
+
+AssembledSource atmosphere_pass_fragment_shader_source(const physics::AtmosphereParams& params,
+                                                      const physics::SpectralSets& spectral,
+                                                      const PassVariant& variant) {
+  AssembledSource s = shared_fragment_shader_source(params, spectral);
+  auto flag = [](bool b) { return b ? "true" : "false"; };
+  s.append("variant", std::string("#define SKY_VIEW_CAMERA ") + flag(variant.sky_view_camera) +
+                          "\n#define VARIANT_LOW_SUN " + flag(variant.low_sun) + "\n#define VARIANT_SHADOWS " +
+                          flag(variant.shadows) + "\n#define VARIANT_VOLUME " + flag(variant.volume) +
+                          "\n#define VARIANT_BLEND " + flag(variant.blend) +
+                          "\n#define VARIANT_SURFACE_MODE " + (variant.gbuffer ? "1" : "0") + "\n");
+  s.append("composite.glsl", embedded("src/gpu/composite.glsl"));
+  s.append("atmosphere_pass.frag.glsl", embedded("src/gpu/atmosphere_pass.frag.glsl"));
+  return s;
+}
+
+AssembledSource aerial_perspective_compute_shader_source(const physics::AtmosphereParams& params,
+                                                        const physics::SpectralSets& spectral, bool low_sun) {
+  AssembledSource s = shared_fragment_shader_source(params, spectral);
+  s.append("variant", std::string("#define VARIANT_LOW_SUN ") + (low_sun ? "true" : "false") + "\n");
+  s.append("composite.glsl", embedded("src/gpu/composite.glsl"));
+  s.append("aerial_perspective.comp.glsl", embedded("src/gpu/aerial_perspective.comp.glsl"));
+  return s;
+}
+
+std::string engine_library_source(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
+                                  const physics::mat3& radiance_to_srgb, int first_unit) {
+  // The shared part without its "#version" line: the engine's shader has its own.
+  AssembledSource shared = shared_fragment_shader_source(params, spectral);
+  std::string text = shared.text.substr(shared.text.find('\n') + 1);
+  text += "#define ATMOS_FIRST_UNIT " + std::to_string(first_unit) + "\n";
+  for (int unit = 0; unit < 5; ++unit)
+    text += "#define ATMOS_UNIT_" + std::to_string(unit) + " " + std::to_string(first_unit + unit) + "\n";
+  text += "const mat3 ATMOS_RADIANCE_TO_SRGB = mat3(";
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) text += glsl_float(radiance_to_srgb[c][r]) + (c == 2 && r == 2 ? ");\n" : ", ");
+  text += embedded("src/gpu/engine_library.glsl");
+  return text;
 }
 
 }  // namespace atmos::gpu

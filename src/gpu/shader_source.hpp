@@ -51,4 +51,36 @@ AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& p
 AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams& params,
                                                 const physics::SpectralSets& spectral);
 
+// The program variants of the engine plugin's pass: what composite.glsl
+// treats as constants (see PassFrame).
+struct PassVariant {
+  bool sky_view_camera = true;  // camera in the atmosphere: reads the sky-view table
+  bool low_sun = false;         // integrates single scattering where the sun is low
+  bool shadows = false;         // a shadow map: light shafts
+  bool gbuffer = false;         // lights surfaces from albedo + normal
+  bool volume = false;          // surfaces read the aerial-perspective volume
+  bool blend = false;           // ... mixed with the exact evaluation (cameras in the blend band)
+  int index() const {
+    return (sky_view_camera ? 1 : 0) | (low_sun ? 2 : 0) | (shadows ? 4 : 0) | (gbuffer ? 8 : 0) | (volume ? 16 : 0) |
+           (blend ? 32 : 0);
+  }
+};
+
+// The fragment shader of the engine plugin's pass (AtmospherePass): the
+// shared part, composite.glsl and atmosphere_pass.frag.glsl.
+AssembledSource atmosphere_pass_fragment_shader_source(const physics::AtmosphereParams& params,
+                                                      const physics::SpectralSets& spectral,
+                                                      const PassVariant& variant);
+
+// The compute shader of the plugin's aerial-perspective volume: the shared
+// part, composite.glsl and aerial_perspective.comp.glsl.
+AssembledSource aerial_perspective_compute_shader_source(const physics::AtmosphereParams& params,
+                                                        const physics::SpectralSets& spectral, bool low_sun);
+
+// The GLSL library for engines' own shaders (AtmospherePass::glsl_library):
+// the shared part without "#version", the colour matrix, then
+// engine_library.glsl with its textures on units first_unit .. first_unit + 4.
+std::string engine_library_source(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
+                                  const physics::mat3& radiance_to_srgb, int first_unit);
+
 }  // namespace atmos::gpu

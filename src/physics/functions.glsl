@@ -1103,36 +1103,47 @@ INLINE SkyViewFrame sky_view_frame(IN(AtmosphereParams) atmosphere, vec3 camera,
   return frame;
 }
 
-// Texture coordinates of a view direction; `ground` says which half (the
-// caller's ray_intersects_ground, so that both agree at the horizon).
-INLINE vec2 sky_view_uv(IN(SkyViewFrame) frame, vec3 view_ray, bool ground) {
+// Texture coordinates of a view direction in a table of width x height
+// texels with this parameterisation; `ground` says which half (the
+// caller's ray_intersects_ground, so that both agree at the horizon). The
+// engine plugin's aerial-perspective volume (gpu/composite.glsl) uses it
+// with its own size.
+INLINE vec2 sky_view_uv_of_size(IN(SkyViewFrame) frame, vec3 view_ray, bool ground, int width, int height) {
   float theta = acos(clamp_cosine(dot(view_ray, frame.zenith)));
   float phi = atan(abs(dot(view_ray, frame.across)), dot(view_ray, frame.sun_side));
   float v;
   if (ground) {
     float x = safe_sqrt((theta - frame.theta_horizon) / max(PI - frame.theta_horizon, 1e-7f));
-    v = 0.5f - 0.5f * texture_coord_from_unit_range(min(x, 1.0f), SKY_VIEW_HEIGHT / 2);
+    v = 0.5f - 0.5f * texture_coord_from_unit_range(min(x, 1.0f), height / 2);
   } else {
     float x = safe_sqrt((frame.theta_horizon - theta) / frame.theta_horizon);
-    v = 0.5f + 0.5f * texture_coord_from_unit_range(min(x, 1.0f), SKY_VIEW_HEIGHT / 2);
+    v = 0.5f + 0.5f * texture_coord_from_unit_range(min(x, 1.0f), height / 2);
   }
-  return vec2(texture_coord_from_unit_range(phi / PI, SKY_VIEW_WIDTH), v);
+  return vec2(texture_coord_from_unit_range(phi / PI, width), v);
 }
 
-// The view direction of texture coordinates uv, and whether its ray is in the
-// ground half.
-INLINE vec3 sky_view_direction(IN(SkyViewFrame) frame, vec2 uv, OUT(bool) ground) {
+INLINE vec2 sky_view_uv(IN(SkyViewFrame) frame, vec3 view_ray, bool ground) {
+  return sky_view_uv_of_size(frame, view_ray, ground, SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT);
+}
+
+// The view direction of texture coordinates uv in a table of width x
+// height texels, and whether its ray is in the ground half.
+INLINE vec3 sky_view_direction_of_size(IN(SkyViewFrame) frame, vec2 uv, int width, int height, OUT(bool) ground) {
   float theta;
   ground = uv.y < 0.5f;
   if (ground) {
-    float x = unit_range_from_texture_coord(1.0f - 2.0f * uv.y, SKY_VIEW_HEIGHT / 2);
+    float x = unit_range_from_texture_coord(1.0f - 2.0f * uv.y, height / 2);
     theta = frame.theta_horizon + x * x * (PI - frame.theta_horizon);
   } else {
-    float x = unit_range_from_texture_coord(2.0f * uv.y - 1.0f, SKY_VIEW_HEIGHT / 2);
+    float x = unit_range_from_texture_coord(2.0f * uv.y - 1.0f, height / 2);
     theta = frame.theta_horizon * (1.0f - x * x);
   }
-  float phi = PI * unit_range_from_texture_coord(uv.x, SKY_VIEW_WIDTH);
+  float phi = PI * unit_range_from_texture_coord(uv.x, width);
   return frame.zenith * cos(theta) + (frame.sun_side * cos(phi) + frame.across * sin(phi)) * sin(theta);
+}
+
+INLINE vec3 sky_view_direction(IN(SkyViewFrame) frame, vec2 uv, OUT(bool) ground) {
+  return sky_view_direction_of_size(frame, uv, SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT, ground);
 }
 
 // A camera below the ground counts as standing on it (as in

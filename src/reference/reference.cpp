@@ -12,7 +12,14 @@
 //   L_ground(z) = a/π · ∫_{ω·n>0} L_in(z, ω) (ω·n) dω                       (4)
 //
 // with L_in(y, ω) the radiance arriving at y from direction ω (the sun disc
-// seen through the atmosphere, or (1) again). Each path:
+// seen through the atmosphere, or (1) again). The light scattered towards x
+// by the segment up to a point P = x + t_P v alone (aerial perspective) is
+// the first term of (1) cut at t_P, without any ground term:
+//
+//   L(x -> P) = ∫_0^{t_P} T(0,t) J(x + t v, v) dt                           (1')
+//
+// and is estimated by the same paths with the view segment ending at t_P.
+// Each path:
 //  - on the view segment, samples a first scattering distance t with density
 //    ∝ σ_ext T, truncated to [0, d] ("forced" scattering, weight (1 - T(d))),
 //    and adds the ground term T(0, d) L_ground deterministically;
@@ -481,6 +488,20 @@ struct Segment {
   const Spec& total() const { return tau.back(); }
 };
 
+// The cumulative optical depths of a segment whose ray, t_begin, t_end and
+// `inside` are set.
+void fill_segment(const Model& m, Segment& s) {
+  s.t.assign(1, s.t_begin);
+  s.tau.assign(1, Spec{});
+  if (!s.inside) return;
+  for_each_interval(m, s.ray, s.t_begin, s.t_end, [&](double ta, double tb) {
+    Spec acc = s.tau.back();
+    integrate_interval(m, s.ray, ta, tb, acc);
+    s.t.push_back(tb);
+    s.tau.push_back(acc);
+  });
+}
+
 void build_segment(const Model& m, const dvec3& o, const dvec3& d, Segment& s) {
   s.ray = Ray(o, d);
   const Extent e = extent(m, o, d);
@@ -488,15 +509,22 @@ void build_segment(const Model& m, const dvec3& o, const dvec3& d, Segment& s) {
   s.hits_ground = e.hits_ground;
   s.t_begin = e.t_begin;
   s.t_end = e.inside ? e.t_end : e.t_begin;
-  s.t.assign(1, s.t_begin);
-  s.tau.assign(1, Spec{});
-  if (!e.inside) return;
-  for_each_interval(m, s.ray, s.t_begin, s.t_end, [&](double ta, double tb) {
-    Spec acc = s.tau.back();
-    integrate_interval(m, s.ray, ta, tb, acc);
-    s.t.push_back(tb);
-    s.tau.push_back(acc);
-  });
+  fill_segment(m, s);
+}
+
+// The view segment of (1'): the ray from o along d cut at t_P = `length`,
+// i.e. [t_begin, min(t_end, t_P)], never ending on the ground (the caller
+// has checked that the segment stays above it, so a ground hit before t_P
+// can only be rounding). Empty (not inside) if the ray misses the
+// atmosphere or enters it only at or beyond t_P.
+void build_segment_to(const Model& m, const dvec3& o, const dvec3& d, double length, Segment& s) {
+  s.ray = Ray(o, d);
+  const Extent e = extent(m, o, d);
+  s.inside = e.inside && e.t_begin < length;
+  s.hits_ground = false;
+  s.t_begin = e.t_begin;
+  s.t_end = s.inside ? std::min(e.t_end, length) : e.t_begin;
+  fill_segment(m, s);
 }
 
 // The point where the optical depth (for wavelength l) from t_begin reaches
@@ -958,6 +986,30 @@ dvec3 check_position(const Model& m, const dvec3& x, const char* what) {
   return r < m.rb ? x * (m.rb / r) : x;
 }
 
+// Throws unless the straight segment from `from` to `to` (length `len` > 0,
+// unit direction of ray) stays above the ground: the altitude at its point
+// closest to the centre, t = clamp(-o·d, 0, len), is >= -1 mm.
+void check_above_ground(const Model& m, const Ray& ray, double len) {
+  const double tp = std::clamp(-ray.b, 0.0, len);
+  if (ray.altitude(tp, m.rb) < -1e-3) throw Error("reference: segment passes below the ground");
+}
+
+// τ(λ) = ∫ σ_ext ds along the straight segment from `from` to `to`, for all
+// wavelengths, counting only the part inside the atmosphere |x| <= Rt:
+// the ray clipped to the roots of |from + t d| = Rt and to [0, |to - from|].
+Spec segment_optical_depth(const Model& m, const dvec3& from, const dvec3& to) {
+  const double len = glm::length(to - from);
+  if (!(len > 0.0)) return Spec{};
+  const Ray ray(from, (to - from) / len);
+  check_above_ground(m, ray, len);
+  double t0, t1;
+  const double r = glm::length(from);
+  if (!sphere_roots(ray.b, (r - m.rt) * (r + m.rt), t0, t1)) return Spec{};
+  const double a0 = std::max(0.0, t0), a1 = std::min(len, t1);
+  if (!(a1 > a0)) return Spec{};
+  return optical_depth_spec(m, ray, a0, a1);
+}
+
 }  // namespace
 
 namespace reference_detail {
@@ -991,19 +1043,7 @@ double optical_depth(const Atmosphere& atmosphere, double wavelength_nm, const g
   Atmosphere a = atmosphere;
   a.wavelengths_nm = {wavelength_nm, wavelength_nm, wavelength_nm};  // validate() wants triples
   const Model m = make_model(a, false);
-  const double len = glm::length(to - from);
-  if (!(len > 0.0)) return 0.0;
-  const Ray ray(from, (to - from) / len);
-  // Perigee inside the segment below the ground?
-  const double tp = std::clamp(-ray.b, 0.0, len);
-  if (ray.altitude(tp, m.rb) < -1e-3) throw Error("reference: optical depth segment passes below the ground");
-  // Clip to the atmosphere sphere |x| <= Rt.
-  double t0, t1;
-  const double r = glm::length(from);
-  if (!sphere_roots(ray.b, (r - m.rt) * (r + m.rt), t0, t1)) return 0.0;
-  const double a0 = std::max(0.0, t0), a1 = std::min(len, t1);
-  if (!(a1 > a0)) return 0.0;
-  return optical_depth_spec(m, ray, a0, a1)[0];
+  return segment_optical_depth(m, from, to)[0];
 }
 
 }  // namespace reference_detail
@@ -1037,6 +1077,30 @@ ReferenceResult radiance_chunk(const Atmosphere& atmosphere, const glm::dvec3& o
   const Context ctx{m, check_unit(sun, "sun"), options.scattering_orders};
   Segment view_segment;
   build_segment(m, x, check_unit(view, "view"), view_segment);
+  const Plan plan = shadow_plan(m, view_segment, ctx.sun);
+  return estimate(m, options, [&](double u, reference_detail::Random& rnd, Workspace& ws) {
+    return radiance_sample(ctx, view_segment, plan, u, rnd, ws.path);
+  });
+}
+
+// (1') for observer x and point P: paths as radiance_chunk's, on the view
+// segment cut at P (build_segment_to), which never ends on the ground, so
+// radiance_sample adds no ground term.
+ReferenceResult radiance_to_point_chunk(const Atmosphere& atmosphere, const glm::dvec3& observer,
+                                        const glm::dvec3& point, const glm::dvec3& sun,
+                                        const ReferenceOptions& options) {
+  check_options(options);
+  const Model m = make_model(atmosphere, true);
+  const dvec3 x = check_position(m, observer, "observer");
+  const dvec3 p = check_position(m, point, "point");
+  const Context ctx{m, check_unit(sun, "sun"), options.scattering_orders};
+  const double len = glm::length(p - x);
+  // observer == point: an empty segment (any direction, length 0), every
+  // sample 0.
+  const dvec3 v = len > 0.0 ? (p - x) / len : dvec3(0.0, 0.0, 1.0);
+  check_above_ground(m, Ray(x, v), len);
+  Segment view_segment;
+  build_segment_to(m, x, v, len, view_segment);
   const Plan plan = shadow_plan(m, view_segment, ctx.sun);
   return estimate(m, options, [&](double u, reference_detail::Random& rnd, Workspace& ws) {
     return radiance_sample(ctx, view_segment, plan, u, rnd, ws.path);
@@ -1078,6 +1142,33 @@ ReferenceResult reference_radiance(const Atmosphere& atmosphere, const glm::dvec
                                    const glm::dvec3& sun, const ReferenceOptions& options) {
   return in_wavelength_chunks(
       atmosphere, [&](const Atmosphere& part) { return radiance_chunk(part, observer, view, sun, options); });
+}
+
+ReferenceResult reference_radiance_to_point(const Atmosphere& atmosphere, const glm::dvec3& observer,
+                                            const glm::dvec3& point, const glm::dvec3& sun,
+                                            const ReferenceOptions& options) {
+  return in_wavelength_chunks(atmosphere, [&](const Atmosphere& part) {
+    return radiance_to_point_chunk(part, observer, point, sun, options);
+  });
+}
+
+// T(λ) = exp(-τ(λ)), τ by segment_optical_depth, in chunks of at most
+// kMaxWavelengths wavelengths (one model each).
+std::vector<double> reference_transmittance(const Atmosphere& atmosphere, const glm::dvec3& from,
+                                            const glm::dvec3& to) {
+  if (!std::isfinite(glm::length(from)) || !std::isfinite(glm::length(to)))
+    throw Error("reference: transmittance end points must be finite");
+  const ReferenceResult r = in_wavelength_chunks(atmosphere, [&](const Atmosphere& part) {
+    const Model m = make_model(part, false);
+    const Spec tau = segment_optical_depth(m, from, to);
+    ReferenceResult out;
+    for (int l = 0; l < m.n; ++l) {
+      out.radiance.push_back(std::exp(-tau[size_t(l)]));
+      out.standard_error.push_back(0.0);
+    }
+    return out;
+  });
+  return r.radiance;
 }
 
 ReferenceResult reference_irradiance(const Atmosphere& atmosphere, const glm::dvec3& point, const glm::dvec3& normal,

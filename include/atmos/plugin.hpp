@@ -1,0 +1,196 @@
+// atmos — the engine plugin: the atmosphere as a post-process over any
+// renderer's colour and depth buffers (seed 000 §4.2–4.5).
+//
+// An engine renders its planet as usual (terrain, objects, its own lighting)
+// into an HDR colour texture and a depth texture, then calls
+// AtmospherePass::render() once per view. The pass reconstructs every
+// pixel's position from the depth buffer and
+//  - where nothing was drawn (depth at the far plane): draws the sky, the
+//    planet as a Lambertian sphere below the horizon (so a terrain patch sits
+//    on a whole planet), and the sun disc;
+//  - where a surface was drawn: attenuates it by the transmittance between
+//    the camera and the surface and adds the light scattered in between
+//    (aerial perspective), optionally lighting it first from a G-buffer;
+//  - with a sun shadow map: removes the single scattering of the shadowed
+//    parts of each view ray (light shafts; no Mie halo through mountains).
+// The camera can be anywhere: on the ground, in the atmosphere, in space
+// (the atmosphere's night side stays dark in the planet's shadow), far away.
+//
+// Units. Positions and matrices are in the engine's units and world frame;
+// PlanetFrame says where the planet is and how long a metre is. Radiance is
+// linear sRGB on the luminance scale, cd/m², divided by
+// FrameInput::nits_per_unit (so that an engine with half-float buffers can
+// keep the sun's ~1e9 cd/m² in range). In SurfaceMode::lit_colour the
+// engine's colour must be in those same units (use the GLSL library below to
+// light it with the atmosphere's sun and sky irradiance).
+//
+// Threading and GL state. Construct, use and destroy the pass with the
+// engine's OpenGL 4.5 core context current (the pass never creates or
+// switches contexts). render() changes the bound program, vertex array,
+// framebuffer, viewport, texture units 0–11 and their sampler objects, and
+// disables blending, depth and stencil tests, scissor and sRGB conversion;
+// it restores none of them (engines typically set their state per pass).
+//
+// Precision. The CPU side works in double: the camera position, the view
+// and projection matrices are reduced to camera-relative floats before they
+// reach the GPU, so that nothing shimmers at 1 m above the ground nor at a
+// hundred planet radii.
+#pragma once
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "atmos/atmosphere.hpp"
+#include "atmos/image.hpp"
+#include "atmos/tables.hpp"
+
+namespace atmos {
+
+// The planet in the engine's world.
+struct PlanetFrame {
+  glm::dvec3 centre{0.0};        // engine units
+  double units_per_metre = 1.0;  // engine units in one metre (> 0)
+};
+
+// How the engine's depth buffer encodes distance. The pass decides "sky"
+// where the depth equals the clear value of the encoding: 1 for standard and
+// logarithmic, 0 for reversed_z.
+enum class DepthEncoding {
+  // OpenGL's default: NDC z in [-1, 1] mapped to depth [0, 1]; any
+  // perspective projection, with a finite or an infinite far plane.
+  standard,
+  // glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE) with a projection mapping
+  // the near plane to 1 and the far plane (or infinity) to 0.
+  reversed_z,
+  // depth = log2(1 + w) / log2(1 + F), w the distance along the view axis
+  // (engine units) and F = FrameInput::log_depth_far — the usual
+  // logarithmic depth written in gl_FragDepth. The projection matrix then
+  // only gives the pixels' directions.
+  logarithmic,
+};
+
+// What the engine's colour texture holds for surfaces.
+enum class SurfaceMode {
+  // Lit colour (seed 000 §4.5): the pass attenuates it and adds in-scatter.
+  lit_colour,
+  // The pass lights the surfaces itself from a G-buffer (albedo + normal)
+  // with the sun and sky irradiance of the tables (and the shadow map's
+  // visibility when one is given), then attenuates them and adds in-scatter.
+  // The colour texture is not read.
+  gbuffer,
+};
+
+// One view of one frame.
+struct FrameInput {
+  // Engine textures (GL texture names, owned by the engine), all
+  // width x height, level 0 read.
+  std::uint32_t colour = 0;  // RGB(A) float/half-float, linear (lit_colour mode)
+  std::uint32_t depth = 0;   // GL_DEPTH_COMPONENT* / GL_DEPTH*_STENCIL8 or GL_R32F holding window depth
+  std::uint32_t albedo = 0;  // gbuffer mode: linear reflectance in RGB, in [0, 1]
+  std::uint32_t normal = 0;  // gbuffer mode: unit normal in the engine's world frame in RGB (float texture, not packed)
+  int width = 0;
+  int height = 0;
+  SurfaceMode surfaces = SurfaceMode::lit_colour;
+  DepthEncoding depth_encoding = DepthEncoding::standard;
+  double log_depth_far = 0.0;  // logarithmic only: F, engine units (> 0)
+
+  glm::dmat4 view{1.0};        // world -> view, engine units (rigid: rotation + translation)
+  glm::dmat4 projection{1.0};  // view -> clip, OpenGL conventions (camera looks along -z)
+
+  glm::dvec3 sun_direction{0.0, 0.0, 1.0};  // world frame, towards the sun (normalised internally)
+  // Illuminance of the sun at the top of the atmosphere, perpendicular to it,
+  // in lux; 0 keeps the atmosphere's own (its solar spectrum, e.g. about
+  // 128 klx for Earth). Scales all light of the pass.
+  double sun_illuminance_lux = 0.0;
+  // cd/m² per unit of the engine's colour (and of the output).
+  double nits_per_unit = 1.0;
+  bool sun_disc = true;  // draw the sun's disc in the sky
+
+  // Terrain shadows and light shafts (optional): a depth texture rendered
+  // from the sun with an orthographic projection, and the matrix from the
+  // engine's world to its clip space (light projection x light view;
+  // standard depth encoding, [-1, 1] clip cube). Points outside the cube are
+  // lit. 0: no shadows.
+  std::uint32_t shadow_map = 0;
+  glm::dmat4 shadow_matrix{1.0};
+  int shadow_steps = 24;  // samples of the shadow map along each view ray, 1..256
+  // Depth bias of the shadow test, metres along the sun's direction (keeps
+  // lit surfaces from shadowing themselves); 0: 1.5 texels of the map's
+  // footprint.
+  double shadow_bias_m = 0.0;
+
+  // Measure the passes' GPU time (last_timings()). Waits for the GPU at the
+  // end of render(): for benchmarks and tools, not for every frame of an
+  // engine.
+  bool timed = false;
+
+  // Where to write the composited image: an RGBA16F or RGBA32F texture of
+  // width x height owned by the engine (not `colour`); 0: a texture of the
+  // pass (RGBA32F, valid until the next render() or the pass's destruction).
+  std::uint32_t output = 0;
+};
+
+// GPU time of the last render() with FrameInput::timed, in milliseconds
+// (timer queries; wall-clock up to glFinish on software rasterisers, see
+// Renderer::last_frame_ms); zero for untimed frames.
+struct PassTimings {
+  double sky_view_ms = 0.0;   // the per-frame sky-view table (cameras in the atmosphere)
+  double volume_ms = 0.0;     // the per-frame aerial-perspective volume (cameras in the atmosphere)
+  double composite_ms = 0.0;  // the full-screen pass: sky, surfaces, aerial perspective, shafts
+  double total_ms() const { return sky_view_ms + volume_ms + composite_ms; }
+};
+
+class AtmospherePass {
+ public:
+  // Uploads the tables and compiles the shaders in the CURRENT OpenGL
+  // context (4.5 core). Throws atmos::Error on mismatched tables, a missing
+  // or too old context, compile errors, or an invalid frame.
+  AtmospherePass(const Atmosphere& atmosphere, const Tables& tables, const PlanetFrame& frame);
+  ~AtmospherePass();
+  AtmospherePass(const AtmospherePass&) = delete;
+  AtmospherePass& operator=(const AtmospherePass&) = delete;
+
+  // Composites one view. Returns the texture written (input.output, or the
+  // pass's own). Throws atmos::Error, with nothing drawn, on invalid input:
+  // missing or mismatched textures, non-finite or singular matrices, a
+  // degenerate projection, a zero sun direction, a non-affine shadow
+  // matrix. A camera inside the planet is moved up to its surface
+  // (documented clamping, as everywhere in atmos).
+  std::uint32_t render(const FrameInput& input);
+
+  const PassTimings& last_timings() const;
+
+  // GLSL for engines that shade in their own shaders (see docs/plugin.md):
+  // declarations of the atmosphere's textures on units
+  // first_unit..first_unit+4 and the functions
+  //   vec3 atmos_sky_radiance(vec3 camera, vec3 view_ray, vec3 sun, out vec3 transmittance);
+  //   vec3 atmos_radiance_to_point(vec3 camera, vec3 offset, vec3 sun, out vec3 transmittance);
+  //   vec3 atmos_sun_and_sky_irradiance(vec3 point, vec3 normal, vec3 sun, out vec3 sky_irradiance);
+  //   vec3 atmos_transmittance_to_sun(vec3 point, vec3 sun);
+  // with positions in metres relative to the planet centre (`offset`: from
+  // the camera to the point, which keeps float precision near the camera),
+  // directions as unit vectors in the planet's axes, radiance in cd/m²
+  // linear sRGB, irradiance in lux-scaled linear sRGB (cd/m² x sr); the sun
+  // at the atmosphere's own illuminance. Paste it after "#version 450 core".
+  std::string glsl_library(int first_unit) const;
+  // Binds the textures glsl_library() declares.
+  void bind_textures(int first_unit) const;
+
+  const PlanetFrame& frame() const;
+  // The illuminance of the atmosphere's own sun at the top of the
+  // atmosphere (lux): what FrameInput::sun_illuminance_lux = 0 means, and
+  // the sun of glsl_library()'s functions (scale their light by
+  // your_lux / sun_illuminance_lux() to match a frame's).
+  double sun_illuminance_lux() const;
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace atmos

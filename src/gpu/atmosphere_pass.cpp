@@ -1,0 +1,425 @@
+// The engine plugin (include/atmos/plugin.hpp): validation of the engine's
+// input, the reduction of its double-precision frame to camera-relative
+// floats, and the two GPU passes (the sky-view table, then composite.glsl
+// over every pixel).
+#include <epoxy/gl.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "atmos/plugin.hpp"
+#include "gpu/atmosphere_pass.hpp"
+#include "gpu/gl_util.hpp"
+#include "gpu/shader_source.hpp"
+#include "physics/parameters.hpp"
+
+namespace atmos {
+
+namespace {
+
+constexpr int kMaxImageSize = 16384;
+
+// Texture units of the pass (the layout(binding) of atmosphere_pass.frag.glsl).
+constexpr GLuint kColourUnit = 7;
+constexpr GLuint kDepthUnit = 8;
+constexpr GLuint kAlbedoUnit = 9;
+constexpr GLuint kNormalUnit = 10;
+constexpr GLuint kShadowUnit = 11;
+constexpr GLuint kVolumeUnit = 12;  // 12..15: the aerial-perspective volume
+
+bool is_finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+std::string number(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", x);
+  return buffer;
+}
+
+// Width, height and internal format of level 0 of an engine texture; throws
+// when `name` is not a 2D texture.
+struct TextureInfo {
+  int width = 0;
+  int height = 0;
+  GLint format = 0;
+};
+
+TextureInfo texture_info(GLuint name, const char* what) {
+  if (name == 0 || glIsTexture(name) != GL_TRUE)
+    throw Error(std::string("plugin input: ") + what + " texture " + std::to_string(name) +
+                " is not a texture of the current OpenGL context");
+  GLint target = 0;
+  glGetTextureParameteriv(name, GL_TEXTURE_TARGET, &target);
+  if (target != GL_TEXTURE_2D)
+    throw Error(std::string("plugin input: ") + what + " texture " + std::to_string(name) +
+                " is not a GL_TEXTURE_2D (multisampled buffers must be resolved first)");
+  TextureInfo info;
+  glGetTextureLevelParameteriv(name, 0, GL_TEXTURE_WIDTH, &info.width);
+  glGetTextureLevelParameteriv(name, 0, GL_TEXTURE_HEIGHT, &info.height);
+  glGetTextureLevelParameteriv(name, 0, GL_TEXTURE_INTERNAL_FORMAT, &info.format);
+  return info;
+}
+
+void check_size(const TextureInfo& info, const FrameInput& input, const char* what) {
+  if (info.width != input.width || info.height != input.height)
+    throw Error(std::string("plugin input: ") + what + " texture is " + std::to_string(info.width) + "x" +
+                std::to_string(info.height) + ", the frame is " + std::to_string(input.width) + "x" +
+                std::to_string(input.height));
+}
+
+bool is_depth_format(GLint format) {
+  switch (format) {
+    case GL_DEPTH_COMPONENT16:
+    case GL_DEPTH_COMPONENT24:
+    case GL_DEPTH_COMPONENT32:
+    case GL_DEPTH_COMPONENT32F:
+    case GL_DEPTH24_STENCIL8:
+    case GL_DEPTH32F_STENCIL8:
+    case GL_R32F:
+      return true;
+    default:
+      return false;
+  }
+}
+
+bool is_float_colour_format(GLint format) {
+  switch (format) {
+    case GL_RGB16F:
+    case GL_RGBA16F:
+    case GL_RGB32F:
+    case GL_RGBA32F:
+    case GL_R11F_G11F_B10F:
+      return true;
+    default:
+      return false;
+  }
+}
+
+}  // namespace
+
+struct AtmospherePass::Impl {
+  PlanetFrame frame;
+  std::unique_ptr<gpu::GpuTables> tables;
+  std::unique_ptr<gpu::GpuTimer> timer;
+  // The program variants (gpu::PassVariant::index), compiled on first use.
+  GLuint programs[64] = {};
+  // The aerial-perspective volume: its compute programs (sun high, sun low)
+  // and textures (see composite.glsl).
+  GLuint volume_programs[2] = {0, 0};
+  GLuint volume[4] = {0, 0, 0, 0};
+  std::unique_ptr<physics::AtmosphereParams> params;
+  GLuint vertex_array = 0;
+  GLuint framebuffer = 0;
+  GLuint own_output = 0;
+  int own_width = 0;
+  int own_height = 0;
+  GLuint depth_sampler = 0;   // nearest, no comparison: the engine's depth as a value
+  GLuint shadow_sampler = 0;  // linear, clamped, no comparison
+  double own_sun_lux = 0.0;   // the atmosphere's sun illuminance
+  PassTimings timings;
+
+  void release() {
+    for (GLuint& program : programs) {
+      if (program != 0) glDeleteProgram(program);
+      program = 0;
+    }
+    for (GLuint& program : volume_programs) {
+      if (program != 0) glDeleteProgram(program);
+      program = 0;
+    }
+    glDeleteTextures(4, volume);
+    for (GLuint& texture : volume) texture = 0;
+    if (vertex_array != 0) glDeleteVertexArrays(1, &vertex_array);
+    if (framebuffer != 0) glDeleteFramebuffers(1, &framebuffer);
+    if (own_output != 0) glDeleteTextures(1, &own_output);
+    if (depth_sampler != 0) glDeleteSamplers(1, &depth_sampler);
+    if (shadow_sampler != 0) glDeleteSamplers(1, &shadow_sampler);
+    vertex_array = framebuffer = own_output = depth_sampler = shadow_sampler = 0;
+    timer.reset();
+    tables.reset();
+  }
+};
+
+namespace {
+
+void require_context() {
+  // Without a current context every GL call is a no-op (or a crash through a
+  // null dispatch): check before the first one.
+  if (epoxy_gl_version() < 45)
+    throw Error("the engine plugin needs a current OpenGL 4.5 core context (found version " +
+                std::to_string(epoxy_gl_version() / 10) + "." + std::to_string(epoxy_gl_version() % 10) + ")");
+}
+
+}  // namespace
+
+AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const Tables& tables, const PlanetFrame& frame)
+    : impl_(std::make_unique<Impl>()) {
+  if (!is_finite(frame.centre))
+    throw Error("invalid planet frame: centre is not finite");
+  if (!(frame.units_per_metre > 0.0 && std::isfinite(frame.units_per_metre)))
+    throw Error("invalid planet frame: units_per_metre " + number(frame.units_per_metre) + " must be > 0");
+  check_tables_match(atmosphere, tables);
+  require_context();
+  Impl& p = *impl_;
+  p.frame = frame;
+  gpu::clear_gl_errors();
+  try {
+    p.tables = std::make_unique<gpu::GpuTables>(atmosphere, tables, TexturePrecision::full);
+    p.timer = std::make_unique<gpu::GpuTimer>();
+    p.own_sun_lux = gpu::own_sun_illuminance(p.tables->params(), p.tables->radiance_to_srgb());
+    gpu::AssembledSource vertex;
+    vertex.append("vertex shader", gpu::fullscreen_vertex_shader_source());
+    glCreateVertexArrays(1, &p.vertex_array);
+    glCreateFramebuffers(1, &p.framebuffer);
+    glCreateTextures(GL_TEXTURE_3D, 4, p.volume);
+    for (GLuint texture : p.volume) {
+      glTextureStorage3D(texture, 1, GL_RGBA32F, AP_WIDTH, AP_HEIGHT, AP_SLICES);
+      gpu::set_table_sampling(texture);
+    }
+    glCreateSamplers(1, &p.depth_sampler);
+    glSamplerParameteri(p.depth_sampler, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glSamplerParameteri(p.depth_sampler, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glSamplerParameteri(p.depth_sampler, GL_TEXTURE_COMPARE_MODE, GL_NONE);
+    glCreateSamplers(1, &p.shadow_sampler);
+    // Read at texel centres (composite.glsl: shadow_visibility filters the
+    // comparisons itself); CLAMP_TO_EDGE as the CPU twin's texture().
+    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_COMPARE_MODE, GL_NONE);
+    gpu::check_gl("while creating the atmosphere pass");
+
+    // Drivers (llvmpipe's JIT in particular) compile shaders at their first
+    // draw: draw the common variants once (lit colour, sun high, camera in
+    // and above the atmosphere) over a 1x1 sky, so that the engine's first
+    // frames and the timings measure frames, not compilation. The other
+    // variants compile at their first use.
+    GLuint warm_up_textures[2] = {0, 0};
+    glCreateTextures(GL_TEXTURE_2D, 2, warm_up_textures);
+    glTextureStorage2D(warm_up_textures[0], 1, GL_R32F, 1, 1);
+    glTextureStorage2D(warm_up_textures[1], 1, GL_RGBA32F, 1, 1);
+    const float sky_depth[4] = {1.0f, 0.0f, 0.0f, 0.0f};
+    glTextureSubImage2D(warm_up_textures[0], 0, 0, 0, 1, 1, GL_RED, GL_FLOAT, sky_depth);
+    glTextureSubImage2D(warm_up_textures[1], 0, 0, 0, 1, 1, GL_RGBA, GL_FLOAT, sky_depth);
+    try {
+      FrameInput warm_up;
+      warm_up.depth = warm_up_textures[0];
+      warm_up.colour = warm_up_textures[1];
+      warm_up.width = warm_up.height = 1;
+      warm_up.projection = glm::perspective(1.0, 1.0, 1.0, 100.0);
+      for (double altitude : {10.0, 1e7}) {
+        warm_up.view = glm::translate(glm::dmat4(1.0), -(frame.centre + glm::dvec3(0.0, 0.0, 1.0) *
+                                                         (atmosphere.bottom_radius_m + altitude) * frame.units_per_metre));
+        render(warm_up);
+      }
+    } catch (...) {
+      glDeleteTextures(2, warm_up_textures);
+      throw;
+    }
+    glDeleteTextures(2, warm_up_textures);
+    p.timings = PassTimings{};
+  } catch (...) {
+    p.release();
+    throw;
+  }
+}
+
+AtmospherePass::~AtmospherePass() {
+  // With no current context the objects die with the engine's context.
+  if (impl_ && epoxy_gl_version() >= 45) impl_->release();
+}
+
+const PassTimings& AtmospherePass::last_timings() const { return impl_->timings; }
+
+const PlanetFrame& AtmospherePass::frame() const { return impl_->frame; }
+
+double AtmospherePass::sun_illuminance_lux() const { return impl_->own_sun_lux; }
+
+std::string AtmospherePass::glsl_library(int first_unit) const {
+  GLint units = 0;
+  glGetIntegerv(GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS, &units);
+  if (first_unit < 0 || (units > 0 && first_unit + 5 > units))
+    throw Error("glsl_library: texture units " + std::to_string(first_unit) + ".." + std::to_string(first_unit + 4) +
+                " outside the context's " + std::to_string(units));
+  return gpu::engine_library_source(impl_->tables->params(), impl_->tables->spectral(),
+                                    impl_->tables->radiance_to_srgb(), first_unit);
+}
+
+void AtmospherePass::bind_textures(int first_unit) const {
+  for (int i = 0; i < 5; ++i) {
+    glBindTextureUnit(GLuint(first_unit + i), impl_->tables->texture(i));
+    glBindSampler(GLuint(first_unit + i), 0);
+  }
+}
+
+std::uint32_t AtmospherePass::render(const FrameInput& input) {
+  Impl& p = *impl_;
+  require_context();
+  // --- Validation: everything before the first state change. ---
+  if (input.width < 1 || input.height < 1 || input.width > kMaxImageSize || input.height > kMaxImageSize)
+    throw Error("plugin input: frame size " + std::to_string(input.width) + "x" + std::to_string(input.height) +
+                " outside 1.." + std::to_string(kMaxImageSize));
+  if (input.depth == 0) throw Error("plugin input: no depth texture (FrameInput::depth is 0)");
+  gpu::clear_gl_errors();
+  const TextureInfo depth = texture_info(input.depth, "depth");
+  check_size(depth, input, "depth");
+  if (!is_depth_format(depth.format))
+    throw Error("plugin input: the depth texture's format is not a depth format (GL_DEPTH_COMPONENT*, "
+                "GL_DEPTH*_STENCIL8) nor GL_R32F");
+  if (input.surfaces == SurfaceMode::lit_colour) {
+    check_size(texture_info(input.colour, "colour"), input, "colour");
+  } else {
+    check_size(texture_info(input.albedo, "albedo"), input, "albedo");
+    check_size(texture_info(input.normal, "normal"), input, "normal");
+  }
+  if (input.output != 0) {
+    if (input.output == input.colour || input.output == input.depth || input.output == input.albedo ||
+        input.output == input.normal)
+      throw Error("plugin input: the output texture is also an input (a GL feedback loop); use another texture");
+    const TextureInfo output = texture_info(input.output, "output");
+    check_size(output, input, "output");
+    if (!is_float_colour_format(output.format))
+      throw Error("plugin input: the output texture must be RGBA16F or RGBA32F (HDR)");
+  }
+  gpu::validate_frame_numbers(input);
+  const bool shadows = input.shadow_map != 0;
+  if (shadows) {
+    const TextureInfo shadow = texture_info(input.shadow_map, "shadow map");
+    if (!is_depth_format(shadow.format))
+      throw Error("plugin input: the shadow map's format is not a depth format nor GL_R32F");
+  }
+
+  physics::PassFrame frame =
+      gpu::make_pass_frame(input, p.frame, p.tables->params(), p.tables->radiance_to_srgb(), p.own_sun_lux);
+  if (shadows) {
+    const TextureInfo shadow = texture_info(input.shadow_map, "shadow map");
+    gpu::set_shadow_map_size(input, shadow.width, shadow.height, frame);
+  }
+  const glm::vec3 camera_f = frame.camera;
+  const glm::vec3 sun_f = frame.sun_direction;
+
+  // --- The output target. ---
+  GLuint output = input.output;
+  if (output == 0) {
+    if (p.own_output == 0 || p.own_width != input.width || p.own_height != input.height) {
+      if (p.own_output != 0) glDeleteTextures(1, &p.own_output);
+      glCreateTextures(GL_TEXTURE_2D, 1, &p.own_output);
+      glTextureStorage2D(p.own_output, 1, GL_RGBA32F, input.width, input.height);
+      p.own_width = input.width;
+      p.own_height = input.height;
+    }
+    output = p.own_output;
+  }
+  glNamedFramebufferTexture(p.framebuffer, GL_COLOR_ATTACHMENT0, output, 0);
+  glNamedFramebufferDrawBuffer(p.framebuffer, GL_COLOR_ATTACHMENT0);
+  gpu::check_gl("while preparing the plugin's output");
+  if (glCheckNamedFramebufferStatus(p.framebuffer, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw Error("plugin: the output texture cannot be rendered to by this OpenGL driver");
+
+  glDisable(GL_BLEND);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_STENCIL_TEST);
+  glDisable(GL_SCISSOR_TEST);
+  glDisable(GL_CULL_FACE);
+  glDisable(GL_FRAMEBUFFER_SRGB);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+
+  const bool low_sun = frame.low_sun;
+  // Pass 1: this frame's sky-view table, for cameras in the atmosphere.
+  PassTimings timings;
+  const bool sky_view_camera = physics::camera_uses_sky_view(p.tables->params(), camera_f);
+  if (sky_view_camera) {
+    const double ms = p.tables->update_sky_view(camera_f, sun_f, input.timed ? p.timer.get() : nullptr);
+    timings.sky_view_ms = ms;
+  }
+
+  // Pass 2: this frame's aerial-perspective volume, for cameras low in the
+  // atmosphere.
+  if (frame.volume) {
+    GLuint& volume_program = p.volume_programs[low_sun ? 1 : 0];
+    if (volume_program == 0)
+      volume_program = gpu::link_compute_program(
+          gpu::aerial_perspective_compute_shader_source(p.tables->params(), p.tables->spectral(), low_sun));
+    glUseProgram(volume_program);
+    glProgramUniform3f(volume_program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
+    glProgramUniform3f(volume_program, 1, frame.sun_direction.x, frame.sun_direction.y, frame.sun_direction.z);
+    glProgramUniform1f(volume_program, 24, frame.ap_t_far);
+    glProgramUniform1f(volume_program, 25, frame.ap_t_min);
+    for (GLuint unit = 0; unit < 5; ++unit) {
+      glBindTextureUnit(unit, p.tables->texture(int(unit)));
+      glBindSampler(unit, 0);
+    }
+    for (GLuint i = 0; i < 4; ++i) glBindImageTexture(i, p.volume[i], 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    if (input.timed) p.timer->begin();
+    glDispatchCompute((AP_WIDTH + 7) / 8, (AP_HEIGHT + 7) / 8, 1);
+    // The composite pass samples what the images wrote.
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
+    if (input.timed) timings.volume_ms = p.timer->end_ms();
+    for (GLuint i = 0; i < 4; ++i) glBindImageTexture(i, 0, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+  }
+
+  // Pass 3: every pixel.
+  gpu::PassVariant variant;
+  variant.sky_view_camera = sky_view_camera;
+  variant.low_sun = low_sun;
+  variant.shadows = shadows;
+  variant.gbuffer = input.surfaces == SurfaceMode::gbuffer;
+  variant.volume = frame.volume;
+  variant.blend = frame.volume && frame.volume_weight < 1.0f;
+  GLuint& program = p.programs[variant.index()];
+  if (program == 0) {
+    gpu::AssembledSource vertex;
+    vertex.append("vertex shader", gpu::fullscreen_vertex_shader_source());
+    program = gpu::link_program(
+        vertex, gpu::atmosphere_pass_fragment_shader_source(p.tables->params(), p.tables->spectral(), variant));
+  }
+  glUseProgram(program);
+  glProgramUniform3f(program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
+  glProgramUniform3f(program, 1, frame.sun_direction.x, frame.sun_direction.y, frame.sun_direction.z);
+  glProgramUniformMatrix4fv(program, 2, 1, GL_FALSE, glm::value_ptr(frame.inverse_projection));
+  glProgramUniformMatrix3fv(program, 6, 1, GL_FALSE, glm::value_ptr(frame.view_to_world));
+  glProgramUniform1i(program, 9, frame.depth_encoding);
+  glProgramUniform1f(program, 10, frame.log2_depth_far);
+  glProgramUniformMatrix3fv(program, 12, 1, GL_FALSE, glm::value_ptr(frame.radiance_to_srgb));
+  glProgramUniform1f(program, 15, frame.light_scale);
+  glProgramUniform1i(program, 16, frame.sun_disc ? 1 : 0);
+  glProgramUniform1i(program, 18, frame.shadow_steps);
+  glProgramUniformMatrix4fv(program, 19, 1, GL_FALSE, glm::value_ptr(frame.shadow_matrix));
+  glProgramUniform2f(program, 23, float(input.width), float(input.height));
+  glProgramUniform1f(program, 24, frame.ap_t_far);
+  glProgramUniform1f(program, 25, frame.ap_t_min);
+  glProgramUniform2f(program, 26, frame.shadow_map_size.x, frame.shadow_map_size.y);
+  glProgramUniform1f(program, 27, frame.shadow_depth_bias);
+  glProgramUniform1f(program, 28, frame.volume_weight);
+  p.tables->bind();
+  for (GLuint unit = 0; unit < gpu::kTableUnitCount; ++unit) glBindSampler(unit, 0);
+  glBindTextureUnit(kColourUnit, input.surfaces == SurfaceMode::lit_colour ? input.colour : 0);
+  glBindTextureUnit(kDepthUnit, input.depth);
+  glBindTextureUnit(kAlbedoUnit, input.surfaces == SurfaceMode::gbuffer ? input.albedo : 0);
+  glBindTextureUnit(kNormalUnit, input.surfaces == SurfaceMode::gbuffer ? input.normal : 0);
+  glBindTextureUnit(kShadowUnit, shadows ? input.shadow_map : 0);
+  for (GLuint unit : {kColourUnit, kAlbedoUnit, kNormalUnit}) glBindSampler(unit, p.depth_sampler);
+  glBindSampler(kDepthUnit, p.depth_sampler);
+  glBindSampler(kShadowUnit, p.shadow_sampler);
+  for (GLuint i = 0; i < 4; ++i) {
+    glBindTextureUnit(kVolumeUnit + i, p.volume[i]);
+    glBindSampler(kVolumeUnit + i, 0);
+  }
+  glBindVertexArray(p.vertex_array);
+  glBindFramebuffer(GL_FRAMEBUFFER, p.framebuffer);
+  glViewport(0, 0, input.width, input.height);
+  if (input.timed) p.timer->begin();
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  if (input.timed) timings.composite_ms = p.timer->end_ms();
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  gpu::check_gl("while compositing the atmosphere");
+  p.timings = timings;
+  return output;
+}
+
+}  // namespace atmos

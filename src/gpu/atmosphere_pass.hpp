@@ -1,0 +1,121 @@
+// The engine plugin's GL-free part: validation of a frame's numbers, the
+// reduction of the engine's double-precision frame to the camera-relative
+// floats of composite.glsl (PassFrame), and the CPU twin of the pass for the
+// tests. AtmospherePass::render() uploads exactly the PassFrame built here.
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include <vector>
+
+#include "atmos/plugin.hpp"
+#include "gpu/composite_cpp.hpp"
+#include "precompute/samplers.hpp"
+
+namespace atmos::gpu {
+
+// Throws atmos::Error for what render() refuses without looking at any
+// texture: non-finite or non-rigid view, singular or non-perspective
+// projection, bad depth-encoding parameters, zero sun, bad scales, a
+// non-affine shadow matrix (when a shadow map is given), bad step counts.
+void validate_frame_numbers(const FrameInput& input);
+
+// The PassFrame of a validated input: computed in double, rounded once.
+// `own_sun_lux`: the atmosphere's sun illuminance (see sun_illuminance_lux).
+physics::PassFrame make_pass_frame(const FrameInput& input, const PlanetFrame& planet,
+                                   const physics::AtmosphereParams& params, const glm::mat3& radiance_to_srgb,
+                                   double own_sun_lux);
+
+// Highest surface the pass expects an engine to draw above the ground
+// sphere (Olympus Mons rises 22 km): the aerial-perspective volume reaches
+// the horizon of such a surface, and the low-sun test assumes none higher
+// (a higher surface under a low sun gets the tables' twilight interpolation;
+// one beyond the volume's reach gets its last slice).
+constexpr double kMaxSurfaceAltitude = 25e3;
+
+// The shadow map's size and the depth bias of shadow_visibility: `input`'s
+// shadow_bias_m, or 1.5 texels of the map's footprint, in its depth units.
+void set_shadow_map_size(const FrameInput& input, int width, int height, physics::PassFrame& frame);
+
+// The illuminance of the atmosphere's own sun, lux: the luminance of its
+// irradiance in the render channels.
+double own_sun_illuminance(const physics::AtmosphereParams& params, const glm::mat3& radiance_to_srgb);
+
+// This frame's sky-view table on the CPU, texel by texel as the GPU pass
+// computes it (for cameras in the atmosphere).
+struct CpuSkyView {
+  std::vector<glm::vec3> rayleigh;
+  std::vector<glm::vec3> aerosol;
+  physics::sampler2D rayleigh_sampler() const { return {SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT, rayleigh.data()}; }
+  physics::sampler2D aerosol_sampler() const { return {SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT, aerosol.data()}; }
+};
+CpuSkyView compute_sky_view_cpu(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
+                                const precompute::TableSamplers& samplers, const glm::vec3& camera,
+                                const glm::vec3& sun);
+
+// The aerial-perspective volume (composite.glsl) serves cameras below
+// kVolumeMaxAltitude: the terrain and flight views whose surfaces are near,
+// where the difference of two table lookups is ill-conditioned and costly
+// per pixel. From higher up every surface is tens of kilometres away, the
+// difference is well-conditioned, and the volume's slices — quadratic in
+// distance — would be too long where a downward ray crosses the aerosol
+// layer (4 % off at 45° from 100 km, against 0.3 % for the exact
+// evaluation). Between kVolumeBlendAltitude and kVolumeMaxAltitude both are
+// evaluated and mixed linearly in altitude (the weight of the volume), so
+// that nothing jumps at the switch.
+constexpr double kVolumeMaxAltitude = 25e3;
+constexpr double kVolumeBlendAltitude = 15e3;
+float aerial_perspective_volume_weight(const physics::AtmosphereParams& params, const glm::dvec3& camera);
+
+// The distances the aerial-perspective volume spans for a camera (m,
+// planet-centred): from its height above a surface at kMaxSurfaceAltitude
+// (no surface is nearer) to its horizon on the ground sphere plus the
+// horizon of such a surface (none is farther).
+void aerial_perspective_reach(const physics::AtmosphereParams& params, const glm::dvec3& camera, float& t_min,
+                              float& t_far);
+
+// This frame's aerial-perspective volume on the CPU, as the compute pass
+// fills it (textures: single Rayleigh + multiple, single Rayleigh,
+// single aerosol, transmittance; all zero / one when !frame.volume).
+struct CpuVolume {
+  std::vector<glm::vec3> textures[4];
+  physics::sampler3D sampler(int i) const { return {AP_WIDTH, AP_HEIGHT, AP_SLICES, textures[i].data()}; }
+};
+CpuVolume compute_volume_cpu(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
+                             const precompute::TableSamplers& samplers, const physics::PassFrame& frame);
+
+// The light between a camera (m, planet-centred) and the points
+// camera + offsets[i], in the tables' channels (for three wavelengths: the
+// spectral radiance at each, W m^-2 sr^-1 nm^-1, comparable with
+// atmos/reference.hpp), as the plugin computes it for surfaces: from the
+// aerial-perspective volume (use_volume, cameras in the atmosphere) or
+// exactly (scattering_to_point). For accuracy tests.
+struct AerialPerspectiveSample {
+  glm::dvec3 single{0.0};         // single scattering (Rayleigh + aerosol), with phase functions
+  glm::dvec3 multiple{0.0};       // orders >= 2
+  glm::dvec3 transmittance{1.0};  // sunlight-weighted (see channel_transmittance)
+};
+std::vector<AerialPerspectiveSample> aerial_perspective_cpu(const Atmosphere& atmosphere, const Tables& tables,
+                                                            const glm::dvec3& camera, const glm::dvec3& sun,
+                                                            const std::vector<glm::dvec3>& offsets, bool use_volume);
+
+// The engine's buffers on the CPU, rows bottom-up as in OpenGL (pixel (x, y)
+// at index y * width + x). Empty vectors for what the mode does not read.
+struct CpuEngineBuffers {
+  std::vector<float> depth;
+  std::vector<glm::vec3> colour;
+  std::vector<glm::vec3> albedo;
+  std::vector<glm::vec3> normal;
+  int shadow_width = 0;
+  int shadow_height = 0;
+  std::vector<glm::vec3> shadow_depth;  // depth in x, GL_LINEAR sampled like the pass's shadow sampler
+};
+
+// The CPU twin of AtmospherePass::render() at the given pixels (x, y from the
+// bottom-left, as gl_FragCoord): the same PassFrame, tables, sky-view table
+// and composite_pixel(). Validates the numbers as render() does.
+std::vector<glm::vec3> composite_cpu(const Atmosphere& atmosphere, const Tables& tables, const PlanetFrame& planet,
+                                     const FrameInput& input, const CpuEngineBuffers& buffers,
+                                     const std::vector<glm::ivec2>& pixels);
+
+}  // namespace atmos::gpu

@@ -1,0 +1,74 @@
+// atmos — the GLSL library for engines that shade in their own shaders
+// (AtmospherePass::glsl_library; GLSL only). Appended after the shared
+// definitions, functions.glsl and aerial_perspective.glsl, with
+// ATMOS_UNIT_0..4 (the texture units) and ATMOS_RADIANCE_TO_SRGB defined.
+//
+// Conventions of every atmos_* function:
+//  - positions in metres relative to the planet centre, in the engine's world
+//    axes; directions are unit vectors in the same axes;
+//  - radiance in linear sRGB, cd/m² (luminance scale), for the sun at the
+//    atmosphere's own illuminance (scale it as FrameInput::sun_illuminance_lux
+//    and nits_per_unit scale the pass, to stay consistent with it);
+//  - irradiance in the same units times sr (so that albedo / PI times it is
+//    a radiance in cd/m²).
+// The shared part also defines the functions and macros of atmos's physics
+// (PI, IN, OUT, INLINE, transmittance_along_ray, ...): avoid those names.
+
+layout(binding = ATMOS_UNIT_0) uniform sampler2D atmos_optical_depth_texture;
+layout(binding = ATMOS_UNIT_1) uniform sampler3D atmos_scattering_texture;
+layout(binding = ATMOS_UNIT_2) uniform sampler3D atmos_single_aerosol_texture;
+layout(binding = ATMOS_UNIT_3) uniform sampler2D atmos_irradiance_texture;
+layout(binding = ATMOS_UNIT_4) uniform sampler3D atmos_multiple_scattering_texture;
+
+// Radiance of the sky (or of the atmosphere in front of the planet's sphere)
+// along a view ray from `camera`, excluding the sun disc and the ground
+// itself, and the transmittance of that path (linear sRGB, for sunlight).
+vec3 atmos_sky_radiance(vec3 camera, vec3 view_ray, vec3 sun, out vec3 transmittance) {
+  vec3 channels = sky_radiance(ATMOSPHERE, SPECTRAL, atmos_optical_depth_texture, atmos_scattering_texture,
+                               atmos_single_aerosol_texture, atmos_multiple_scattering_texture,
+                               atmos_irradiance_texture, atmos_irradiance_texture, false,
+                               camera_above_ground(ATMOSPHERE, camera), view_ray, sun, transmittance);
+  vec3 s = ATMOS_RADIANCE_TO_SRGB * ATMOSPHERE.solar_irradiance;
+  transmittance = clamp(ATMOS_RADIANCE_TO_SRGB * (ATMOSPHERE.solar_irradiance * transmittance) / max(s, vec3(1e-30)),
+                        vec3(0.0), vec3(1.0));
+  return ATMOS_RADIANCE_TO_SRGB * channels;
+}
+
+// In-scattered radiance between `camera` and the point camera + `offset`
+// (aerial perspective), and the transmittance between them (linear sRGB):
+// a surface of radiance L at the point is seen as L * transmittance + the
+// returned radiance.
+vec3 atmos_radiance_to_point(vec3 camera, vec3 offset, vec3 sun, out vec3 transmittance) {
+  float nu;
+  PathScattering s = scattering_to_point(ATMOSPHERE, SPECTRAL, atmos_optical_depth_texture, atmos_scattering_texture,
+                                         atmos_single_aerosol_texture, atmos_multiple_scattering_texture, camera,
+                                         offset, sun, true, false, transmittance, nu);
+  vec3 sun_srgb = ATMOS_RADIANCE_TO_SRGB * ATMOSPHERE.solar_irradiance;
+  transmittance =
+      clamp(ATMOS_RADIANCE_TO_SRGB * (ATMOSPHERE.solar_irradiance * transmittance) / max(sun_srgb, vec3(1e-30)),
+            vec3(0.0), vec3(1.0));
+  return max(ATMOS_RADIANCE_TO_SRGB * path_radiance(ATMOSPHERE, s, nu), vec3(0.0));
+}
+
+// Irradiance of the sun (returned; with the planet's shadow and the
+// atmosphere's transmittance, not the engine's shadows) and of the sky
+// (`sky_irradiance`) on a surface at `point` with unit normal `normal`.
+vec3 atmos_sun_and_sky_irradiance(vec3 point, vec3 normal, vec3 sun, out vec3 sky_irradiance) {
+  vec3 sky;
+  vec3 direct = sun_and_sky_irradiance(ATMOSPHERE, SPECTRAL, atmos_optical_depth_texture, atmos_irradiance_texture,
+                                       point, normal, sun, sky);
+  sky_irradiance = ATMOS_RADIANCE_TO_SRGB * sky;
+  return ATMOS_RADIANCE_TO_SRGB * direct;
+}
+
+// Transmittance from `point` to the sun (linear sRGB, averaged over the
+// solar disc, 0 in the planet's shadow): the colour of direct sunlight there
+// relative to the sunlight at the top of the atmosphere.
+vec3 atmos_transmittance_to_sun(vec3 point, vec3 sun) {
+  float r = length(point);
+  vec3 t = channel_transmittance(ATMOSPHERE, SPECTRAL, atmos_optical_depth_texture, PATH_TO_SUN,
+                                 clamp_radius(ATMOSPHERE, r), clamp_cosine(dot(point, sun) / r));
+  vec3 s = ATMOS_RADIANCE_TO_SRGB * ATMOSPHERE.solar_irradiance;
+  return clamp(ATMOS_RADIANCE_TO_SRGB * (ATMOSPHERE.solar_irradiance * t) / max(s, vec3(1e-30)), vec3(0.0),
+               vec3(1.0));
+}

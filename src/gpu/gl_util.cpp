@@ -1,0 +1,344 @@
+#include "gpu/gl_util.hpp"
+
+#include <glm/gtc/packing.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <initializer_list>
+#include <sstream>
+
+#include "physics/parameters.hpp"
+
+namespace atmos::gpu {
+
+namespace {
+
+std::string to_string(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", x);
+  return buffer;
+}
+
+
+// One line out of a compiler info log: the first error lines, with the line
+// numbers of the assembled source mapped back to the files
+// ("0:1234(12): error: ..." -> "functions.glsl:57(12): error: ...";
+// also NVIDIA's "0(1234) : error" and AMD's "ERROR: 0:1234:").
+std::string summarize_log(const std::string& log, const AssembledSource* source) {
+  auto digits_end = [](const std::string& s, size_t i) {
+    while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i;
+    return i;
+  };
+  std::vector<std::string> errors;
+  std::vector<std::string> others;
+  std::istringstream lines(log);
+  std::string line;
+  while (std::getline(lines, line)) {
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+    if (line.empty()) continue;
+    // "<string>:<line>" or "<string>(<line>" at the start, after an optional "ERROR: ".
+    const size_t start = line.rfind("ERROR: ", 0) == 0 ? 7 : 0;
+    const size_t separator = digits_end(line, start);
+    if (source != nullptr && separator > start && separator < line.size() &&
+        (line[separator] == ':' || line[separator] == '(')) {
+      const size_t end = digits_end(line, separator + 1);
+      if (end > separator + 1 && end - separator <= 9) {
+        std::string where = source->locate(std::stoi(line.substr(separator + 1, end - separator - 1)));
+        if (line[separator] == '(') where[where.rfind(':')] = '(';  // NVIDIA style: "file(line) : error"
+        line = line.substr(0, start) + where + line.substr(end);
+      }
+    }
+    (line.find("error") != std::string::npos || line.find("ERROR") != std::string::npos ? errors : others)
+        .push_back(line);
+  }
+  const std::vector<std::string>& chosen = errors.empty() ? others : errors;
+  std::string s;
+  for (size_t i = 0; i < chosen.size() && i < 2; ++i) s += (i > 0 ? " | " : "") + chosen[i];
+  if (s.empty()) s = "(empty info log)";
+  return s;
+}
+
+GLuint compile_shader(GLenum type, const AssembledSource& source, const char* what) {
+  GLuint shader = glCreateShader(type);
+  const char* text = source.text.c_str();
+  glShaderSource(shader, 1, &text, nullptr);
+  glCompileShader(shader);
+  GLint ok = GL_FALSE;
+  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    GLint length = 0;
+    glGetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
+    std::string log(size_t(std::max(length, 1)), '\0');
+    glGetShaderInfoLog(shader, length, nullptr, log.data());
+    glDeleteShader(shader);
+    throw Error(std::string(what) + " shader does not compile: " + summarize_log(log.c_str(), &source));
+  }
+  return shader;
+}
+
+// Texel data for an upload: floats as they are, or rounded to half floats on
+// the CPU (glm::packHalf1x16, round to nearest). Rounding here rather than in
+// the driver makes the GPU's texels the same on every driver, and lets the
+// tests give the CPU twin exactly the same half-rounded tables.
+struct TexelData {
+  GLenum type = GL_FLOAT;
+  const void* pixels = nullptr;
+  std::vector<std::uint16_t> halves;
+};
+
+TexelData texel_data(const std::vector<glm::vec3>& texels, GLenum internal_format) {
+  TexelData data;
+  if (internal_format != GL_RGB16F) {
+    data.pixels = texels.data();
+    return data;
+  }
+  data.type = GL_HALF_FLOAT;
+  data.halves.resize(texels.size() * 3);
+  for (size_t i = 0; i < texels.size(); ++i) {
+    for (int c = 0; c < 3; ++c) {
+      const float value = texels[i][c];
+      if (!(std::abs(value) <= 65504.0f))
+        throw Error("table value " + to_string(double(value)) +
+                    " is outside the half-float range; render with full texture precision");
+      data.halves[3 * i + size_t(c)] = glm::packHalf1x16(value);
+    }
+  }
+  data.pixels = data.halves.data();
+  return data;
+}
+
+}  // namespace
+
+namespace {
+
+GLuint link_shaders(std::initializer_list<GLuint> shaders) {
+  GLuint program = glCreateProgram();
+  for (GLuint shader : shaders) glAttachShader(program, shader);
+  glLinkProgram(program);
+  // The program keeps the compiled code; the shader objects can go.
+  for (GLuint shader : shaders) glDeleteShader(shader);
+  GLint ok = GL_FALSE;
+  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    GLint length = 0;
+    glGetProgramiv(program, GL_INFO_LOG_LENGTH, &length);
+    std::string log(size_t(std::max(length, 1)), '\0');
+    glGetProgramInfoLog(program, length, nullptr, log.data());
+    glDeleteProgram(program);
+    throw Error("shader program does not link: " + summarize_log(log.c_str(), nullptr));
+  }
+  return program;
+}
+
+}  // namespace
+
+GLuint link_program(const AssembledSource& vertex_source, const AssembledSource& fragment_source) {
+  GLuint vertex = compile_shader(GL_VERTEX_SHADER, vertex_source, "vertex");
+  GLuint fragment = 0;
+  try {
+    fragment = compile_shader(GL_FRAGMENT_SHADER, fragment_source, "fragment");
+  } catch (...) {
+    glDeleteShader(vertex);
+    throw;
+  }
+  return link_shaders({vertex, fragment});
+}
+
+GLuint link_compute_program(const AssembledSource& compute_source) {
+  return link_shaders({compile_shader(GL_COMPUTE_SHADER, compute_source, "compute")});
+}
+
+void set_table_sampling(GLuint texture) {
+  glTextureParameteri(texture, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTextureParameteri(texture, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTextureParameteri(texture, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTextureParameteri(texture, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glTextureParameteri(texture, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
+}
+
+GLuint make_texture_2d(int width, int height, const std::vector<glm::vec3>& texels, GLenum internal_format) {
+  GLint max_size = 0;
+  glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
+  if (width > max_size || height > max_size)
+    throw Error("table of " + std::to_string(width) + "x" + std::to_string(height) +
+                " texels exceeds GL_MAX_TEXTURE_SIZE " + std::to_string(max_size));
+  GLuint texture = 0;
+  glCreateTextures(GL_TEXTURE_2D, 1, &texture);
+  // Rows of RGB half floats are 6 bytes per texel: not always 4-byte aligned.
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTextureStorage2D(texture, 1, internal_format, width, height);
+  const TexelData data = texel_data(texels, internal_format);
+  glTextureSubImage2D(texture, 0, 0, 0, width, height, GL_RGB, data.type, data.pixels);
+  set_table_sampling(texture);
+  return texture;
+}
+
+GLuint make_texture_3d(int width, int height, int depth, const std::vector<glm::vec3>& texels,
+                       GLenum internal_format) {
+  GLint max_size = 0;
+  glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max_size);
+  if (width > max_size || height > max_size || depth > max_size)
+    throw Error("table of " + std::to_string(width) + "x" + std::to_string(height) + "x" + std::to_string(depth) +
+                " texels exceeds GL_MAX_3D_TEXTURE_SIZE " + std::to_string(max_size));
+  GLuint texture = 0;
+  glCreateTextures(GL_TEXTURE_3D, 1, &texture);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTextureStorage3D(texture, 1, internal_format, width, height, depth);
+  const TexelData data = texel_data(texels, internal_format);
+  glTextureSubImage3D(texture, 0, 0, 0, 0, width, height, depth, GL_RGB, data.type, data.pixels);
+  set_table_sampling(texture);
+  return texture;
+}
+
+void check_gl(const char* when) {
+  GLenum error = glGetError();
+  if (error == GL_NO_ERROR) return;
+  while (glGetError() != GL_NO_ERROR) {
+  }
+  char code[16];
+  std::snprintf(code, sizeof code, "0x%04X", error);
+  const char* name = error == GL_OUT_OF_MEMORY       ? " (GL_OUT_OF_MEMORY)"
+                     : error == GL_INVALID_OPERATION ? " (GL_INVALID_OPERATION)"
+                     : error == GL_INVALID_VALUE     ? " (GL_INVALID_VALUE)"
+                     : error == GL_INVALID_ENUM      ? " (GL_INVALID_ENUM)"
+                                                     : "";
+  throw Error(std::string("OpenGL error ") + code + name + " " + when);
+}
+
+
+void clear_gl_errors() {
+  while (glGetError() != GL_NO_ERROR) {
+  }
+}
+
+bool is_software_rasterizer() {
+  const GLubyte* name = glGetString(GL_RENDERER);
+  const std::string renderer_name = name != nullptr ? reinterpret_cast<const char*>(name) : "";
+  for (const char* software : {"llvmpipe", "softpipe", "SwiftShader", "swrast"})
+    if (renderer_name.find(software) != std::string::npos) return true;
+  return false;
+}
+
+GpuTimer::GpuTimer() : software_(is_software_rasterizer()) {
+  if (!software_) glCreateQueries(GL_TIME_ELAPSED, 1, &query_);
+}
+
+GpuTimer::~GpuTimer() {
+  if (query_ != 0) glDeleteQueries(1, &query_);
+}
+
+void GpuTimer::begin() {
+  if (software_) {
+    // Work queued before belongs to someone else.
+    glFinish();
+    start_ = std::chrono::steady_clock::now();
+  } else {
+    glBeginQuery(GL_TIME_ELAPSED, query_);
+  }
+}
+
+double GpuTimer::end_ms() {
+  if (software_) {
+    glFinish();
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count();
+  }
+  glEndQuery(GL_TIME_ELAPSED);
+  GLuint64 nanoseconds = 0;
+  glGetQueryObjectui64v(query_, GL_QUERY_RESULT, &nanoseconds);
+  return double(nanoseconds) * 1e-6;
+}
+
+// --- The tables on the GPU -------------------------------------------------
+
+GpuTables::GpuTables(const Atmosphere& atmosphere, const Tables& tables, TexturePrecision precision) {
+  check_tables_match(atmosphere, tables);
+  params_ = std::make_unique<physics::AtmosphereParams>(physics::make_render_params(atmosphere, tables.sizes));
+  spectral_ = physics::make_spectral_sets(atmosphere, tables.sizes);
+  radiance_to_srgb_ = physics::channels_to_srgb_matrix(tables.wavelengths_nm);
+  clear_gl_errors();
+  try {
+    AssembledSource vertex;
+    vertex.append("vertex shader", fullscreen_vertex_shader_source());
+    sky_view_program_ = link_program(vertex, sky_view_fragment_shader_source(*params_, *spectral_));
+    // The sky-view table: recomputed every frame, read with GL_LINEAR +
+    // CLAMP_TO_EDGE like the precomputed tables.
+    glCreateTextures(GL_TEXTURE_2D, 2, sky_view_textures_);
+    glCreateFramebuffers(1, &sky_view_framebuffer_);
+    for (int i = 0; i < 2; ++i) {
+      glTextureStorage2D(sky_view_textures_[i], 1, GL_RGBA32F, SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT);
+      set_table_sampling(sky_view_textures_[i]);
+      glNamedFramebufferTexture(sky_view_framebuffer_, GLenum(GL_COLOR_ATTACHMENT0 + i), sky_view_textures_[i], 0);
+    }
+    const GLenum attachments[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    glNamedFramebufferDrawBuffers(sky_view_framebuffer_, 2, attachments);
+    check_gl("while creating the sky-view table");
+    if (glCheckNamedFramebufferStatus(sky_view_framebuffer_, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw Error("the RGBA32F sky-view target is not supported by this OpenGL driver");
+    // Core profile draws need a vertex array object, even an empty one.
+    glCreateVertexArrays(1, &vertex_array_);
+
+    const TableSizes& s = tables.sizes;
+    const TableSet& t = tables.set;
+    const GLenum format = precision == TexturePrecision::half ? GL_RGB16F : GL_RGB32F;
+    // The optical depth of every wavelength triple, side by side (32-bit
+    // whatever the precision, see TexturePrecision).
+    textures_[0] = make_texture_2d(s.transmittance_mu * tables.spectral_sets(), s.transmittance_r,
+                                   tables.spectral_optical_depth, GL_RGB32F);
+    textures_[1] = make_texture_3d(tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
+                                   t.scattering, format);
+    textures_[2] = make_texture_3d(tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
+                                   t.single_aerosol, format);
+    textures_[3] = make_texture_2d(s.irradiance_mu_s, s.irradiance_r, t.indirect_irradiance, format);
+    textures_[4] = make_texture_3d(tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
+                                   t.multiple_scattering, format);
+    check_gl("while uploading the tables");
+  } catch (...) {
+    release();
+    throw;
+  }
+}
+
+GpuTables::~GpuTables() { release(); }
+
+void GpuTables::release() {
+  if (sky_view_program_ != 0) glDeleteProgram(sky_view_program_);
+  if (sky_view_framebuffer_ != 0) glDeleteFramebuffers(1, &sky_view_framebuffer_);
+  if (vertex_array_ != 0) glDeleteVertexArrays(1, &vertex_array_);
+  glDeleteTextures(2, sky_view_textures_);
+  glDeleteTextures(5, textures_);
+  sky_view_program_ = sky_view_framebuffer_ = vertex_array_ = 0;
+  for (GLuint& t : sky_view_textures_) t = 0;
+  for (GLuint& t : textures_) t = 0;
+}
+
+void GpuTables::bind(GLuint first_unit) const {
+  for (GLuint unit = 0; unit < 5; ++unit) glBindTextureUnit(first_unit + unit, textures_[unit]);
+  glBindTextureUnit(first_unit + kSkyViewRayleighUnit, sky_view_textures_[0]);
+  glBindTextureUnit(first_unit + kSkyViewAerosolUnit, sky_view_textures_[1]);
+}
+
+double GpuTables::update_sky_view(const glm::vec3& camera, const glm::vec3& sun, GpuTimer* timer) {
+  glUseProgram(sky_view_program_);
+  glProgramUniform3f(sky_view_program_, 0, camera.x, camera.y, camera.z);
+  glProgramUniform3f(sky_view_program_, 7, sun.x, sun.y, sun.z);
+  for (GLuint unit = 0; unit < 5; ++unit) {
+    glBindTextureUnit(unit, textures_[unit]);
+    glBindSampler(unit, 0);
+  }
+  // The table's own textures must not be bound for reading while drawn to.
+  glBindTextureUnit(kSkyViewRayleighUnit, 0);
+  glBindTextureUnit(kSkyViewAerosolUnit, 0);
+  glBindVertexArray(vertex_array_);
+  glBindFramebuffer(GL_FRAMEBUFFER, sky_view_framebuffer_);
+  glViewport(0, 0, SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT);
+  if (timer == nullptr) {
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    return 0.0;
+  }
+  timer->begin();
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  return timer->end_ms();
+}
+
+}  // namespace atmos::gpu

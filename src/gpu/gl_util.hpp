@@ -1,0 +1,125 @@
+// OpenGL plumbing shared by the GPU passes (the renderer, the engine
+// plugin): shader compilation with messages mapped back to the source files,
+// table textures with the sampling the CPU twin reproduces, error checks,
+// timing, and the precomputed tables on the GPU with the per-frame sky-view
+// table that both passes read.
+//
+// Everything here works on the CURRENT OpenGL context.
+#pragma once
+
+#include <epoxy/gl.h>
+
+#include <glm/glm.hpp>
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "atmos/atmosphere.hpp"
+#include "atmos/renderer.hpp"
+#include "atmos/tables.hpp"
+#include "gpu/shader_source.hpp"
+
+namespace atmos::gpu {
+
+// Compiles and links a vertex + fragment program; throws atmos::Error with
+// the first error lines of the info log, their line numbers mapped back to
+// the files of the assembled source ("functions.glsl:57(12): error: ...").
+GLuint link_program(const AssembledSource& vertex_source, const AssembledSource& fragment_source);
+// The same for a compute shader.
+GLuint link_compute_program(const AssembledSource& compute_source);
+
+// GL_LINEAR + CLAMP_TO_EDGE, no mipmaps: the arithmetic that
+// physics/shader_cpp.hpp reproduces on the CPU.
+void set_table_sampling(GLuint texture);
+
+// RGB tables as textures: 32-bit floats, or half floats rounded on the CPU
+// (GL_RGB16F). Throws atmos::Error when the size exceeds the driver's limit.
+GLuint make_texture_2d(int width, int height, const std::vector<glm::vec3>& texels, GLenum internal_format);
+GLuint make_texture_3d(int width, int height, int depth, const std::vector<glm::vec3>& texels,
+                       GLenum internal_format);
+
+// Throws atmos::Error naming the pending GL error, if any ("OpenGL error
+// 0x0505 (GL_OUT_OF_MEMORY) while uploading the tables").
+void check_gl(const char* when);
+// Drops pending GL errors (from the engine, before a pass starts).
+void clear_gl_errors();
+
+// Whether the current context is a software rasteriser (llvmpipe, softpipe,
+// SwiftShader): their timer queries time only the submission of the deferred
+// rasterisation (llvmpipe reports ~3 % of the real time), so GpuTimer uses
+// the wall clock up to glFinish there.
+bool is_software_rasterizer();
+
+// Time of GPU work between begin() and end_ms(): a GL_TIME_ELAPSED query, or
+// on software rasterisers the wall clock up to glFinish (the time the "GPU",
+// i.e. the CPU, spent). end_ms() waits for the work.
+class GpuTimer {
+ public:
+  GpuTimer();
+  ~GpuTimer();
+  GpuTimer(const GpuTimer&) = delete;
+  GpuTimer& operator=(const GpuTimer&) = delete;
+  void begin();
+  double end_ms();
+
+ private:
+  GLuint query_ = 0;
+  bool software_ = false;
+  std::chrono::steady_clock::time_point start_;
+};
+
+// Texture units of GpuTables::bind() (the layout(binding) of the shaders).
+enum TableUnit : GLuint {
+  kOpticalDepthUnit = 0,       // spectral optical depth (all wavelength triples side by side)
+  kScatteringUnit = 1,         // single Rayleigh + multiple / P_R
+  kSingleAerosolUnit = 2,      // single aerosol, phase-free
+  kIrradianceUnit = 3,         // indirect (sky) irradiance
+  kMultipleScatteringUnit = 4, // multiple scattering / P_R
+  kSkyViewRayleighUnit = 5,    // this frame's sky-view table
+  kSkyViewAerosolUnit = 6,
+  kTableUnitCount = 7,
+};
+
+// The tables of one atmosphere on the GPU, its parameters as the shaders
+// see them, and the per-frame sky-view table (functions.glsl: sky_view_frame)
+// with its pass.
+class GpuTables {
+ public:
+  GpuTables(const Atmosphere& atmosphere, const Tables& tables, TexturePrecision precision);
+  ~GpuTables();  // needs the context current
+  GpuTables(const GpuTables&) = delete;
+  GpuTables& operator=(const GpuTables&) = delete;
+
+  const physics::AtmosphereParams& params() const { return *params_; }
+  const physics::SpectralSets& spectral() const { return *spectral_; }
+  // The tables' channels to linear sRGB on the cd/m² scale (column-major).
+  const glm::mat3& radiance_to_srgb() const { return radiance_to_srgb_; }
+
+  // Binds the five tables to units first_unit + 0..4 and the sky-view table
+  // to first_unit + 5, 6 (see TableUnit).
+  void bind(GLuint first_unit = 0) const;
+  GLuint texture(int index) const { return textures_[index]; }
+  GLuint sky_view_texture(int index) const { return sky_view_textures_[index]; }
+
+  // Computes this frame's sky-view table for a camera in the atmosphere
+  // (camera_uses_sky_view) at `camera` (m, planet-centred) with the sun in
+  // direction `sun`; returns its GPU time in ms (0 without a timer). Leaves the sky-view
+  // framebuffer bound and the tables bound to units 0..4.
+  double update_sky_view(const glm::vec3& camera, const glm::vec3& sun, GpuTimer* timer);
+
+ private:
+  void release();
+  std::unique_ptr<physics::AtmosphereParams> params_;
+  std::unique_ptr<physics::SpectralSets> spectral_;
+  glm::mat3 radiance_to_srgb_{1.0f};
+  GLuint textures_[5] = {0, 0, 0, 0, 0};
+  GLuint sky_view_program_ = 0;
+  GLuint sky_view_framebuffer_ = 0;
+  GLuint sky_view_textures_[2] = {0, 0};  // single Rayleigh + multiple / P_R, single aerosol (RGBA32F)
+  GLuint vertex_array_ = 0;
+};
+
+}  // namespace atmos::gpu

@@ -1,0 +1,292 @@
+// The engine plugin's GL-free part (see gpu/atmosphere_pass.hpp).
+#include "gpu/atmosphere_pass.hpp"
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "physics/parameters.hpp"
+
+namespace atmos::gpu {
+
+namespace {
+
+bool is_finite(const glm::dmat4& m) {
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r)
+      if (!std::isfinite(m[c][r])) return false;
+  return true;
+}
+
+bool is_finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+std::string number(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", x);
+  return buffer;
+}
+
+// The view matrix must be rigid (rotation + translation): the pass turns
+// its inverse into a rotation and a camera position.
+void check_rigid(const glm::dmat4& view) {
+  const glm::dmat3 r(view);
+  const glm::dmat3 should_be_identity = glm::transpose(r) * r;
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < 3; ++k)
+      if (std::abs(should_be_identity[c][k] - (c == k ? 1.0 : 0.0)) > 1e-6)
+        throw Error("plugin input: the view matrix is not a rotation + translation (scale or shear: put the scale "
+                    "in PlanetFrame::units_per_metre)");
+  if (std::abs(view[0][3]) + std::abs(view[1][3]) + std::abs(view[2][3]) > 0.0 || view[3][3] != 1.0)
+    throw Error("plugin input: the view matrix has a projective last row");
+}
+
+// The projection must be a perspective one (the camera at the view-space
+// origin, looking along -z) and invertible.
+void check_perspective(const glm::dmat4& projection) {
+  if (std::abs(glm::determinant(projection)) < 1e-300)
+    throw Error("plugin input: degenerate projection matrix (not invertible)");
+  // clip w = -z for every OpenGL perspective projection.
+  if (projection[0][3] != 0.0 || projection[1][3] != 0.0 || projection[3][3] != 0.0 || !(projection[2][3] < 0.0))
+    throw Error("plugin input: the projection is not a perspective projection looking along -z (clip w must be -z)");
+  if (!(projection[0][0] != 0.0 && projection[1][1] != 0.0))
+    throw Error("plugin input: degenerate projection matrix (zero field of view scale)");
+}
+
+
+// Whether some surface the camera can see may have the sun below 10°
+// (LOW_SUN_MU_S_TABLE), where aerial perspective integrates single
+// scattering (scattering_to_distance). A surface point is at most
+// acos(R / r) + acos(R / (R + kMaxSurfaceAltitude)) away from the camera's
+// nadir, in angle from the planet centre (the camera's horizon plus the
+// surface's own), and the sun's zenith angle there differs from the one
+// above the nadir by at most that much. The variant without the integration
+// is several times faster on software rasterisers, which run every branch.
+bool sun_may_be_low(const physics::AtmosphereParams& atmosphere, const glm::dvec3& camera, const glm::vec3& sun) {
+  const double bottom = atmosphere.bottom_radius;
+  const double r = std::max(glm::length(camera), bottom);
+  const double reach = std::acos(bottom / r) + std::acos(bottom / (bottom + gpu::kMaxSurfaceAltitude));
+  const double sun_zenith = std::acos(std::clamp(glm::dot(glm::normalize(camera), glm::dvec3(sun)), -1.0, 1.0));
+  const double low_sun_zenith = std::acos(double(LOW_SUN_MU_S_TABLE));
+  return sun_zenith + reach >= low_sun_zenith;
+}
+
+}  // namespace
+
+void aerial_perspective_reach(const physics::AtmosphereParams& params, const glm::dvec3& camera, float& t_min,
+                              float& t_far) {
+  // Far: the camera's horizon on the ground sphere plus the horizon of the
+  // highest surface. Near: the camera's height above the highest surface.
+  const double bottom = params.bottom_radius;
+  const double r = std::max(glm::length(camera), bottom);
+  t_far = float(std::sqrt(r * r - bottom * bottom) +
+                std::sqrt(kMaxSurfaceAltitude * (2.0 * bottom + kMaxSurfaceAltitude)));
+  t_min = float(std::max(r - bottom - kMaxSurfaceAltitude, 0.0));
+}
+
+float aerial_perspective_volume_weight(const physics::AtmosphereParams& params, const glm::dvec3& camera) {
+  const double altitude = glm::length(camera) - double(params.bottom_radius);
+  return float(std::clamp((kVolumeMaxAltitude - altitude) / (kVolumeMaxAltitude - kVolumeBlendAltitude), 0.0, 1.0));
+}
+
+void validate_frame_numbers(const FrameInput& input) {
+  if (!is_finite(input.view) || !is_finite(input.projection))
+    throw Error("plugin input: the view or projection matrix is not finite");
+  check_rigid(input.view);
+  check_perspective(input.projection);
+  if (input.depth_encoding == DepthEncoding::logarithmic &&
+      !(input.log_depth_far > 0.0 && std::isfinite(input.log_depth_far)))
+    throw Error("plugin input: logarithmic depth needs log_depth_far > 0, got " + number(input.log_depth_far));
+  if (!is_finite(input.sun_direction) || glm::length(input.sun_direction) == 0.0)
+    throw Error("plugin input: the sun direction is zero or not finite");
+  if (!(input.sun_illuminance_lux >= 0.0 && std::isfinite(input.sun_illuminance_lux)))
+    throw Error("plugin input: sun_illuminance_lux " + number(input.sun_illuminance_lux) + " must be >= 0");
+  if (!(input.nits_per_unit > 0.0 && std::isfinite(input.nits_per_unit)))
+    throw Error("plugin input: nits_per_unit " + number(input.nits_per_unit) + " must be > 0");
+  if (input.shadow_map != 0) {
+    if (!is_finite(input.shadow_matrix)) throw Error("plugin input: the shadow matrix is not finite");
+    if (input.shadow_matrix[0][3] != 0.0 || input.shadow_matrix[1][3] != 0.0 || input.shadow_matrix[2][3] != 0.0 ||
+        input.shadow_matrix[3][3] != 1.0)
+      throw Error("plugin input: the shadow matrix is not affine (the sun's shadow map needs an orthographic "
+                  "projection)");
+    if (!(input.shadow_bias_m >= 0.0 && std::isfinite(input.shadow_bias_m)))
+      throw Error("plugin input: shadow_bias_m " + number(input.shadow_bias_m) + " must be >= 0");
+    if (input.shadow_steps < 1 || input.shadow_steps > 256)
+      throw Error("plugin input: shadow_steps " + std::to_string(input.shadow_steps) + " outside 1..256");
+  }
+}
+
+double own_sun_illuminance(const physics::AtmosphereParams& params, const glm::mat3& radiance_to_srgb) {
+  const glm::dvec3 sun_srgb = glm::dmat3(radiance_to_srgb) * glm::dvec3(params.solar_irradiance);
+  return glm::dot(sun_srgb, glm::dvec3(0.2126, 0.7152, 0.0722));
+}
+
+physics::PassFrame make_pass_frame(const FrameInput& input, const PlanetFrame& planet,
+                                   const physics::AtmosphereParams& params, const glm::mat3& radiance_to_srgb,
+                                   double own_sun_lux) {
+  // The camera in the engine's world, in double: the inverse of the rigid
+  // view matrix.
+  const glm::dmat4 camera_to_world = glm::inverse(input.view);
+  const glm::dvec3 camera_world(camera_to_world[3]);
+  const glm::dvec3 camera_planet = (camera_world - planet.centre) / planet.units_per_metre;
+  if (!is_finite(camera_planet) || glm::length(camera_planet) > 1e12)
+    throw Error("plugin input: camera position is not finite or absurdly far (> 1e12 m from the planet)");
+  physics::PassFrame frame{};
+  frame.camera = glm::vec3(camera_planet);
+  frame.sun_direction = glm::vec3(glm::normalize(input.sun_direction));
+  frame.inverse_projection = glm::mat4(glm::inverse(input.projection));
+  frame.view_to_world = glm::mat3(glm::dmat3(camera_to_world) / planet.units_per_metre);
+  frame.depth_encoding = input.depth_encoding == DepthEncoding::standard     ? DEPTH_STANDARD
+                         : input.depth_encoding == DepthEncoding::reversed_z ? DEPTH_REVERSED_Z
+                                                                             : DEPTH_LOGARITHMIC;
+  frame.log2_depth_far =
+      input.depth_encoding == DepthEncoding::logarithmic ? float(std::log2(1.0 + input.log_depth_far)) : 0.0f;
+  frame.surface_mode = input.surfaces == SurfaceMode::gbuffer ? SURFACE_GBUFFER : SURFACE_LIT_COLOUR;
+  frame.radiance_to_srgb = radiance_to_srgb;
+  frame.light_scale =
+      float((input.sun_illuminance_lux > 0.0 ? input.sun_illuminance_lux / own_sun_lux : 1.0) / input.nits_per_unit);
+  frame.sun_disc = input.sun_disc;
+  frame.volume_weight = aerial_perspective_volume_weight(params, camera_planet);
+  frame.volume = frame.volume_weight > 0.0f;
+  aerial_perspective_reach(params, camera_planet, frame.ap_t_min, frame.ap_t_far);
+  frame.low_sun = sun_may_be_low(params, camera_planet, frame.sun_direction);
+  frame.shadows = input.shadow_map != 0;
+  frame.shadow_steps = input.shadow_steps;
+  // Camera-relative metres -> the light's clip space: the engine's world
+  // point is camera_world + offset * units_per_metre (composed in double,
+  // so the camera's distance from the world origin never meets a float).
+  frame.shadow_matrix = glm::mat4(input.shadow_matrix * glm::translate(glm::dmat4(1.0), camera_world) *
+                                  glm::scale(glm::dmat4(1.0), glm::dvec3(planet.units_per_metre)));
+  return frame;
+}
+
+void set_shadow_map_size(const FrameInput& input, int width, int height, physics::PassFrame& frame) {
+  frame.shadow_map_size = glm::vec2(float(width), float(height));
+  // The map's texel footprint (m) from the rows of the camera-relative
+  // shadow matrix (clip units per metre), and its depth per metre.
+  const glm::dmat4 m(frame.shadow_matrix);
+  const auto row_length = [&](int row) { return glm::length(glm::dvec3(m[0][row], m[1][row], m[2][row])); };
+  const double texel_m = std::max(2.0 / (double(width) * row_length(0)), 2.0 / (double(height) * row_length(1)));
+  const double bias_m = input.shadow_bias_m > 0.0 ? input.shadow_bias_m : 1.5 * texel_m;
+  frame.shadow_depth_bias = float(0.5 * row_length(2) * bias_m);
+}
+
+CpuSkyView compute_sky_view_cpu(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
+                                const precompute::TableSamplers& samplers, const glm::vec3& camera,
+                                const glm::vec3& sun) {
+  CpuSkyView view;
+  view.rayleigh.assign(size_t(SKY_VIEW_WIDTH) * SKY_VIEW_HEIGHT, glm::vec3(0.0f));
+  view.aerosol.assign(view.rayleigh.size(), glm::vec3(0.0f));
+  tbb::parallel_for(0, SKY_VIEW_HEIGHT, [&](int y) {
+    for (int x = 0; x < SKY_VIEW_WIDTH; ++x) {
+      // The texel centre, as gl_FragCoord gives it to the sky-view pass.
+      const glm::vec2 uv((float(x) + 0.5f) / float(SKY_VIEW_WIDTH), (float(y) + 0.5f) / float(SKY_VIEW_HEIGHT));
+      const size_t i = size_t(y) * SKY_VIEW_WIDTH + size_t(x);
+      physics::compute_sky_view_texel(params, spectral, samplers.spectral_optical_depth, samplers.scattering,
+                                      samplers.single_aerosol, samplers.multiple_scattering, camera, sun, uv,
+                                      view.rayleigh[i], view.aerosol[i]);
+    }
+  });
+  return view;
+}
+
+CpuVolume compute_volume_cpu(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
+                             const precompute::TableSamplers& samplers, const physics::PassFrame& frame) {
+  CpuVolume volume;
+  const size_t size = size_t(AP_WIDTH) * AP_HEIGHT * AP_SLICES;
+  for (auto& t : volume.textures) t.assign(size, glm::vec3(0.0f));
+  volume.textures[3].assign(size, glm::vec3(1.0f));
+  if (!frame.volume) return volume;
+  tbb::parallel_for(0, AP_HEIGHT, [&](int y) {
+    for (int x = 0; x < AP_WIDTH; ++x) {
+      const auto c = std::make_unique<physics::AerialPerspectiveColumn>(physics::compute_aerial_perspective_column(
+          params, spectral, samplers.spectral_optical_depth, samplers.multiple_scattering, frame, x, y));
+      for (int z = 0; z < AP_SLICES; ++z) {
+        const size_t i = (size_t(z) * AP_HEIGHT + size_t(y)) * AP_WIDTH + size_t(x);
+        volume.textures[0][i] = c->single_rayleigh[z] + c->multiple[z];
+        volume.textures[1][i] = c->single_rayleigh[z];
+        volume.textures[2][i] = c->aerosol[z];
+        volume.textures[3][i] = c->transmittance[z];
+      }
+    }
+  });
+  return volume;
+}
+
+std::vector<AerialPerspectiveSample> aerial_perspective_cpu(const Atmosphere& atmosphere, const Tables& tables,
+                                                            const glm::dvec3& camera, const glm::dvec3& sun,
+                                                            const std::vector<glm::dvec3>& offsets, bool use_volume) {
+  check_tables_match(atmosphere, tables);
+  const physics::AtmosphereParams params = physics::make_render_params(atmosphere, tables.sizes);
+  const std::unique_ptr<physics::SpectralSets> spectral = physics::make_spectral_sets(atmosphere, tables.sizes);
+  const precompute::TableSamplers samplers = precompute::make_samplers(tables);
+  physics::PassFrame frame{};
+  frame.camera = glm::vec3(camera);
+  frame.sun_direction = glm::vec3(glm::normalize(sun));
+  frame.volume_weight = use_volume ? aerial_perspective_volume_weight(params, camera) : 0.0f;
+  frame.volume = frame.volume_weight > 0.0f;
+  aerial_perspective_reach(params, camera, frame.ap_t_min, frame.ap_t_far);
+  frame.low_sun = sun_may_be_low(params, camera, frame.sun_direction);
+  const CpuVolume volume = compute_volume_cpu(params, *spectral, samplers, frame);
+  std::vector<AerialPerspectiveSample> out(offsets.size());
+  for (size_t i = 0; i < offsets.size(); ++i) {
+    const float t = float(glm::length(offsets[i]));
+    const glm::vec3 view_ray(glm::normalize(offsets[i]));
+    const physics::PathScattering s = physics::light_to_distance(
+        params, *spectral, samplers.spectral_optical_depth, samplers.scattering, samplers.single_aerosol,
+        samplers.multiple_scattering, volume.sampler(0), volume.sampler(1), volume.sampler(2), volume.sampler(3),
+        frame, view_ray, t, true);
+    const float nu = physics::clamp_cosine(glm::dot(view_ray, frame.sun_direction));
+    out[i].single = glm::dvec3(physics::phase_weighted_scattering(params, s.single_rayleigh, s.aerosol, nu));
+    out[i].multiple = glm::dvec3(s.multiple * physics::rayleigh_phase_function(nu));
+    out[i].transmittance = glm::dvec3(s.transmittance);
+  }
+  return out;
+}
+
+std::vector<glm::vec3> composite_cpu(const Atmosphere& atmosphere, const Tables& tables, const PlanetFrame& planet,
+                                     const FrameInput& input, const CpuEngineBuffers& buffers,
+                                     const std::vector<glm::ivec2>& pixels) {
+  check_tables_match(atmosphere, tables);
+  validate_frame_numbers(input);
+  const physics::AtmosphereParams params = physics::make_render_params(atmosphere, tables.sizes);
+  const std::unique_ptr<physics::SpectralSets> spectral = physics::make_spectral_sets(atmosphere, tables.sizes);
+  const glm::mat3 matrix = physics::channels_to_srgb_matrix(tables.wavelengths_nm);
+  physics::PassFrame frame = make_pass_frame(input, planet, params, matrix, own_sun_illuminance(params, matrix));
+  if (input.shadow_map != 0) set_shadow_map_size(input, buffers.shadow_width, buffers.shadow_height, frame);
+  const precompute::TableSamplers samplers = precompute::make_samplers(tables);
+  const bool sky_view_camera = physics::camera_uses_sky_view(params, frame.camera);
+  // Cameras above the atmosphere evaluate every ray; their table stays unread.
+  CpuSkyView sky_view;
+  if (sky_view_camera) {
+    sky_view = compute_sky_view_cpu(params, *spectral, samplers, frame.camera, frame.sun_direction);
+  } else {
+    sky_view.rayleigh.assign(size_t(SKY_VIEW_WIDTH) * SKY_VIEW_HEIGHT, glm::vec3(0.0f));
+    sky_view.aerosol = sky_view.rayleigh;
+  }
+  const CpuVolume volume = compute_volume_cpu(params, *spectral, samplers, frame);
+  const physics::sampler2D shadow_map{buffers.shadow_width, buffers.shadow_height, buffers.shadow_depth.data()};
+  std::vector<glm::vec3> out(pixels.size());
+  tbb::parallel_for(size_t(0), pixels.size(), [&](size_t k) {
+    const glm::ivec2 pixel = pixels[k];
+    const size_t i = size_t(pixel.y) * size_t(input.width) + size_t(pixel.x);
+    // The pixel centre, as gl_FragCoord gives it to the pass.
+    const glm::vec2 centre(float(pixel.x) + 0.5f, float(pixel.y) + 0.5f);
+    const glm::vec2 ndc = centre / glm::vec2(float(input.width), float(input.height)) * 2.0f - 1.0f;
+    const bool gbuffer = frame.surface_mode == SURFACE_GBUFFER;
+    out[k] = physics::composite_pixel(
+        params, *spectral, samplers.spectral_optical_depth, samplers.scattering, samplers.single_aerosol,
+        samplers.multiple_scattering, samplers.indirect_irradiance, sky_view.rayleigh_sampler(),
+        sky_view.aerosol_sampler(), sky_view_camera, volume.sampler(0), volume.sampler(1), volume.sampler(2),
+        volume.sampler(3), frame, shadow_map, ndc, buffers.depth[i],
+        gbuffer ? glm::vec3(0.0f) : buffers.colour[i], gbuffer ? buffers.albedo[i] : glm::vec3(0.0f),
+        gbuffer ? buffers.normal[i] : glm::vec3(0.0f, 0.0f, 1.0f), physics::pixel_dither(centre));
+  });
+  return out;
+}
+
+}  // namespace atmos::gpu

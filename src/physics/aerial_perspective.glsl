@@ -1,0 +1,209 @@
+// atmos — light between a camera and a point: aerial perspective.
+//
+// Shared by the CPU (physics/shader_cpp.hpp, after functions.glsl) and the
+// shaders (gpu/shader_source.cpp), in the GLSL / C++ subset described at the
+// top of definitions.glsl. The engine plugin (gpu/composite.glsl) and the
+// GLSL library for engines (gpu/engine_library.glsl) build on it.
+//
+// The 4D tables hold the light scattered towards the start of a ray along
+// its whole length, up to the top of the atmosphere or the ground. The light
+// scattered along a PART of the ray, up to a surface point P at distance t,
+// is the difference of two table values (seed 001 §4.2, seed 000 §4.5.2,
+// Bruneton & Neyret 2008 §4 "aerial perspective"):
+//   S(x -> P) = S(x, v) - T(x, P) S(P, v),
+// the ray from P in the same direction v being the rest of the camera's ray.
+// Both lookups use the half of the table (rays that hit the ground or not)
+// of the camera's ray, so that they describe the same ray.
+
+// Transmittance between the start of the ray (r, mu) and the point at
+// distance d along it, in the tables' channels: each wavelength triple's own
+// transmittance, weighted by sunlight as channel_transmittance does (exact
+// for sunlight, the colour of nearly everything an atmosphere attenuates).
+INLINE vec3 channel_transmittance_along_ray(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                            IN(sampler2D) spectral_transmittance_texture, float r, float mu, float d,
+                                            bool ray_r_mu_intersects_ground) {
+  vec3 sum = vec3(0.0f);
+  for (int k = 0; k < spectral.count; ++k) {
+    vec3 t = transmittance_along_ray(spectral.set[k], spectral_transmittance_texture, r, mu, d,
+                                     ray_r_mu_intersects_ground);
+    sum += spectral.to_channels[k] * (spectral.set[k].solar_irradiance * t);
+  }
+  return max(sum / max(atmosphere.solar_irradiance, vec3(1e-30f)), vec3(0.0f));
+}
+
+// The light scattered towards the start of a ray from its first part, in the
+// form of the tables (phase-free): single Rayleigh, multiple / P_R (all
+// orders >= 2, which the terrain's shadows do not cut: they are lit by the
+// whole sky), and single aerosol. The split lets the plugin remove the single
+// scattering of shadowed stretches (light shafts).
+struct PathScattering {
+  vec3 single_rayleigh;
+  vec3 multiple;
+  vec3 aerosol;
+  vec3 transmittance;  // of the segment (tables' channels, see channel_transmittance_along_ray)
+};
+
+// The horizon fix (Bruneton 2017, GetSkyRadianceToPoint). At the horizon
+// the tables switch from rays that end on the ground to rays that graze it
+// and go on to space: both values are large and change fast there, and for
+// a point close to the camera their difference is small — the subtraction
+// amplifies the interpolation error of each lookup into a bright or dark
+// line along the horizon. Rays above the horizon are therefore evaluated at
+// least HORIZON_MARGIN_MU above it, where both lookups sit well inside their
+// half of the table; the point moves with the ray (same distance t). The
+// change is invisible: 0.004 in mu is 0.23°, over which the in-scatter of a
+// near-horizontal segment hardly changes.
+#define HORIZON_MARGIN_MU 0.004f
+
+// S(x -> P) from the tables alone, for the ray (r, mu) and the point at
+// distance t (clamped to the ray's end, d), both lookups in the half of the
+// table that `ray_r_mu_intersects_ground` says. The end point's own sun
+// angle follows from the geometry (mu_s_along_ray).
+INLINE PathScattering table_scattering_to_distance(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                                   IN(sampler2D) spectral_transmittance_texture,
+                                                   IN(sampler3D) scattering_texture,
+                                                   IN(sampler3D) single_aerosol_texture,
+                                                   IN(sampler3D) multiple_scattering_texture, float r, float mu,
+                                                   float mu_s, float nu, float t, bool ray_r_mu_intersects_ground,
+                                                   bool split) {
+  float d = distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ray_r_mu_intersects_ground);
+  t = clamp(t, 0.0f, d);
+  float r_t = clamp_radius(atmosphere, radius_along_ray(r, mu, t));
+  float mu_t = clamp_cosine(mu_along_ray(r, mu, t, r_t));
+  float mu_s_t = clamp_cosine(mu_s_along_ray(r, mu_s, nu, t, r_t));
+  vec3 transmittance = channel_transmittance_along_ray(atmosphere, spectral, spectral_transmittance_texture, r, mu, t,
+                                                       ray_r_mu_intersects_ground);
+  vec3 scattering_0 = scattering_lookup(atmosphere, scattering_texture, r, mu, mu_s, nu, ray_r_mu_intersects_ground);
+  vec3 scattering_t =
+      scattering_lookup(atmosphere, scattering_texture, r_t, mu_t, mu_s_t, nu, ray_r_mu_intersects_ground);
+  // Without `split`, single Rayleigh and multiple stay summed in
+  // single_rayleigh (two lookups fewer; shaders pass a constant).
+  vec3 multiple_0 = vec3(0.0f);
+  vec3 multiple_t = vec3(0.0f);
+  if (split) {
+    multiple_0 =
+        scattering_lookup(atmosphere, multiple_scattering_texture, r, mu, mu_s, nu, ray_r_mu_intersects_ground);
+    multiple_t =
+        scattering_lookup(atmosphere, multiple_scattering_texture, r_t, mu_t, mu_s_t, nu, ray_r_mu_intersects_ground);
+  }
+  vec3 aerosol_0 =
+      scattering_lookup(atmosphere, single_aerosol_texture, r, mu, mu_s, nu, ray_r_mu_intersects_ground);
+  vec3 aerosol_t =
+      scattering_lookup(atmosphere, single_aerosol_texture, r_t, mu_t, mu_s_t, nu, ray_r_mu_intersects_ground);
+  // Light cannot be negative; interpolation noise near t = 0 can make it so.
+  PathScattering s;
+  s.transmittance = transmittance;
+  s.multiple = max(multiple_0 - transmittance * multiple_t, vec3(0.0f));
+  s.single_rayleigh =
+      max((scattering_0 - multiple_0) - transmittance * (scattering_t - multiple_t), vec3(0.0f));
+  s.aerosol = max(aerosol_0 - transmittance * aerosol_t, vec3(0.0f));
+  return s;
+}
+
+// table_scattering_to_distance with the horizon fix above.
+INLINE PathScattering horizon_safe_scattering_to_distance(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                                          IN(sampler2D) spectral_transmittance_texture,
+                                                          IN(sampler3D) scattering_texture,
+                                                          IN(sampler3D) single_aerosol_texture,
+                                                          IN(sampler3D) multiple_scattering_texture, float r,
+                                                          float mu, float mu_s, float nu, float t, bool split) {
+  bool ground = ray_intersects_ground(atmosphere, r, mu);
+  if (!ground) mu = max(mu, horizon_mu(atmosphere, r) + HORIZON_MARGIN_MU);
+  return table_scattering_to_distance(atmosphere, spectral, spectral_transmittance_texture, scattering_texture,
+                                      single_aerosol_texture, multiple_scattering_texture, r, mu, mu_s, nu, t, ground,
+                                      split);
+}
+
+// The light scattered towards the start of the ray (r, mu) by its part up to
+// distance t, with the sun at (mu_s, nu): the table difference with the sun
+// high, and with the sun low somewhere on the segment (see
+// scattering_along_ray: the tables' interpolation in mu_s is off by tens of
+// percent there) single scattering integrated along the segment itself for
+// every wavelength triple, the smooth multiple scattering still from the
+// tables; blended in between. `low_sun_path` false drops the integration
+// (for shaders: a constant, see scattering_to_point).
+INLINE PathScattering scattering_to_distance(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                             IN(sampler2D) spectral_transmittance_texture,
+                                             IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
+                                             IN(sampler3D) multiple_scattering_texture, float r, float mu, float mu_s,
+                                             float nu, float t, bool low_sun_path, bool split) {
+  // The integration replaces single scattering only: it needs the split.
+  PathScattering s = horizon_safe_scattering_to_distance(
+      atmosphere, spectral, spectral_transmittance_texture, scattering_texture, single_aerosol_texture,
+      multiple_scattering_texture, r, mu, mu_s, nu, t, split || low_sun_path);
+  float low_sun = low_sun_weight(mu_s, mu_s_at_ray_end(r, mu, mu_s, nu, t));
+  if (low_sun_path && low_sun > 0.0f) {
+    vec3 single_rayleigh = vec3(0.0f);
+    vec3 single_aerosol = vec3(0.0f);
+    if (!ray_in_planet_shadow(atmosphere, mu_s, mu_s_at_ray_end(r, mu, mu_s, nu, t))) {
+      for (int k = 0; k < spectral.count; ++k) {
+        vec3 set_rayleigh;
+        vec3 set_aerosol;
+        integrate_single_scattering(spectral.set[k], spectral_transmittance_texture, r, mu, mu_s, nu, t,
+                                    RUNTIME_SINGLE_SCATTERING_INTERVALS, RUNTIME_RAY_MAP_CELLS, set_rayleigh,
+                                    set_aerosol);
+        single_rayleigh += spectral.to_channels[k] * set_rayleigh;
+        single_aerosol += spectral.to_channels[k] * set_aerosol;
+      }
+    }
+    s.single_rayleigh = mix(s.single_rayleigh, single_rayleigh, low_sun);
+    s.aerosol = mix(s.aerosol, single_aerosol, low_sun);
+  }
+  return s;
+}
+
+// Radiance of PathScattering towards the camera, with the phase functions
+// of the angle nu between the view ray and the sun.
+INLINE vec3 path_radiance(IN(AtmosphereParams) atmosphere, IN(PathScattering) s, float nu) {
+  return phase_weighted_scattering(atmosphere, s.single_rayleigh + s.multiple, s.aerosol, nu);
+}
+
+// The light between a camera and a point: in-scattered radiance and
+// transmittance (returned in `transmittance`). `camera` is relative to the
+// planet centre (m); `offset` goes from the camera to the point (m), which
+// keeps its float precision however far the camera is from the centre. A
+// camera outside the atmosphere starts where the segment enters it; a
+// segment that misses the atmosphere has no in-scatter and transmittance 1.
+// A camera below the ground counts as standing on it, a point below it as
+// lying on it (the tables end there). `low_sun_path`: whether the sun may be
+// low on the segment (see scattering_to_distance); shaders pass a constant
+// for the frame: software rasterisers run both sides of every branch, and
+// the integration would cost every pixel at noon too. `split`: whether
+// single_rayleigh must exclude the multiple scattering (else it holds both,
+// and `multiple` is 0 — two lookups fewer); always split with low_sun_path.
+INLINE PathScattering scattering_to_point(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                          IN(sampler2D) spectral_transmittance_texture,
+                                          IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
+                                          IN(sampler3D) multiple_scattering_texture, vec3 camera, vec3 offset,
+                                          vec3 sun_direction, bool low_sun_path, bool split,
+                                          OUT(vec3) transmittance, OUT(float) nu) {
+  PathScattering s;
+  s.single_rayleigh = vec3(0.0f);
+  s.multiple = vec3(0.0f);
+  s.aerosol = vec3(0.0f);
+  s.transmittance = vec3(1.0f);
+  transmittance = vec3(1.0f);
+  camera = camera_above_ground(atmosphere, camera);
+  float t = length(offset);
+  vec3 view_ray = t > 0.0f ? offset / t : vec3(0.0f, 0.0f, 1.0f);
+  nu = clamp_cosine(dot(view_ray, sun_direction));
+  vec3 start = camera;
+  if (!enter_atmosphere(atmosphere, start, view_ray)) return s;
+  // The distance the segment runs inside the atmosphere.
+  t = t - length(start - camera);
+  if (!(t > 0.0f)) return s;
+  float r = clamp_radius(atmosphere, length(start));
+  float mu = clamp_cosine(dot(start, view_ray) / r);
+  float mu_s = clamp_cosine(dot(start, sun_direction) / r);
+  bool ground = ray_intersects_ground(atmosphere, r, mu);
+  float d = distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ground);
+  // A point beyond the ray's end lies below the ground sphere (the engine's
+  // terrain may dip below it): the tables end at the sphere. (Unused when
+  // the point is in the atmosphere; the segment's transmittance comes with
+  // the table values, see table_scattering_to_distance.)
+  s = scattering_to_distance(atmosphere, spectral, spectral_transmittance_texture, scattering_texture,
+                             single_aerosol_texture, multiple_scattering_texture, r, mu, mu_s, nu, min(t, d),
+                             low_sun_path, split);
+  transmittance = s.transmittance;
+  return s;
+}
