@@ -42,6 +42,7 @@
 #include "atmos/tables.hpp"
 #include "gpu/camera_cpp.hpp"
 #include "gpu/shader_source.hpp"
+#include "table_sizes.hpp"
 
 namespace {
 
@@ -51,19 +52,6 @@ using atmos::Projection;
 using atmos::TexturePrecision;
 
 constexpr double kEarthRadius = 6371e3;
-
-atmos::TableSizes small_sizes() {
-  atmos::TableSizes s;
-  s.transmittance_mu = 64;
-  s.transmittance_r = 16;
-  s.irradiance_mu_s = 32;
-  s.irradiance_r = 8;
-  s.scattering_nu = 4;
-  s.scattering_mu_s = 16;
-  s.scattering_mu = 32;
-  s.scattering_r = 8;
-  return s;
-}
 
 glm::dvec3 sun_at(double elevation_deg, double azimuth_deg) {
   // Azimuth from +y (the cameras' forward) towards +x (their right).
@@ -190,7 +178,7 @@ class Gpu : public ::testing::Test {
   static void SetUpTestSuite() {
     earth_ = std::make_unique<atmos::Atmosphere>(atmos::load_atmosphere("earth"));
     atmos::PrecomputeOptions options;
-    options.sizes = small_sizes();
+    options.sizes = atmos_test::small_gpu_sizes();
     tables_ = std::make_unique<atmos::Tables>(atmos::precompute_tables(*earth_, options));
     try {
       context_ = atmos::GlContext::create_headless();
@@ -313,7 +301,7 @@ TEST_F(Gpu, SpectralTablesMatchCpu) {
   atmos::Atmosphere spectral = *earth_;
   spectral.wavelengths_nm = atmos::spectral_wavelengths(7);
   atmos::PrecomputeOptions options;
-  options.sizes = small_sizes();
+  options.sizes = atmos_test::small_gpu_sizes();
   const atmos::Tables tables = atmos::precompute_tables(spectral, options);
   atmos::Renderer renderer(*context_, spectral, tables, TexturePrecision::full);
   expect_gpu_matches_cpu(renderer, spectral, tables, "spectral full vs cpu");

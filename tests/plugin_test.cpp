@@ -30,6 +30,7 @@
 #include "atmos/renderer.hpp"
 #include "atmos/tables.hpp"
 #include "gpu/atmosphere_pass.hpp"
+#include "table_sizes.hpp"
 
 namespace {
 
@@ -39,19 +40,6 @@ using atmos::PlanetFrame;
 using atmos::SurfaceMode;
 
 constexpr double kEarthRadius = 6371e3;
-
-atmos::TableSizes small_sizes() {
-  atmos::TableSizes s;
-  s.transmittance_mu = 64;
-  s.transmittance_r = 16;
-  s.irradiance_mu_s = 32;
-  s.irradiance_r = 8;
-  s.scattering_nu = 4;
-  s.scattering_mu_s = 16;
-  s.scattering_mu = 32;
-  s.scattering_r = 8;
-  return s;
-}
 
 // The engine's world: kilometres, planet centre away from the origin.
 PlanetFrame engine_frame() {
@@ -253,7 +241,7 @@ class Plugin : public ::testing::Test {
   static void SetUpTestSuite() {
     earth_ = std::make_unique<atmos::Atmosphere>(atmos::load_atmosphere("earth"));
     atmos::PrecomputeOptions options;
-    options.sizes = small_sizes();
+    options.sizes = atmos_test::small_gpu_sizes();
     tables_ = std::make_unique<atmos::Tables>(atmos::precompute_tables(*earth_, options));
     try {
       context_ = atmos::GlContext::create_headless();

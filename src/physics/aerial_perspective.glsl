@@ -133,19 +133,10 @@ INLINE PathScattering scattering_to_distance(IN(AtmosphereParams) atmosphere, IN
       multiple_scattering_texture, r, mu, mu_s, nu, t, split || low_sun_path);
   float low_sun = low_sun_weight(mu_s, mu_s_at_ray_end(r, mu, mu_s, nu, t));
   if (low_sun_path && low_sun > 0.0f) {
-    vec3 single_rayleigh = vec3(0.0f);
-    vec3 single_aerosol = vec3(0.0f);
-    if (!ray_in_planet_shadow(atmosphere, mu_s, mu_s_at_ray_end(r, mu, mu_s, nu, t))) {
-      for (int k = 0; k < spectral.count; ++k) {
-        vec3 set_rayleigh;
-        vec3 set_aerosol;
-        integrate_single_scattering(spectral.set[k], spectral_transmittance_texture, r, mu, mu_s, nu, t,
-                                    RUNTIME_SINGLE_SCATTERING_INTERVALS, RUNTIME_RAY_MAP_CELLS, set_rayleigh,
-                                    set_aerosol);
-        single_rayleigh += spectral.to_channels[k] * set_rayleigh;
-        single_aerosol += spectral.to_channels[k] * set_aerosol;
-      }
-    }
+    vec3 single_rayleigh;
+    vec3 single_aerosol;
+    spectral_single_scattering(atmosphere, spectral, spectral_transmittance_texture, r, mu, mu_s, nu, t,
+                               single_rayleigh, single_aerosol);
     s.single_rayleigh = mix(s.single_rayleigh, single_rayleigh, low_sun);
     s.aerosol = mix(s.aerosol, single_aerosol, low_sun);
   }

@@ -964,6 +964,26 @@ INLINE bool ray_in_planet_shadow(IN(AtmosphereParams) atmosphere, float mu_s, fl
   return max(mu_s, mu_s_end) < atmosphere.mu_s_min;
 }
 
+// Single scattering of the ray (r, mu) up to distance d, integrated along
+// it (integrate_single_scattering) for every wavelength triple of `spectral`
+// and converted to the tables' channels: the run-time low-sun path. Nothing
+// to integrate on the night side (ray_in_planet_shadow).
+INLINE void spectral_single_scattering(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                       IN(sampler2D) spectral_transmittance_texture, float r, float mu, float mu_s,
+                                       float nu, float d, OUT(vec3) rayleigh, OUT(vec3) aerosol) {
+  rayleigh = vec3(0.0f);
+  aerosol = vec3(0.0f);
+  if (ray_in_planet_shadow(atmosphere, mu_s, mu_s_at_ray_end(r, mu, mu_s, nu, d))) return;
+  for (int k = 0; k < spectral.count; ++k) {
+    vec3 set_rayleigh;
+    vec3 set_aerosol;
+    integrate_single_scattering(spectral.set[k], spectral_transmittance_texture, r, mu, mu_s, nu, d,
+                                RUNTIME_SINGLE_SCATTERING_INTERVALS, RUNTIME_RAY_MAP_CELLS, set_rayleigh, set_aerosol);
+    rayleigh += spectral.to_channels[k] * set_rayleigh;
+    aerosol += spectral.to_channels[k] * set_aerosol;
+  }
+}
+
 // The light scattered towards the start of the ray (r, mu) along it up to
 // the ground or the top (d is that distance), without phase functions, in
 // the form of the tables: `rayleigh` = single Rayleigh + multiple / P_R,
@@ -990,20 +1010,10 @@ INLINE void scattering_along_ray(IN(AtmosphereParams) atmosphere, IN(SpectralSet
               scattering_lookup(atmosphere, single_aerosol_texture, r, mu, mu_s, nu, ray_r_mu_intersects_ground);
   }
   if (low_sun > 0.0f) {
-    vec3 single_rayleigh = vec3(0.0f);
-    vec3 single_aerosol = vec3(0.0f);
-    // Nothing to integrate on the night side.
-    if (!ray_in_planet_shadow(atmosphere, mu_s, mu_s_end)) {
-      for (int k = 0; k < spectral.count; ++k) {
-        vec3 set_rayleigh;
-        vec3 set_aerosol;
-        integrate_single_scattering(spectral.set[k], spectral_transmittance_texture, r, mu, mu_s, nu, d,
-                                    RUNTIME_SINGLE_SCATTERING_INTERVALS, RUNTIME_RAY_MAP_CELLS, set_rayleigh,
-                                    set_aerosol);
-        single_rayleigh += spectral.to_channels[k] * set_rayleigh;
-        single_aerosol += spectral.to_channels[k] * set_aerosol;
-      }
-    }
+    vec3 single_rayleigh;
+    vec3 single_aerosol;
+    spectral_single_scattering(atmosphere, spectral, spectral_transmittance_texture, r, mu, mu_s, nu, d,
+                               single_rayleigh, single_aerosol);
     vec3 multiple =
         scattering_lookup(atmosphere, multiple_scattering_texture, r, mu, mu_s, nu, ray_r_mu_intersects_ground);
     rayleigh += low_sun * (single_rayleigh + multiple);
