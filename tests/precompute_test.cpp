@@ -34,6 +34,11 @@ class EarthSteps : public ::testing::Test {
     aerosol_ = new Table3D();
     compute_single_scattering_tables(params_, *transmittance_, *rayleigh_, *aerosol_, nullptr);
     empty_ = new Table3D(rayleigh_->width, rayleigh_->height, rayleigh_->depth);
+    // Order 2: its density (from the single scattering and the ground lit by
+    // the sun) and its radiance.
+    density1_ = new Table3D(compute_scattering_density_table(params_, *transmittance_, *rayleigh_, *aerosol_, *empty_,
+                                                             Table2D(), 1, nullptr));
+    multiple2_ = new Table3D(compute_multiple_scattering_table(params_, *density1_, nullptr));
   }
   static void TearDownTestSuite() {
     delete atmosphere_;
@@ -41,16 +46,19 @@ class EarthSteps : public ::testing::Test {
     delete rayleigh_;
     delete aerosol_;
     delete empty_;
+    delete density1_;
+    delete multiple2_;
   }
   static atmos::Atmosphere* atmosphere_;
   static AtmosphereParams params_;
   static Table2D* transmittance_;
-  static Table3D *rayleigh_, *aerosol_, *empty_;
+  static Table3D *rayleigh_, *aerosol_, *empty_, *density1_, *multiple2_;
 };
 atmos::Atmosphere* EarthSteps::atmosphere_ = nullptr;
 AtmosphereParams EarthSteps::params_{};
 Table2D* EarthSteps::transmittance_ = nullptr;
-Table3D *EarthSteps::rayleigh_ = nullptr, *EarthSteps::aerosol_ = nullptr, *EarthSteps::empty_ = nullptr;
+Table3D *EarthSteps::rayleigh_ = nullptr, *EarthSteps::aerosol_ = nullptr, *EarthSteps::empty_ = nullptr,
+        *EarthSteps::density1_ = nullptr, *EarthSteps::multiple2_ = nullptr;
 
 TEST_F(EarthSteps, SingleScatteringFastPathEqualsTheSharedDefinition) {
   std::mt19937 rng(3);
@@ -100,47 +108,86 @@ TEST_F(EarthSteps, TransmittanceTableMatchesDirectIntegration) {
     }
 }
 
-// The spherical-harmonic density against the direct sphere quadrature of
-// compute_scattering_density(), for orders 1 (from single scattering, with
-// the direct ground irradiance) and 2.
-TEST_F(EarthSteps, ScatteringDensityMatchesTheSphereQuadrature) {
-  const Table2D no_irradiance;
-  const Table3D density1 =
-      compute_scattering_density_table(params_, *transmittance_, *rayleigh_, *aerosol_, *empty_, no_irradiance, 1, nullptr);
-  std::mt19937 rng(5);
-  double sum_sq = 0.0;
+// The spherical-harmonic density `density` of order `order` + 1 against the
+// direct sphere quadrature of compute_scattering_density() from the same
+// inputs, at 120 random texels: RMS and largest error on the green channel,
+// relative to the density's scale at the texel's altitude.
+void expect_density_matches_the_sphere_quadrature(const AtmosphereParams& p, const Table2D& transmittance,
+                                                  const Table3D& rayleigh, const Table3D& aerosol,
+                                                  const Table3D& multiple, const Table2D& irradiance, int order,
+                                                  const Table3D& density, unsigned seed) {
+  std::mt19937 rng(seed);
+  double sum_sq = 0.0, worst = 0.0;
   int n = 0;
-  double worst = 0.0;
   for (int k = 0; k < 120; ++k) {
-    const int x = int(rng() % unsigned(density1.width)), y = int(rng() % unsigned(density1.height)),
-              z = int(rng() % unsigned(density1.depth));
+    const int x = int(rng() % unsigned(density.width)), y = int(rng() % unsigned(density.height)),
+              z = int(rng() % unsigned(density.depth));
     float r, mu, mu_s, nu;
     bool ground;
-    r_mu_mu_s_nu_from_scattering_texel(params_, vec3(float(x), float(y), float(z)), r, mu, mu_s, nu, ground);
-    const vec3 direct = compute_scattering_density(params_, transmittance_->sampler(), rayleigh_->sampler(),
-                                                   aerosol_->sampler(), empty_->sampler(), no_irradiance.sampler(), r,
-                                                   mu, mu_s, nu, 1, 128);
-    const vec3 fast = const_cast<Table3D&>(density1).at(x, y, z);
-    // Compare on the green channel, relative to the density's scale at this altitude.
-    const double scale = std::max(double(direct.y), 1e-3 * double(compute_scattering_density(
-        params_, transmittance_->sampler(), rayleigh_->sampler(), aerosol_->sampler(), empty_->sampler(),
-        no_irradiance.sampler(), r, 1.0f, 1.0f, 1.0f, 1, 32).y));
-    const double e = std::abs(double(fast.y) - double(direct.y)) / scale;
+    r_mu_mu_s_nu_from_scattering_texel(p, vec3(float(x), float(y), float(z)), r, mu, mu_s, nu, ground);
+    auto direct = [&](float mu_v, float mu_s_v, float nu_v, int samples) {
+      return compute_scattering_density(p, transmittance.sampler(), rayleigh.sampler(), aerosol.sampler(),
+                                        multiple.sampler(), irradiance.sampler(), r, mu_v, mu_s_v, nu_v, order, samples);
+    };
+    const vec3 reference = direct(mu, mu_s, nu, 128);
+    const double scale = std::max(double(reference.y), 1e-3 * double(direct(1.0f, 1.0f, 1.0f, 32).y));
+    const double e = std::abs(double(density.at(x, y, z).y) - double(reference.y)) / scale;
     sum_sq += e * e;
     worst = std::max(worst, e);
     ++n;
   }
   const double rms = std::sqrt(sum_sq / n);
-  std::printf("scattering density, SH vs sphere quadrature: RMS %.3f %%, max %.3f %%\n", 100 * rms, 100 * worst);
+  std::printf("scattering density of order %d, SH vs sphere quadrature: RMS %.3f %%, max %.3f %%\n", order + 1,
+              100 * rms, 100 * worst);
   EXPECT_LT(rms, 0.02);
   EXPECT_LT(worst, 0.10);
 }
 
+// Order 2, from the single scattering and the ground lit by the sun.
+TEST_F(EarthSteps, ScatteringDensityMatchesTheSphereQuadrature) {
+  expect_density_matches_the_sphere_quadrature(params_, *transmittance_, *rayleigh_, *aerosol_, *empty_, Table2D(), 1,
+                                               *density1_, 5);
+}
+
+// Order 3, from the multiple scattering of order 2 and the ground lit by the
+// sky of order 1 (irradiance_lookup() at the ground, which the fast path
+// reads from a row of the irradiance table).
+TEST_F(EarthSteps, ScatteringDensityOfOrderThreeMatchesTheSphereQuadrature) {
+  const Table3D& multiple2 = *multiple2_;
+  const Table2D irradiance1 =
+      compute_indirect_irradiance_table(params_, *transmittance_, *rayleigh_, *aerosol_, *empty_, 1);
+  const Table3D density2 = compute_scattering_density_table(params_, *transmittance_, *rayleigh_, *aerosol_, multiple2,
+                                                            irradiance1, 2, nullptr);
+  expect_density_matches_the_sphere_quadrature(params_, *transmittance_, *rayleigh_, *aerosol_, multiple2, irradiance1,
+                                               2, density2, 7);
+}
+
+// The sky irradiance table (rings of directions that share their (mu, r)
+// lookups) against compute_indirect_irradiance() of functions.glsl, from the
+// single scattering (order 1) and from an order of multiple scattering.
+TEST_F(EarthSteps, IndirectIrradianceFastPathEqualsTheSharedDefinition) {
+  for (int order : {1, 2}) {
+    SCOPED_TRACE(order);
+    const Table3D& ms = order == 1 ? *empty_ : *multiple2_;
+    const Table2D table = compute_indirect_irradiance_table(params_, *transmittance_, *rayleigh_, *aerosol_, ms, order);
+    float largest = 0.0f;
+    for (const vec3& v : table.texels) largest = std::max(largest, v.y);
+    for (int y = 0; y < table.height; ++y)
+      for (int x = 0; x < table.width; ++x) {
+        float r, mu_s;
+        r_mu_s_from_irradiance_uv(
+            params_, vec2((float(x) + 0.5f) / float(table.width), (float(y) + 0.5f) / float(table.height)), r, mu_s);
+        // 16: the theta samples of the precomputation (kIrradianceThetaSamples).
+        const vec3 direct = compute_indirect_irradiance(params_, transmittance_->sampler(), rayleigh_->sampler(),
+                                                        aerosol_->sampler(), ms.sampler(), r, mu_s, order, 16);
+        EXPECT_LT(relative(const_cast<Table2D&>(table).at(x, y), direct, 1e-6f * largest), 1e-4) << x << " " << y;
+      }
+  }
+}
+
 TEST_F(EarthSteps, MultipleScatteringFastPathEqualsTheSharedDefinition) {
-  const Table2D no_irradiance;
-  const Table3D density =
-      compute_scattering_density_table(params_, *transmittance_, *rayleigh_, *aerosol_, *empty_, no_irradiance, 1, nullptr);
-  const Table3D multiple = compute_multiple_scattering_table(params_, density, nullptr);
+  const Table3D& density = *density1_;
+  const Table3D& multiple = *multiple2_;
   std::mt19937 rng(9);
   for (int k = 0; k < 300; ++k) {
     const int x = int(rng() % unsigned(multiple.width)), y = int(rng() % unsigned(multiple.height)),
@@ -252,6 +299,47 @@ TEST_F(Cache, KeyChangesWithEveryInput) {
   o2 = options;
   o2.sizes.scattering_r = 10;
   EXPECT_NE(atmos::tables_cache_key(earth, o2), key);
+  // Auto orders: the tolerance and the tail solver's options.
+  o2 = options;
+  o2.auto_orders = true;
+  const std::string auto_key = atmos::tables_cache_key(earth, o2);
+  EXPECT_NE(auto_key, key);
+  for (auto change : {+[](atmos::PrecomputeOptions& o) { o.auto_orders_tolerance = 1e-4; },
+                      +[](atmos::PrecomputeOptions& o) { o.solve_tail = false; },
+                      +[](atmos::PrecomputeOptions& o) { o.tail_tolerance = 1e-4; },
+                      +[](atmos::PrecomputeOptions& o) { o.tail_iterations = 10; }}) {
+    auto o3 = o2;
+    change(o3);
+    EXPECT_NE(atmos::tables_cache_key(earth, o3), auto_key);
+  }
+  // Fixed orders never solve the tail: its options are not part of the key.
+  o2 = options;
+  o2.solve_tail = false;
+  EXPECT_EQ(atmos::tables_cache_key(earth, o2), key);
+}
+
+// The convergence report, with the entry of a solved tail, comes back from
+// the cache as it was computed.
+TEST_F(Cache, ConvergenceReportWithTheTailRoundTrips) {
+  options.auto_orders = true;
+  options.scattering_orders = 2;  // Earth is not converged after 2 orders: the tail is solved
+  const auto first = atmos::load_or_precompute_tables(earth, options, dir.string());
+  ASSERT_EQ(first.status, atmos::CacheStatus::computed);
+  ASSERT_EQ(first.tables.convergence.size(), 2u);
+  ASSERT_TRUE(first.tables.convergence.back().tail);
+  const auto second = atmos::load_or_precompute_tables(earth, options, dir.string());
+  ASSERT_EQ(second.status, atmos::CacheStatus::hit);
+  ASSERT_EQ(second.tables.convergence.size(), first.tables.convergence.size());
+  for (size_t i = 0; i < first.tables.convergence.size(); ++i) {
+    const atmos::OrderContribution &a = first.tables.convergence[i], &b = second.tables.convergence[i];
+    EXPECT_EQ(a.order, b.order);
+    EXPECT_EQ(a.added, b.added);
+    EXPECT_EQ(a.relative, b.relative);
+    EXPECT_EQ(a.tail, b.tail);
+    EXPECT_EQ(a.iterations, b.iterations);
+    EXPECT_EQ(a.residual, b.residual);
+  }
+  EXPECT_EQ(second.tables.set.scattering, first.tables.set.scattering);
 }
 
 TEST_F(Cache, CorruptAndTruncatedFilesAreRecomputed) {

@@ -115,7 +115,8 @@ TEST(Presets, DerivedQuantities) {
 // scattering tables (with 8, 16 or 24 an order adds more light than the one
 // before, which precompute_tables reports as an error), and it is still
 // converging at the CLI's cap of 64 orders (the 64th adds 0.14 % of the
-// light with these tables, 0.17 % with the default ones).
+// light with these tables, 0.17 % with the default ones): the tail solver
+// adds the rest (4.6 % of the light, in 53 steps with these tables).
 TEST(Presets, VenusAndTitanConvergeWithAutoOrders) {
   for (const char* name : {"titan", "venus"}) {
     SCOPED_TRACE(name);
@@ -126,10 +127,10 @@ TEST(Presets, VenusAndTitanConvergeWithAutoOrders) {
     options.auto_orders = true;
     options.scattering_orders = 64;
     const atmos::Tables t = atmos::precompute_tables(atmos::load_atmosphere(name), options);
-    std::printf("%s: %d orders, the last adds %.3e of the light\n", name, t.scattering_orders,
-                t.convergence.back().relative);
-    ASSERT_EQ(t.convergence.size(), size_t(t.scattering_orders - 1));
-    for (size_t i = 1; i < t.convergence.size(); ++i) {
+    ASSERT_EQ(t.convergence.size(), size_t(t.scattering_orders - 1) + (venus ? 1 : 0));
+    const atmos::OrderContribution& last = t.convergence[size_t(t.scattering_orders - 2)];
+    std::printf("%s: %d orders, the last adds %.3e of the light\n", name, t.scattering_orders, last.relative);
+    for (size_t i = 1; i < size_t(t.scattering_orders - 1); ++i) {
       EXPECT_LT(t.convergence[i].relative, t.convergence[i - 1].relative) << "order " << t.convergence[i].order;
       EXPECT_LT(t.convergence[i].added, t.convergence[i - 1].added) << "order " << t.convergence[i].order;
     }
@@ -139,31 +140,51 @@ TEST(Presets, VenusAndTitanConvergeWithAutoOrders) {
         ASSERT_TRUE(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && v.x >= 0.0f && v.y >= 0.0f &&
                     v.z >= 0.0f);
     if (venus) {
-      EXPECT_LE(t.scattering_orders, 64);
-      EXPECT_LT(t.convergence.back().relative, 2e-3);
+      EXPECT_EQ(t.scattering_orders, 64);
+      EXPECT_LT(last.relative, 2e-3);
+      // The orders after the cap, solved for (tail.cpp).
+      const atmos::OrderContribution& tail = t.convergence.back();
+      std::printf("venus: the tail (orders >= %d) adds %.3e of the light, %d solver steps, residual %.1e\n", tail.order,
+                  tail.relative, tail.iterations, tail.residual);
+      EXPECT_TRUE(tail.tail);
+      EXPECT_EQ(tail.order, 65);
+      EXPECT_LE(tail.residual, options.tail_tolerance);
+      EXPECT_GT(tail.relative, 0.01);
+      EXPECT_LT(tail.relative, 0.1);
     } else {
       EXPECT_LT(t.scattering_orders, 64);
-      EXPECT_LE(t.convergence.back().relative, options.auto_orders_tolerance);
+      EXPECT_LE(last.relative, options.auto_orders_tolerance);
+      EXPECT_FALSE(t.convergence.back().tail);
     }
   }
 }
 
 // The acceptance test of the Venus preset (docs/preset-sources.md 1.2.3):
 // 1.5-2.6 % of the sunlight reaches the ground (Venera 8, Pioneer Venus,
-// Titov et al. 2007). Not met: the light at the ground has been scattered
-// hundreds of times, and the orders of scattering add it too slowly. With
-// these tables the sky light on the ground at 550 nm, sun 40 deg up, is
-// 4e-6 of the sunlight on a horizontal surface at the top after 32 orders,
-// 1.6e-4 after 64 and 6.5e-4 after 100 (the library's maximum), while the
-// auto-orders criterion (0.1 % of the light of the whole table, which the
-// sunlit cloud tops dominate) is met at 75 orders. Disabled until the
-// precomputation can sum the orders to convergence near the ground.
+// Titov et al. 2007). Not met. The light at the ground has been scattered
+// hundreds of times: summed order by order, the light on the ground at
+// 550 nm, sun 40 deg up, was 1.6e-4 of the sunlight on a horizontal surface
+// at the top after 64 orders (the cap of auto orders) and 6.5e-4 after 100;
+// with the orders after the cap solved for (PrecomputeOptions::solve_tail)
+// it is the converged value of these tables, 1.77e-3 (680 nm: 1.2e-2,
+// 440 nm: 3.0e-4; the default tables: 2.2e-3, and 0.31 % of the
+// illuminance), still an order of magnitude short. What is left is not the
+// summation but the tables: their r axis puts ~5 optical depths of cloud
+// between samples, and they do not conserve energy there — with nothing
+// absorbing and a white ground, the light leaving the top above the subsolar
+// point is 1.41 times the sunlight coming in (Earth: 0.97), while each order
+// keeps only 0.978 of the light of the one before in the deep cloud (more
+// samples in r help slowly: 0.981 with 64, 0.983 with 128). (The preset's
+// cloud single-scattering albedo, 0.9995 above 500 nm, is a placeholder too:
+// docs/preset-sources.md 1.2.4.) Disabled until the tables resolve an
+// optically thick cloud.
 TEST(Presets, DISABLED_VenusGroundGetsAFewPercentOfTheSunlight) {
   const atmos::Atmosphere venus = atmos::load_atmosphere("venus");
   atmos::PrecomputeOptions options;
   options.sizes = small_sizes();
   options.sizes.scattering_r = 32;
-  options.scattering_orders = 100;
+  options.auto_orders = true;
+  options.scattering_orders = 64;
   const atmos::Tables t = atmos::precompute_tables(venus, options);
   const atmos::SkyModel model(venus, t);
   const glm::dvec3 sun = atmos::direction_from_azimuth_elevation(180.0, 40.0);
@@ -171,7 +192,8 @@ TEST(Presets, DISABLED_VenusGroundGetsAFewPercentOfTheSunlight) {
   model.horizontal_irradiance(atmos::observer_position(venus, 2.0), sun, ground_sun, ground_sky);
   model.horizontal_irradiance(atmos::observer_position(venus, 99e3), sun, top_sun, top_sky);
   const double ratio = (ground_sun.y + ground_sky.y) / top_sun.y;
-  std::printf("venus: ground / top irradiance at 550 nm %.3e\n", ratio);
+  std::printf("venus: ground / top irradiance at 550 nm %.3e (680 nm %.3e, 440 nm %.3e)\n", ratio,
+              (ground_sun.x + ground_sky.x) / top_sun.x, (ground_sun.z + ground_sky.z) / top_sun.z);
   EXPECT_GT(ratio, 0.01);
   EXPECT_LT(ratio, 0.04);
 }

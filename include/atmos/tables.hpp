@@ -37,6 +37,21 @@ struct PrecomputeOptions {
   int scattering_orders = 4;  // K >= 1: light scattered (or reflected by the ground) at most K times
   bool auto_orders = false;
   double auto_orders_tolerance = 1e-3;
+  // With auto orders, when the cap is reached before the tolerance (an
+  // optically thick, nearly conservative atmosphere such as Venus, where the
+  // light that reaches the ground has been scattered hundreds of times and
+  // each order adds almost as much as the one before): the light of all
+  // further orders is solved for at once instead of being left out — GMRES on
+  // the transport equation of the remaining light (src/precompute/tail.cpp),
+  // until the residual of every wavelength is below `tail_tolerance` of the
+  // first missing order, in at most `tail_iterations` steps of about one
+  // order's cost each, keeping up to 21 tables of the scattering table's size.
+  // Tables::convergence then ends with an entry marked `tail`. Fixed orders
+  // (auto_orders false) never solve the tail: K orders mean light scattered
+  // at most K times.
+  bool solve_tail = true;
+  double tail_tolerance = 1e-5;
+  int tail_iterations = 100;
   // Called from the calling thread with the name of the running step and the
   // fraction of the whole precomputation done, in [0, 1].
   std::function<void(const std::string& step, double fraction)> progress;
@@ -66,6 +81,13 @@ struct OrderContribution {
   int order = 0;
   double added = 0.0;     // what this order adds
   double relative = 0.0;  // added / everything up to and including this order
+  // The last entry, when PrecomputeOptions::solve_tail summed the orders
+  // after the cap: `order` is the first of them (cap + 1), `added` their
+  // light, `relative` its share of all the light, `iterations` the solver's
+  // steps and `residual` its largest relative residual.
+  bool tail = false;
+  int iterations = 0;
+  double residual = 0.0;
 };
 
 struct Tables {
@@ -80,7 +102,7 @@ struct Tables {
   // computes every transmittance from it, spectrally, and integrates the
   // low-sun single scattering with it.
   std::vector<glm::vec3> spectral_optical_depth;
-  std::vector<OrderContribution> convergence;  // orders 2..K (filled by precompute_tables)
+  std::vector<OrderContribution> convergence;  // orders 2..K, then the tail if solved (filled by precompute_tables)
   std::vector<StepTiming> timings;             // filled by precompute_tables (empty when loaded from the cache)
 
   int spectral_sets() const { return int((wavelengths_nm.size() + 2) / 3); }

@@ -2,12 +2,14 @@
 //
 // File name: atmos-<key>.tables, where the key hashes every input of the
 // tables: the atmosphere resampled at the working wavelengths, the table
-// sizes, the number of orders, the file format version and the text of the
+// sizes, the number of orders (and with auto orders the tolerance and the tail
+// solver's options), the file format version and the text of the
 // shared physics sources (so that editing the physics invalidates old files).
 // The file repeats the key and the sizes and ends with a checksum of all its
 // bytes; anything that does not match is reported and recomputed.
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
@@ -27,7 +29,9 @@ namespace {
 constexpr char kMagic[8] = {'A', 'T', 'M', 'O', 'S', 'T', 'B', 'L'};
 // Bump when the meaning of the tables changes in code that is not one of the
 // hashed sources (src/precompute/*.cpp).
-constexpr std::uint32_t kFormatVersion = 4;
+// 5: the convergence entries hold the tail solver's entry (32 bytes each).
+constexpr std::uint32_t kFormatVersion = 5;
+constexpr std::size_t kConvergenceEntryBytes = 4 + 4 + 3 * 8;
 
 struct Fnv1a {
   std::uint64_t h = 1469598103934665603ull;
@@ -79,7 +83,14 @@ std::string tables_cache_key(const Atmosphere& a, const PrecomputeOptions& optio
   write_sizes(h, options.sizes);
   h.value(std::int32_t(options.scattering_orders));
   h.value(options.auto_orders);
-  if (options.auto_orders) h.value(options.auto_orders_tolerance);
+  if (options.auto_orders) {
+    h.value(options.auto_orders_tolerance);
+    h.value(options.solve_tail);
+    if (options.solve_tail) {
+      h.value(options.tail_tolerance);
+      h.value(std::int32_t(options.tail_iterations));
+    }
+  }
   h.value(a.bottom_radius_m);
   h.value(a.top_radius_m);
   h.value(a.sun_angular_radius_rad);
@@ -156,7 +167,7 @@ std::string read_cache(const std::string& path, const std::string& key, const Pr
   const std::size_t transmittance_floats = 3 * std::size_t(s.transmittance_mu) * s.transmittance_r;
   const std::size_t floats = set_floats(s) + transmittance_floats * std::size_t(sets);
   const std::size_t expected =
-      header + std::size_t(wavelengths) * 8 + std::size_t(convergence) * 20 + floats * 4 + 8;
+      header + std::size_t(wavelengths) * 8 + std::size_t(convergence) * kConvergenceEntryBytes + floats * 4 + 8;
   if (data.size() != expected)
     return "size " + std::to_string(data.size()) + " bytes, expected " + std::to_string(expected) + " (truncated?)";
   Fnv1a check;
@@ -172,11 +183,15 @@ std::string read_cache(const std::string& path, const std::string& key, const Pr
   take(tables.wavelengths_nm.data(), std::size_t(wavelengths) * 8);
   for (int i = 0; i < convergence; ++i) {
     OrderContribution c;
-    std::int32_t order;
+    std::int32_t order, iterations;  // iterations < 0: an order, not the tail
     take(&order, 4);
+    take(&iterations, 4);
     take(&c.added, 8);
     take(&c.relative, 8);
+    take(&c.residual, 8);
     c.order = order;
+    c.tail = iterations >= 0;
+    c.iterations = std::max(iterations, std::int32_t(0));
     tables.convergence.push_back(c);
   }
   auto take_vec3 = [&](std::vector<glm::vec3>& v, std::size_t count) {
@@ -217,10 +232,12 @@ std::string write_cache(const std::string& path, const std::string& key, const T
   put(&convergence, 4);
   put(tables.wavelengths_nm.data(), tables.wavelengths_nm.size() * 8);
   for (const OrderContribution& c : tables.convergence) {
-    const std::int32_t order = c.order;
+    const std::int32_t order = c.order, iterations = c.tail ? c.iterations : -1;
     put(&order, 4);
+    put(&iterations, 4);
     put(&c.added, 8);
     put(&c.relative, 8);
+    put(&c.residual, 8);
   }
   const TableSet& set = tables.set;
   for (const auto* v : {&set.direct_irradiance, &set.indirect_irradiance, &set.scattering,

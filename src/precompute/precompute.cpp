@@ -1,11 +1,13 @@
 // The precomputation pipeline (seed 004 §4.2, Bruneton & Neyret 2008 §4):
 // transmittance, direct irradiance and single scattering, then for each
 // scattering order n = 2..K the scattering density of order n, the sky
-// irradiance of order n - 1 and the multiple scattering of order n.
+// irradiance of order n - 1 and the multiple scattering of order n; with auto
+// orders that reach the cap K, the orders after K summed at once (tail.cpp).
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -57,6 +59,10 @@ void check_tables_match(const Atmosphere& atmosphere, const Tables& tables) {
 
 namespace {
 
+// Fields kept by the tail solver between restarts (memory: 21 tables of the
+// scattering table's size, 265 MB with the default sizes).
+constexpr int kTailRestart = 20;
+
 // Radiance summed over the texels of a scattering table, weighted into
 // luminance by `luminance` (per channel of the set), with the phase function
 // of each texel's nu tile for phase-free tables (`phase` 0: none, 1: Rayleigh,
@@ -92,6 +98,11 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
   if (K < 1 || K > 100) throw Error("scattering orders must be in [1, 100], got " + std::to_string(K));
   if (options.auto_orders && !(options.auto_orders_tolerance > 0.0 && options.auto_orders_tolerance < 1.0))
     throw Error("the tolerance of auto orders must be in (0, 1)");
+  const bool may_solve_tail = options.auto_orders && options.solve_tail;
+  if (may_solve_tail && !(options.tail_tolerance > 0.0 && options.tail_tolerance < 1.0))
+    throw Error("the tolerance of the tail solver must be in (0, 1)");
+  if (may_solve_tail && (options.tail_iterations < 1 || options.tail_iterations > 1000))
+    throw Error("the tail solver's iterations must be in [1, 1000], got " + std::to_string(options.tail_iterations));
   const std::vector<double>& wavelengths = atmosphere.wavelengths_nm;
   const int set_count = physics::spectral_set_count(wavelengths);
   if (set_count > SPECTRAL_SET_CAPACITY)
@@ -105,9 +116,11 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
   tables.wavelengths_nm = wavelengths;
 
   // Relative cost of the steps, for the progress fraction (with auto orders,
-  // the estimate assumes the cap and the bar jumps at the end).
+  // the estimate assumes the cap and a tail solved in all its iterations, and
+  // the bar jumps at the end).
   const double cost_single = 1.0, cost_order = 1.6;
-  const double cost_set = 0.05 + cost_single + cost_order * (K - 1);
+  const double cost_tail = may_solve_tail ? cost_order * options.tail_iterations : 0.0;
+  const double cost_set = 0.05 + cost_single + cost_order * (K - 1) + cost_tail;
   const double cost_total = cost_set * set_count;
   double cost_done = 0.0;
   auto report = [&](const std::string& step, double step_cost, double fraction) {
@@ -137,8 +150,11 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
   const glm::vec3 luminance_of_srgb(0.2126f, 0.7152f, 0.0722f);
   const glm::mat3 to_srgb = physics::channels_to_srgb_matrix(wavelengths);
   // Per set, the light each order added and the light gathered up to it
-  // (index order - 2), for the convergence report.
+  // (index order - 2), for the convergence report; and what the tail solver
+  // added, in how many steps, with what residual.
   std::vector<std::vector<double>> set_added, set_total;
+  std::vector<OrderContribution> set_tail(static_cast<size_t>(set_count));
+  std::vector<double> set_total_before_tail(static_cast<size_t>(set_count), 0.0);
   // (With three wavelengths the one set is the render tables: moved, not converted.)
   auto accumulate = [&](std::vector<glm::vec3>& sum, std::vector<glm::vec3>& texels, const glm::mat3& m) {
     if (!srgb) {
@@ -171,11 +187,32 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
     delta_multiple = Table3D(single_rayleigh.width, single_rayleigh.height, single_rayleigh.depth);
     double total = luminance_sum(a, single_rayleigh, luminance, 1) + luminance_sum(a, single_aerosol, luminance, 2);
     double previous_added = 0.0;
+    // What the orders of this set share (view rays, density quadrature).
+    std::shared_ptr<const OrderGeometry> geometry;
+    // Adds the radiance of orders to `multiple`, stored divided by the
+    // Rayleigh phase function so that one lookup and one phase function at
+    // run time give single Rayleigh + all multiple (the `scattering` table
+    // below). The division uses the nu of the texel's tile, not the clamped nu
+    // the texel was computed for: the run-time interpolation between tiles
+    // weights them by their tile nu, and a clamped nu there makes M / P_R
+    // jump between neighbours (17 % errors in the second order towards the
+    // sun, measured against the reference).
+    auto add_to_multiple = [&](const Table3D& radiance) {
+      tbb::parallel_for(0, multiple.depth, [&](int z) {
+        for (int y = 0; y < multiple.height; ++y)
+          for (int x = 0; x < multiple.width; ++x) {
+            const float tile_nu = physics::scattering_texel_tile_nu(a, vec3(float(x), float(y), float(z)));
+            multiple.at(x, y, z) += radiance.at(x, y, z) / physics::rayleigh_phase_function(tile_nu);
+          }
+      });
+    };
+    bool converged = false;
 
     for (int order = 2; order <= K; ++order) {
       timed("scattering_density", cost_order * 0.45, [&](auto&& progress) {
-        density = compute_scattering_density_table(a, transmittance, single_rayleigh, single_aerosol, delta_multiple,
-                                                   delta_irradiance, order - 1, progress);
+        if (!geometry) geometry = make_order_geometry(a);
+        compute_scattering_density_table(a, *geometry, transmittance, single_rayleigh, single_aerosol, delta_multiple,
+                                         delta_irradiance, order - 1, progress, density);
       });
       timed("indirect_irradiance", cost_order * 0.05, [&](auto&&) {
         delta_irradiance = compute_indirect_irradiance_table(a, transmittance, single_rayleigh, single_aerosol,
@@ -184,22 +221,8 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
           indirect_irradiance.texels[i] += delta_irradiance.texels[i];
       });
       timed("multiple_scattering", cost_order * 0.5, [&](auto&& progress) {
-        delta_multiple = compute_multiple_scattering_table(a, density, progress);
-        // Stored divided by the Rayleigh phase function so that one lookup and
-        // one phase function at run time give single Rayleigh + all multiple
-        // (the `scattering` table below).
-        // The division uses the nu of the texel's tile, not the clamped nu
-        // the texel was computed for: the run-time interpolation between
-        // tiles weights them by their tile nu, and a clamped nu there makes
-        // M / P_R jump between neighbours (17 % errors in the second order
-        // towards the sun, measured against the reference).
-        tbb::parallel_for(0, multiple.depth, [&](int z) {
-          for (int y = 0; y < multiple.height; ++y)
-            for (int x = 0; x < multiple.width; ++x) {
-              const float tile_nu = physics::scattering_texel_tile_nu(a, vec3(float(x), float(y), float(z)));
-              multiple.at(x, y, z) += delta_multiple.at(x, y, z) / physics::rayleigh_phase_function(tile_nu);
-            }
-        });
+        compute_multiple_scattering_table(a, *geometry, density, progress, delta_multiple);
+        add_to_multiple(delta_multiple);
       });
       const double added = luminance_sum(a, delta_multiple, luminance, 0);
       // Each order of a physical atmosphere adds less light than the one
@@ -223,9 +246,44 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
       set_total[size_t(set)].push_back(total);
       tables.scattering_orders = std::max(tables.scattering_orders, order);
       if (options.auto_orders && std::abs(added) <= options.auto_orders_tolerance * std::abs(total)) {
-        cost_done += cost_order * (K - order);
+        cost_done += cost_order * (K - order) + cost_tail;
+        converged = true;
         break;
       }
+    }
+
+    // The cap is reached and the orders still add light: solve for the rest
+    // of the series (see tail.cpp), from order K + 1, computed as the orders
+    // are (for K = 1, from the single scattering).
+    if (may_solve_tail && !converged) {
+      timed("tail", cost_tail, [&](auto&& progress) {
+        if (!geometry) geometry = make_order_geometry(a);
+        compute_scattering_density_table(a, *geometry, transmittance, single_rayleigh, single_aerosol, delta_multiple,
+                                         delta_irradiance, K, nullptr, density);
+        const Table2D next_irradiance = compute_indirect_irradiance_table(a, transmittance, single_rayleigh,
+                                                                          single_aerosol, delta_multiple, K);
+        Table3D next_radiance;
+        compute_multiple_scattering_table(a, *geometry, density, nullptr, next_radiance);
+        density = Table3D();
+        delta_multiple = Table3D();
+        const ScatteringTail tail =
+            solve_scattering_tail(a, *geometry, transmittance, next_radiance, next_irradiance, options.tail_tolerance,
+                                  options.tail_iterations, kTailRestart, progress);
+        add_to_multiple(tail.radiance);
+        for (size_t i = 0; i < indirect_irradiance.texels.size(); ++i)
+          indirect_irradiance.texels[i] += tail.irradiance.texels[i];
+        // The solver's combination of signed fields can leave texels of
+        // almost no light slightly below zero.
+        for (auto* texels : {&multiple.texels, &indirect_irradiance.texels})
+          for (vec3& v : *texels) v = max(v, vec3(0.0f));
+        OrderContribution& c = set_tail[size_t(set)];
+        c.tail = true;
+        c.order = K + 1;
+        c.added = luminance_sum(a, tail.radiance, luminance, 0);
+        c.iterations = tail.iterations;
+        c.residual = std::max({tail.relative_residual.x, tail.relative_residual.y, tail.relative_residual.z});
+        set_total_before_tail[size_t(set)] = total;
+      });
     }
 
     Table3D scattering = single_rayleigh;
@@ -258,6 +316,26 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
       total += set_total[k][i];
     }
     tables.convergence.push_back({order, added, total != 0.0 ? added / total : 0.0});
+  }
+  // The tail, over the sets that solved one (each set's light counts in the total).
+  OrderContribution tail;
+  double total = 0.0;
+  for (size_t k = 0; k < set_tail.size(); ++k) {
+    const OrderContribution& c = set_tail[k];
+    if (c.tail) {
+      tail.tail = true;
+      tail.order = std::max(tail.order, c.order);
+      tail.added += c.added;
+      tail.iterations = std::max(tail.iterations, c.iterations);
+      tail.residual = std::max(tail.residual, c.residual);
+      total += set_total_before_tail[k] + c.added;
+    } else if (k < set_total.size() && !set_total[k].empty()) {
+      total += set_total[k].back();
+    }
+  }
+  if (tail.tail) {
+    tail.relative = total != 0.0 ? tail.added / total : 0.0;
+    tables.convergence.push_back(tail);
   }
   return tables;
 }

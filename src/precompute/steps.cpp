@@ -3,8 +3,13 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#ifdef __SSE__
+#include <xmmintrin.h>
+#endif
+
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 
 namespace atmos::precompute {
@@ -24,6 +29,15 @@ void parallel_texels_2d(int width, int height, const std::function<void(int, int
   tbb::parallel_for(tbb::blocked_range<int>(0, width * height, 64), [&](const tbb::blocked_range<int>& range) {
     for (int i = range.begin(); i != range.end(); ++i) body(i % width, i / width);
   });
+}
+
+// Gives `table` these dimensions, reusing its memory (every texel is then
+// written by the step): a new 12 MB table per order costs its page faults.
+void resize_table(Table3D& table, int width, int height, int depth) {
+  table.width = width;
+  table.height = height;
+  table.depth = depth;
+  table.texels.resize(size_t(width) * size_t(height) * size_t(depth));
 }
 
 // Runs body(y, z) for every (mu, r) row of a scattering table, one r slice at a
@@ -59,17 +73,21 @@ TexelColumns make_texel_columns(const AtmosphereParams& a) {
   return c;
 }
 
-// scattering_u_mu_s() tabulated finely over [mu_s_min, 1] (constant below,
-// where the mapping clamps): it costs three square roots and four divisions,
-// and the multiple scattering evaluates it for every texel and ray node.
-// Linear interpolation between 8192 samples of this smooth function is exact
-// to ~1e-7 of the coordinate; the kink at mu_s_min is a sample, not crossed.
+// unit_range_from_mu_s() (the mu_s coordinate of the scattering and
+// irradiance tables) tabulated finely over [mu_s_min, 1] (constant below, where
+// the mapping clamps), times `scale`: for a table of n texels along mu_s,
+// scale = n - 1 gives the texel coordinate that texture() interpolates at
+// (u n - 0.5 with u = texture_coord_from_unit_range(x, n)). The mapping costs
+// three square roots and four divisions, and the multiple scattering
+// evaluates it for every texel and ray node. Linear interpolation between
+// 8192 samples of this smooth function is exact to ~1e-7 of the coordinate;
+// the kink at mu_s_min is a sample, not crossed.
 class MuSCoordinate {
  public:
-  explicit MuSCoordinate(const AtmosphereParams& a) : low_(a.mu_s_min), u_(kSamples + 1) {
+  MuSCoordinate(const AtmosphereParams& a, float scale) : low_(a.mu_s_min), u_(kSamples + 1) {
     scale_ = float(kSamples) / (1.0f - low_);
     for (int i = 0; i <= kSamples; ++i)
-      u_[size_t(i)] = scattering_u_mu_s(a, low_ + (1.0f - low_) * float(i) / float(kSamples));
+      u_[size_t(i)] = unit_range_from_mu_s(a, low_ + (1.0f - low_) * float(i) / float(kSamples)) * scale;
   }
   float operator()(float mu_s) const {
     const float x = std::max(mu_s - low_, 0.0f) * scale_;
@@ -85,53 +103,227 @@ class MuSCoordinate {
   std::vector<float> u_;
 };
 
-// transmittance_to_sun(a, t, r, mu_s) for one radius and many mu_s: the
-// row of the transmittance table at r (its v coordinate) is interpolated
-// once, and the solar disc is only averaged near the horizon.
-class SunTransmittanceAtRadius {
+// irradiance_lookup(a, e, bottom_radius, mu_s) for many mu_s: the ground row
+// of the irradiance table is interpolated once.
+class GroundIrradiance {
  public:
-  SunTransmittanceAtRadius(const AtmosphereParams& a, const sampler2D& t, float r)
-      : a_(a), r_(r), row_(size_t(t.width)) {
-    const vec2 uv = transmittance_uv_from_r_mu(a, r, 1.0f);
+  GroundIrradiance(const AtmosphereParams& a, const sampler2D& e)
+      : coordinate_(a, float(e.width - 1)), row_(size_t(e.width)) {
     int y0, y1;
     float fy;
-    detail::linear_tap(uv.y, t.height, y0, y1, fy);
-    for (int x = 0; x < t.width; ++x)
-      row_[size_t(x)] = t.texels[size_t(y0) * size_t(t.width) + size_t(x)] * (1.0f - fy) +
-                        t.texels[size_t(y1) * size_t(t.width) + size_t(x)] * fy;
-    mu_h_ = horizon_mu(a, r);
+    detail::linear_tap(irradiance_uv_from_r_mu_s(a, a.bottom_radius, 1.0f).y, e.height, y0, y1, fy);
+    for (int x = 0; x < e.width; ++x)
+      row_[size_t(x)] = e.texels[size_t(y0) * size_t(e.width) + size_t(x)] * (1.0f - fy) +
+                        e.texels[size_t(y1) * size_t(e.width) + size_t(x)] * fy;
   }
   vec3 operator()(float mu_s) const {
-    if (!sun_needs_disc_average(a_, mu_s, mu_h_)) return at(mu_s);
-    if (mu_s - mu_h_ < -a_.sun_angular_radius) return vec3(0.0f);
-    vec3 sum(0.0f);
-    for (int k = 0; k < SUN_DISC_NODES; ++k) {
-      float weight;
-      const float mu_k = sun_disc_node(a_, mu_s, mu_h_, k, weight);
-      sum += weight * at(mu_k);
-    }
-    return sum;
+    const float x = coordinate_(mu_s);
+    const int i = std::min(int(x), int(row_.size()) - 2);
+    const float f = x - float(i);
+    return row_[size_t(i)] * (1.0f - f) + row_[size_t(i) + 1] * f;
   }
 
  private:
-  vec3 at(float mu) const {
-    int x0, x1;
-    float fx;
-    detail::linear_tap(transmittance_uv_from_r_mu(a_, r_, mu).x, int(row_.size()), x0, x1, fx);
-    // The table holds optical depth (transmittance_to_top_atmosphere_boundary).
-    return exp(-(row_[size_t(x0)] * (1.0f - fx) + row_[size_t(x1)] * fx));
+  MuSCoordinate coordinate_;
+  std::vector<vec3> row_;
+};
+
+using v4f = float __attribute__((vector_size(16)));  // GCC/Clang vector extension: SSE on x86-64
+using v4i = int __attribute__((vector_size(16)));
+inline v4f splat(float x) { return v4f{x, x, x, x}; }
+
+// exp(x) of four floats at once: Cephes' expf (Moshier), as in the SSE
+// versions of it — range reduction by ln 2 in two parts and a degree-5
+// polynomial; within 1 ulp of the exact exponential for every float in
+// [-87.3, 0] (checked exhaustively; libm's expf is within 0.5), and 0 below
+// -87.3 (where expf is denormal or 0: an optical depth of 87 transmits nothing). The single scattering takes
+// the exponential of the interpolated optical depth once per texel, ray node
+// and point of the solar disc, three channels each: as three calls to expf
+// it was a third of that step.
+inline v4f exp4(v4f x) {
+  const v4i underflow = x < splat(-87.3365447f);
+  x = x < splat(-87.3365447f) ? splat(-87.3365447f) : x;
+  x = x > splat(88.3762626f) ? splat(88.3762626f) : x;
+  // n = floor(x / ln 2 + 1/2)
+  const v4f fx = x * splat(1.44269504088896341f) + splat(0.5f);
+  v4f n = __builtin_convertvector(__builtin_convertvector(fx, v4i), v4f);
+  n = n > fx ? n - splat(1.0f) : n;
+  x = x - n * splat(0.693359375f) + n * splat(2.12194440e-4f);
+  v4f y = splat(1.9875691500e-4f);
+  y = y * x + splat(1.3981999507e-3f);
+  y = y * x + splat(8.3334519073e-3f);
+  y = y * x + splat(4.1665795894e-2f);
+  y = y * x + splat(1.6666665459e-1f);
+  y = y * x + splat(5.0000001201e-1f);
+  y = y * (x * x) + x + splat(1.0f);
+  const v4i bits = (__builtin_convertvector(n, v4i) + 127) << 23;
+  y = y * std::bit_cast<v4f>(bits);
+  return underflow ? splat(0.0f) : y;
+}
+
+inline v4f sqrt4(v4f x) {
+#ifdef __SSE__
+  return v4f(_mm_sqrt_ps(__m128(x)));
+#else
+  return v4f{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
+#endif
+}
+
+// transmittance_to_sun(a, t, r, mu_s) for one radius and many mu_s: the
+// row of the transmittance table at r (its v coordinate) is interpolated
+// once, with what transmittance_uv_from_r_mu() computes from r alone, and the
+// solar disc is only averaged near the horizon.
+class SunTransmittanceAtRadius {
+ public:
+  SunTransmittanceAtRadius(const AtmosphereParams& a, const sampler2D& t, float r) : a_(a) {
+    // sun_disc_node() for a disc wholly above the horizon: θ_k = 22.5°,
+    // 67.5°, 112.5°, 157.5°.
+    for (int k = 0; k < SUN_DISC_NODES; ++k) {
+      const bool outer = k == 0 || k == 3;
+      float cos_theta = outer ? 0.9238795325f : 0.3826834324f;
+      const float sin_theta = outer ? 0.3826834324f : 0.9238795325f;
+      if (k >= 2) cos_theta = -cos_theta;
+      disc_weight_[k] = PI / float(SUN_DISC_NODES) * sin_theta * sin_theta * (2.0f / PI);
+      disc_delta_[k] = a.sun_angular_radius * cos_theta;
+      disc_cosine_[k] = 1.0f - 0.5f * disc_delta_[k] * disc_delta_[k];
+    }
+    reset(t, r);
+  }
+
+  void reset(const sampler2D& t, float r) {
+    const vec2 uv = transmittance_uv_from_r_mu(a_, r, 1.0f);
+    int y0, y1;
+    float fy;
+    detail::linear_tap(uv.y, t.height, y0, y1, fy);
+    row_.resize(size_t(t.width));
+    for (int x = 0; x < t.width; ++x) {
+      const vec3 depth = t.texels[size_t(y0) * size_t(t.width) + size_t(x)] * (1.0f - fy) +
+                         t.texels[size_t(y1) * size_t(t.width) + size_t(x)] * fy;
+      row_[size_t(x)] = v4f{depth.x, depth.y, depth.z, 0.0f};
+    }
+    mu_h_ = horizon_mu(a_, r);
+    // transmittance_uv_from_r_mu(): x_mu = (d - d_min) / (d_max - d_min) with
+    // d the distance to the top; texel coordinate u n - 0.5 in the table of
+    // `transmittance_tiles` tiles side by side, as texture() computes it.
+    r_ = r;
+    top_minus_r_times_top_plus_r_ = (a_.top_radius - r) * (a_.top_radius + r);
+    d_min_ = a_.top_radius - r;
+    inverse_range_ = 1.0f / (horizon_length(a_, r) + horizon_length_at_top(a_) - d_min_);
+    const int n = a_.transmittance_mu_size;
+    texel_scale_ = float(n - 1);
+    texel_offset_ = float(a_.transmittance_tile * n);
+  }
+
+  vec3 operator()(float mu_s) const {
+    vec3 result;
+    evaluate(&mu_s, 1, &result);
+    return result;
+  }
+
+  // out[i] = transmittance_to_sun(a, t, r, mu_s[i]), i < count. The
+  // transmittance is computed four zenith cosines at a time (one vector per
+  // channel): the four points of the solar disc of a sun near the horizon,
+  // or four texels' suns that need no disc average.
+  void evaluate(const float* mu_s, int count, vec3* out) const {
+    int pending_index[4];
+    float pending_mu[4];
+    int pending = 0;
+    std::array<v4f, 3> t;
+    auto flush = [&] {
+      for (int k = pending; k < 4; ++k) pending_mu[k] = pending_mu[0];
+      at4(v4f{pending_mu[0], pending_mu[1], pending_mu[2], pending_mu[3]}, t);
+      for (int k = 0; k < pending; ++k) out[pending_index[k]] = vec3(t[0][k], t[1][k], t[2][k]);
+      pending = 0;
+    };
+    for (int i = 0; i < count; ++i) {
+      const float mu = mu_s[i];
+      if (!sun_needs_disc_average(a_, mu, mu_h_)) {
+        pending_index[pending] = i;
+        pending_mu[pending] = mu;
+        if (++pending == 4) flush();
+        continue;
+      }
+      if (mu - mu_h_ < -a_.sun_angular_radius) {
+        out[i] = vec3(0.0f);
+        continue;
+      }
+      // The disc average of transmittance_to_sun(), sun_disc_node() for each
+      // point: for a disc wholly above the horizon its weights and offsets
+      // are constants (disc_weight_, disc_delta_ and 1 - delta² / 2 in
+      // disc_cosine_), with the same arithmetic.
+      v4f nodes, weights;
+      if (mu - mu_h_ > a_.sun_angular_radius) {
+        const v4f m = splat(mu) * disc_cosine_ + splat(safe_sqrt(1.0f - mu * mu)) * disc_delta_;
+        nodes = m < splat(-1.0f) ? splat(-1.0f) : (m > splat(1.0f) ? splat(1.0f) : m);
+        weights = disc_weight_;
+      } else {
+        for (int k = 0; k < SUN_DISC_NODES; ++k) {
+          float weight;
+          nodes[k] = sun_disc_node(a_, mu, mu_h_, k, weight);
+          weights[k] = weight;
+        }
+      }
+      at4(nodes, t);
+      float sum[3];
+      for (int c = 0; c < 3; ++c) {
+        const v4f weighted = weights * t[size_t(c)];
+        sum[c] = weighted[0] + weighted[1];
+        sum[c] += weighted[2];
+        sum[c] += weighted[3];
+      }
+      out[i] = vec3(sum[0], sum[1], sum[2]);
+    }
+    if (pending > 0) flush();
+  }
+
+ private:
+  static_assert(SUN_DISC_NODES == 4, "the points of the solar disc are one vector");
+
+  // exp(-τ) at four zenith cosines mu (lanes), τ interpolated in the row as
+  // texture() does; t[c] holds channel c.
+  void at4(v4f mu, std::array<v4f, 3>& t) const {
+    const v4f r_mu = splat(r_) * mu;
+    v4f discriminant = r_mu * r_mu + splat(top_minus_r_times_top_plus_r_);
+    discriminant = discriminant < splat(0.0f) ? splat(0.0f) : discriminant;
+    v4f d = sqrt4(discriminant) - r_mu;
+    d = d < splat(0.0f) ? splat(0.0f) : d;
+    v4f x_mu = (d - splat(d_min_)) * splat(inverse_range_);
+    x_mu = x_mu < splat(0.0f) ? splat(0.0f) : (x_mu > splat(1.0f) ? splat(1.0f) : x_mu);
+    const v4f coordinate = x_mu * splat(texel_scale_) + splat(texel_offset_);
+    v4i i = __builtin_convertvector(coordinate, v4i);
+    const int last = int(row_.size()) - 2;
+    i = i > last ? v4i{last, last, last, last} : i;
+    const v4f f = coordinate - __builtin_convertvector(i, v4f);
+    for (int c = 0; c < 3; ++c) {
+      const v4f low{row_[size_t(i[0])][c], row_[size_t(i[1])][c], row_[size_t(i[2])][c], row_[size_t(i[3])][c]};
+      const v4f high{row_[size_t(i[0]) + 1][c], row_[size_t(i[1]) + 1][c], row_[size_t(i[2]) + 1][c],
+                     row_[size_t(i[3]) + 1][c]};
+      // The table holds optical depth (transmittance_to_top_atmosphere_boundary).
+      t[size_t(c)] = exp4(-(low + (high - low) * f));
+    }
   }
 
   const AtmosphereParams& a_;
-  float r_;
-  std::vector<vec3> row_;
+  std::vector<v4f> row_;
   float mu_h_ = 0.0f;
+  float r_ = 0.0f;
+  float top_minus_r_times_top_plus_r_ = 0.0f;
+  float d_min_ = 0.0f;
+  float inverse_range_ = 0.0f;
+  float texel_scale_ = 0.0f;
+  float texel_offset_ = 0.0f;
+  v4f disc_weight_, disc_delta_, disc_cosine_;
 };
 
+// A vec3 as a vector of 4 floats (the fourth 0), and back.
+inline v4f to_v4f(const vec3& v) { return v4f{v.x, v.y, v.z, 0.0f}; }
+inline vec3 to_vec3(v4f v) { return vec3(v[0], v[1], v[2]); }
+
 // The 4D table `table` at one (u_mu, u_r), trilinear in those two
-// coordinates exactly as texture() does: a row of (nu, mu_s) texels. Lookups
-// that share (r, mu) interpolate in it instead of the whole table.
-void interpolate_mu_r_row(const Table3D& table, float u_mu, float u_r, std::vector<vec3>& row) {
+// coordinates exactly as texture() does: a row of (nu, mu_s) texels, as
+// vectors of 4 floats, followed by `padding` zeros. Lookups that share
+// (r, mu) interpolate in it instead of the whole table.
+void interpolate_mu_r_row(const Table3D& table, float u_mu, float u_r, int padding, std::vector<v4f>& row) {
   int y0, y1, z0, z1;
   float fy, fz;
   detail::linear_tap(u_mu, table.height, y0, y1, fy);
@@ -140,9 +332,12 @@ void interpolate_mu_r_row(const Table3D& table, float u_mu, float u_r, std::vect
     return &table.texels[(size_t(z) * size_t(table.height) + size_t(y)) * size_t(table.width)];
   };
   const vec3 *c00 = at(y0, z0), *c10 = at(y1, z0), *c01 = at(y0, z1), *c11 = at(y1, z1);
-  row.resize(size_t(table.width));
+  row.resize(size_t(table.width + padding));
+  const v4f w00 = splat((1.0f - fy) * (1.0f - fz)), w10 = splat(fy * (1.0f - fz)), w01 = splat((1.0f - fy) * fz),
+            w11 = splat(fy * fz);
   for (int x = 0; x < table.width; ++x)
-    row[size_t(x)] = (c00[x] * (1.0f - fy) + c10[x] * fy) * (1.0f - fz) + (c01[x] * (1.0f - fy) + c11[x] * fy) * fz;
+    row[size_t(x)] = to_v4f(c00[x]) * w00 + to_v4f(c10[x]) * w10 + to_v4f(c01[x]) * w01 + to_v4f(c11[x]) * w11;
+  for (int x = table.width; x < table.width + padding; ++x) row[size_t(x)] = splat(0.0f);
 }
 
 // The nodes of the shared ray quadrature (ray_integration_nodes in
@@ -275,17 +470,59 @@ Table2D compute_direct_irradiance_table(const AtmosphereParams& a, const Table2D
   return table;
 }
 
-Table2D compute_indirect_irradiance_table(const AtmosphereParams& a, const Table2D& transmittance,
+// compute_indirect_irradiance() of functions.glsl for every texel. Its
+// directions are rings of constant mu_w: the (mu, r) part of their table
+// lookups is the same for every azimuth and every mu_s of a radius, and is
+// done once per ring (a row of (nu, mu_s) texels); the mu_s coordinate is the
+// same for all directions of a texel.
+Table2D compute_indirect_irradiance_table(const AtmosphereParams& a, const Table2D& /*transmittance*/,
                                           const Table3D& single_rayleigh, const Table3D& single_aerosol,
                                           const Table3D& multiple_scattering, int order) {
+  constexpr int kThetaSamples = kIrradianceThetaSamples;
   Table2D table(a.irradiance_mu_s_size, a.irradiance_r_size);
-  const sampler2D t = transmittance.sampler();
-  const sampler3D sr = single_rayleigh.sampler(), sa = single_aerosol.sampler(), ms = multiple_scattering.sampler();
-  parallel_texels_2d(table.width, table.height, [&](int x, int y) {
-    float r, mu_s;
-    r_mu_s_from_irradiance_uv(a, vec2((float(x) + 0.5f) / float(table.width), (float(y) + 0.5f) / float(table.height)),
-                              r, mu_s);
-    table.at(x, y) = compute_indirect_irradiance(a, t, sr, sa, ms, r, mu_s, order, kIrradianceThetaSamples);
+  const int mu_s_size = a.scattering_mu_s_size;
+  const MuSCoordinate texel_of_mu_s(a, float(mu_s_size - 1));
+  const float d_theta = PI / 2.0f / float(kThetaSamples);
+  const float d_phi = PI / float(kThetaSamples);
+  tbb::parallel_for(0, table.height, [&](int y) {
+    std::vector<float> mu_s(static_cast<size_t>(table.width)), coordinate(static_cast<size_t>(table.width));
+    float r = 0.0f;
+    for (int x = 0; x < table.width; ++x) {
+      r_mu_s_from_irradiance_uv(a, vec2((float(x) + 0.5f) / float(table.width), (float(y) + 0.5f) / float(table.height)),
+                                r, mu_s[size_t(x)]);
+      coordinate[size_t(x)] = texel_of_mu_s(mu_s[size_t(x)]);
+    }
+    std::vector<v4f> first, second, sum(static_cast<size_t>(table.width), splat(0.0f));
+    for (int l = 0; l < kThetaSamples; ++l) {
+      // The ring of compute_indirect_irradiance(): its rays never hit the ground.
+      const float theta = (float(l) + 0.5f) * d_theta;
+      const float mu_w = cos(theta);
+      const float weight = d_theta * d_phi * sin(theta) * mu_w;
+      const float u_mu = scattering_u_mu(a, r, mu_w, false), u_r = scattering_u_r(a, r);
+      interpolate_mu_r_row(order == 1 ? single_rayleigh : multiple_scattering, u_mu, u_r, mu_s_size + 1, first);
+      if (order == 1) interpolate_mu_r_row(single_aerosol, u_mu, u_r, mu_s_size + 1, second);
+      for (int m = 0; m < 2 * kThetaSamples; ++m) {
+        const vec3 w = direction_from_mu_phi(mu_w, (float(m) + 0.5f) * d_phi);
+        for (int x = 0; x < table.width; ++x) {
+          const vec3 sun = vec3(safe_sqrt(1.0f - mu_s[size_t(x)] * mu_s[size_t(x)]), 0.0f, mu_s[size_t(x)]);
+          const float nu_w = clamp_cosine(dot(w, sun));
+          // scattering_lookup() in the row: the two nu tiles around nu_w.
+          float tile, lerp;
+          scattering_nu_tiles(a, nu_w, tile, lerp);
+          const int k = int(coordinate[size_t(x)]);
+          const float f = coordinate[size_t(x)] - float(k);
+          const size_t lower = size_t(int(tile) * mu_s_size + k), upper = lower + size_t(mu_s_size);
+          auto lookup = [&](const std::vector<v4f>& row) {
+            return (row[lower] * splat(1.0f - f) + row[lower + 1] * splat(f)) * splat(1.0f - lerp) +
+                   (row[upper] * splat(1.0f - f) + row[upper + 1] * splat(f)) * splat(lerp);
+          };
+          const vec3 radiance = order == 1 ? phase_weighted_scattering(a, to_vec3(lookup(first)), to_vec3(lookup(second)), nu_w)
+                                           : to_vec3(lookup(first));
+          sum[size_t(x)] += to_v4f(radiance) * splat(weight);
+        }
+      }
+    }
+    for (int x = 0; x < table.width; ++x) table.at(x, y) = to_vec3(sum[size_t(x)]);
   });
   return table;
 }
@@ -307,18 +544,23 @@ void compute_single_scattering_tables(const AtmosphereParams& a, const Table2D& 
     for (int x = 0; x < width; ++x)
       nu[size_t(x)] = clamp_nu(ray.mu, columns.mu_s[size_t(x)], columns.tile_nu[size_t(x)]);
     std::vector<vec3> sum_rayleigh(size_t(width), vec3(0.0f)), sum_aerosol(size_t(width), vec3(0.0f));
+    SunTransmittanceAtRadius sun(a, t, ray.r);
+    std::vector<float> mu_s_t(static_cast<size_t>(width));
+    std::vector<vec3> sun_transmittance(static_cast<size_t>(width));
     for (int i = 0; i < ray.nodes.count; ++i) {
       vec3 beta_rayleigh, beta_aerosol, extinction;
       medium_at(a, ray.r_t[size_t(i)], beta_rayleigh, beta_aerosol, extinction);
       beta_rayleigh *= ray.nodes.weight[i];
       beta_aerosol *= ray.nodes.weight[i];
-      const SunTransmittanceAtRadius sun(a, t, ray.r_t[size_t(i)]);
+      sun.reset(t, ray.r_t[size_t(i)]);
+      // mu_s_along_ray() as two multiply-adds.
+      const float along_mu_s = ray.r / ray.r_t[size_t(i)], along_nu = ray.nodes.t[i] / ray.r_t[size_t(i)];
+      for (int x = 0; x < width; ++x)
+        mu_s_t[size_t(x)] = clamp_cosine(along_mu_s * columns.mu_s[size_t(x)] + along_nu * nu[size_t(x)]);
+      sun.evaluate(mu_s_t.data(), width, sun_transmittance.data());
       for (int x = 0; x < width; ++x) {
-        const float mu_s_t = clamp_cosine(
-            mu_s_along_ray(ray.r, columns.mu_s[size_t(x)], nu[size_t(x)], ray.nodes.t[i], ray.r_t[size_t(i)]));
-        const vec3 sun_transmittance = sun(mu_s_t);
-        sum_rayleigh[size_t(x)] += sun_transmittance * beta_rayleigh;
-        sum_aerosol[size_t(x)] += sun_transmittance * beta_aerosol;
+        sum_rayleigh[size_t(x)] += sun_transmittance[size_t(x)] * beta_rayleigh;
+        sum_aerosol[size_t(x)] += sun_transmittance[size_t(x)] * beta_aerosol;
       }
     }
     for (int x = 0; x < width; ++x) {
@@ -339,65 +581,204 @@ void compute_single_scattering_tables(const AtmosphereParams& a, const Table2D& 
 //   ∫ P(v.w) L(w) dw = Σ_lm p_l L_lm Y_lm(v)
 // (Funk-Hecke). The Rayleigh phase function has only p_0 and p_2, so its part
 // is exact; the aerosol part is truncated at degree kDensityMaxDegree, where
-// p_l = g^l for Henyey-Greenstein (0.8^32 ≈ 8e-4). The cost is one set of
+// p_l = g^l for Henyey-Greenstein (0.8^28 ≈ 2e-3). The cost is one set of
 // radiance samples per (r, mu_s) instead of one sphere per 4D texel.
-Table3D compute_scattering_density_table(const AtmosphereParams& a, const Table2D& transmittance,
-                                         const Table3D& single_rayleigh, const Table3D& single_aerosol,
-                                         const Table3D& multiple_scattering, const Table2D& irradiance, int order,
-                                         const StepProgress& progress) {
-  constexpr int L = kDensityMaxDegree;
-  constexpr int kPhiIntervals = L + 1;  // over [0, π]; 2 (L + 1) over the circle
-  const int width = a.scattering_nu_size * a.scattering_mu_s_size;
-  Table3D density(width, a.scattering_mu_size, a.scattering_r_size);
-  const sampler2D t = transmittance.sampler(), e = irradiance.sampler();
+//
+// The sums over (l, m) are the bulk of the arithmetic; they run on 4-float
+// vectors (SSE): for each m the coefficients of l = m..L are contiguous
+// (ShLayout), the output harmonics are laid out with the view's mu fastest,
+// and the azimuthal sums over the 2 (L + 1) samples use the mirror symmetry
+// cos(m (π - phi)) = (-1)^m cos(m phi) to halve the products.
+namespace {
 
+constexpr int kDensityPhiSamples = kDensityMaxDegree + 2;  // over [0, π]: 2 (L + 1) over the circle
+constexpr int kDensityPhiPairs = kDensityPhiSamples / 2;   // phi and π - phi
+static_assert(kDensityPhiSamples % 2 == 0, "the azimuth samples pair up as phi and π - phi");
+// Azimuthal orders m = 2k (even) and 2k + 1 (odd), in vectors of 4.
+constexpr int kEvenOrders = kDensityMaxDegree / 2 + 1, kOddOrders = (kDensityMaxDegree + 1) / 2;
+constexpr int kEvenVectors = (kEvenOrders + 3) / 4, kOddVectors = (kOddOrders + 3) / 4;
+
+// Coefficient (l, m) at offset[m] + l - m; each m padded to a multiple of 4.
+struct ShLayout {
+  std::array<int, kDensityMaxDegree + 2> offset{};
+  ShLayout() {
+    for (int m = 0; m <= kDensityMaxDegree; ++m) offset[size_t(m) + 1] = offset[size_t(m)] + (kDensityMaxDegree - m + 4) / 4 * 4;
+  }
+  int size() const { return offset[kDensityMaxDegree + 1]; }
+  int vectors(int m) const { return (offset[size_t(m) + 1] - offset[size_t(m)]) / 4; }
+};
+
+// The part of the density's quadrature that depends on r only (and on the
+// medium through the scattering coefficients): per r slice, the nodes in mu
+// (below and above the horizon), the harmonics at those nodes and at the mu
+// of the output texels, the scattering coefficients times the moments.
+struct DensitySlice {
+  float r = 0.0f;
+  std::vector<double> nodes, weights;
+  std::vector<v4f> node_harmonics;    // [j * sh_size / 4 + ...]: node j in ShLayout
+  std::vector<float> output_mu;
+  std::vector<v4f> output_harmonics;  // [(ShLayout index) * mu_vectors + y / 4][y % 4]
+  std::array<std::vector<float>, 3> moment_scale;  // per channel, in ShLayout: beta_R p_R,l + beta_A p_A,l
+};
+
+struct DensityGeometry {
+  ShLayout layout;
+  std::vector<DensitySlice> slices;
+  std::array<float, kDensityPhiSamples> cos_phi{};
+  // Trapezoid weights of ∫_0^{2π} f(phi) cos(m phi) dphi for an even f sampled
+  // on [0, π], for the first phi of each pair (phi, π - phi), m = 2k or 2k + 1
+  // in lane k % 4 of vector k / 4.
+  std::array<std::array<v4f, kEvenVectors>, kDensityPhiPairs> even_weight{};
+  std::array<std::array<v4f, kOddVectors>, kDensityPhiPairs> odd_weight{};
+  std::vector<float> tile_nu;  // the tile nu of each nu index
+};
+
+DensityGeometry make_density_geometry(const AtmosphereParams& a) {
+  constexpr int L = kDensityMaxDegree;
+  constexpr int kPhiIntervals = kDensityPhiSamples - 1;
+  DensityGeometry g;
+  const ShLayout& layout = g.layout;
+  const int sh_size = layout.size();
+  const int mu_size = a.scattering_mu_size;
+  const int mu_vectors = (mu_size + 3) / 4;
   const std::vector<double> rayleigh_moments =
       legendre_moments([](double x) { return double(rayleigh_phase_function(float(x))); }, L);
   const std::vector<double> aerosol_moments =
       legendre_moments([&](double x) { return double(aerosol_phase_function(a, float(x))); }, L);
+  for (int l = 0; l <= kPhiIntervals; ++l) g.cos_phi[size_t(l)] = float(std::cos(M_PI * l / kPhiIntervals));
+  for (int l = 0; l < kDensityPhiPairs; ++l)
+    for (int m = 0; m <= L; ++m) {
+      const float w = float((l == 0 ? 1.0 : 2.0) * std::cos(M_PI * double(m * l) / kPhiIntervals) * M_PI / kPhiIntervals);
+      if (m % 2 == 0) g.even_weight[size_t(l)][size_t(m / 2 / 4)][m / 2 % 4] = w;
+      else g.odd_weight[size_t(l)][size_t(m / 2 / 4)][m / 2 % 4] = w;
+    }
+  for (int i = 0; i < a.scattering_nu_size; ++i)
+    g.tile_nu.push_back(clamp_cosine(scattering_texel_tile_nu(a, vec3(float(i * a.scattering_mu_s_size), 0.0f, 0.0f))));
 
-  std::array<float, kPhiIntervals + 1> cos_phi{};
-  for (int l = 0; l <= kPhiIntervals; ++l) cos_phi[size_t(l)] = float(std::cos(M_PI * l / kPhiIntervals));
-  // Trapezoid weights of ∫_0^{2π} f(phi) cos(m phi) dphi for an even f sampled on [0, π].
-  std::vector<float> fourier_weight(size_t((L + 1) * (kPhiIntervals + 1)));
-  for (int m = 0; m <= L; ++m)
-    for (int l = 0; l <= kPhiIntervals; ++l)
-      fourier_weight[size_t(m * (kPhiIntervals + 1) + l)] =
-          float((l == 0 || l == kPhiIntervals ? 1.0 : 2.0) * std::cos(M_PI * double(m * l) / kPhiIntervals) * M_PI /
-                kPhiIntervals);
-
-  for (int z = 0; z < a.scattering_r_size; ++z) {
-    // Everything that depends on r only: the quadrature nodes in mu (below
-    // and above the horizon), the harmonics at those nodes and at the mu of
-    // the output texels.
-    float r, mu_unused, mu_s_unused, nu_unused;
+  g.slices.resize(size_t(a.scattering_r_size));
+  tbb::parallel_for(0, a.scattering_r_size, [&](int z) {
+    DensitySlice& slice = g.slices[size_t(z)];
+    float mu_unused, mu_s_unused, nu_unused;
     bool ground_unused;
-    r_mu_mu_s_nu_from_scattering_texel(a, vec3(0.0f, 0.0f, float(z)), r, mu_unused, mu_s_unused, nu_unused,
+    r_mu_mu_s_nu_from_scattering_texel(a, vec3(0.0f, 0.0f, float(z)), slice.r, mu_unused, mu_s_unused, nu_unused,
                                        ground_unused);
-    const double mu_h = horizon_mu(a, r);
-    std::vector<double> nodes, weights, nodes_up, weights_up;
-    gauss_legendre(kDensityMuNodes, -1.0, mu_h, nodes, weights);
+    const double mu_h = horizon_mu(a, slice.r);
+    std::vector<double> nodes_up, weights_up;
+    gauss_legendre(kDensityMuNodes, -1.0, mu_h, slice.nodes, slice.weights);
     gauss_legendre(kDensityMuNodes, mu_h, 1.0, nodes_up, weights_up);
-    nodes.insert(nodes.end(), nodes_up.begin(), nodes_up.end());
-    weights.insert(weights.end(), weights_up.begin(), weights_up.end());
-    std::vector<std::array<float, kShCount>> node_harmonics(nodes.size());
-    for (size_t j = 0; j < nodes.size(); ++j) associated_legendre(nodes[j], node_harmonics[j]);
-    std::vector<float> output_mu(size_t(a.scattering_mu_size));
-    std::vector<std::array<float, kShCount>> output_harmonics(output_mu.size());
-    for (int y = 0; y < a.scattering_mu_size; ++y) {
+    slice.nodes.insert(slice.nodes.end(), nodes_up.begin(), nodes_up.end());
+    slice.weights.insert(slice.weights.end(), weights_up.begin(), weights_up.end());
+    std::array<float, kShCount> legendre;
+    slice.node_harmonics.assign(slice.nodes.size() * size_t(sh_size / 4), splat(0.0f));
+    for (size_t j = 0; j < slice.nodes.size(); ++j) {
+      associated_legendre(slice.nodes[j], legendre);
+      v4f* out = &slice.node_harmonics[j * size_t(sh_size / 4)];
+      for (int m = 0; m <= L; ++m)
+        for (int l = m; l <= L; ++l) {
+          const int i = layout.offset[size_t(m)] + l - m;
+          out[i / 4][i % 4] = legendre[size_t(sh_index(l, m))];
+        }
+    }
+    slice.output_mu.resize(size_t(mu_size));
+    slice.output_harmonics.assign(size_t(sh_size) * size_t(mu_vectors), splat(0.0f));
+    for (int y = 0; y < mu_size; ++y) {
       float r_y, mu_s_y, nu_y;
       bool ground_y;
-      r_mu_mu_s_nu_from_scattering_texel(a, vec3(0.0f, float(y), float(z)), r_y, output_mu[size_t(y)], mu_s_y, nu_y,
-                                         ground_y);
-      associated_legendre(output_mu[size_t(y)], output_harmonics[size_t(y)]);
+      r_mu_mu_s_nu_from_scattering_texel(a, vec3(0.0f, float(y), float(z)), r_y, slice.output_mu[size_t(y)], mu_s_y,
+                                         nu_y, ground_y);
+      associated_legendre(slice.output_mu[size_t(y)], legendre);
+      for (int m = 0; m <= L; ++m)
+        for (int l = m; l <= L; ++l)
+          slice.output_harmonics[size_t(layout.offset[size_t(m)] + l - m) * size_t(mu_vectors) + size_t(y / 4)][y % 4] =
+              legendre[size_t(sh_index(l, m))];
     }
+    vec3 beta_rayleigh, beta_aerosol, extinction;
+    medium_at(a, slice.r, beta_rayleigh, beta_aerosol, extinction);
+    for (int c = 0; c < 3; ++c) {
+      slice.moment_scale[size_t(c)].assign(size_t(sh_size), 0.0f);
+      for (int m = 0; m <= L; ++m)
+        for (int l = m; l <= L; ++l)
+          slice.moment_scale[size_t(c)][size_t(layout.offset[size_t(m)] + l - m)] =
+              beta_rayleigh[c] * float(rayleigh_moments[size_t(l)]) + beta_aerosol[c] * float(aerosol_moments[size_t(l)]);
+    }
+  });
+  return g;
+}
+
+}  // namespace
+
+// What the steps of the orders share within one wavelength triple.
+struct OrderGeometry {
+  DensityGeometry density;
+  // The view rays of the multiple scattering: their nodes depend on the
+  // medium only (ray_integration_nodes() costs ~130 extinction samples per
+  // ray). Row (y, z) at y + z * mu_size.
+  std::vector<ViewRay> rays;
+};
+
+std::shared_ptr<const OrderGeometry> make_order_geometry(const AtmosphereParams& a) {
+  auto g = std::make_shared<OrderGeometry>();
+  g->density = make_density_geometry(a);
+  g->rays.resize(size_t(a.scattering_mu_size) * size_t(a.scattering_r_size));
+  tbb::parallel_for(tbb::blocked_range<int>(0, a.scattering_mu_size * a.scattering_r_size, 16),
+                    [&](const tbb::blocked_range<int>& range) {
+                      for (int i = range.begin(); i != range.end(); ++i)
+                        g->rays[size_t(i)] = make_view_ray(a, i % a.scattering_mu_size, i / a.scattering_mu_size,
+                                                           MULTIPLE_SCATTERING_INTERVALS);
+                    });
+  return g;
+}
+
+Table3D compute_scattering_density_table(const AtmosphereParams& a, const Table2D& transmittance,
+                                         const Table3D& single_rayleigh, const Table3D& single_aerosol,
+                                         const Table3D& multiple_scattering, const Table2D& irradiance, int order,
+                                         const StepProgress& progress) {
+  Table3D density;
+  compute_scattering_density_table(a, *make_order_geometry(a), transmittance, single_rayleigh, single_aerosol,
+                                   multiple_scattering, irradiance, order, progress, density);
+  return density;
+}
+
+void compute_scattering_density_table(const AtmosphereParams& a, const OrderGeometry& geometry,
+                                      const Table2D& transmittance, const Table3D& single_rayleigh,
+                                      const Table3D& single_aerosol, const Table3D& multiple_scattering,
+                                      const Table2D& irradiance, int order, const StepProgress& progress,
+                                      Table3D& density, bool clamp_ringing) {
+  constexpr int L = kDensityMaxDegree;
+  constexpr int kPhiIntervals = kDensityPhiSamples - 1;
+  const DensityGeometry& g = geometry.density;
+  const int width = a.scattering_nu_size * a.scattering_mu_s_size;
+  const int mu_size = a.scattering_mu_size;
+  const int mu_vectors = (mu_size + 3) / 4;
+  resize_table(density, width, mu_size, a.scattering_r_size);
+  const sampler2D t = transmittance.sampler();
+  const ShLayout& layout = g.layout;
+  const int sh_size = layout.size();
+  const auto& cos_phi = g.cos_phi;
+  const auto& even_weight = g.even_weight;
+  const auto& odd_weight = g.odd_weight;
+  const std::vector<float>& tile_nu = g.tile_nu;
+  // The ground's irradiance: the sun (order 1) or the previous order's sky.
+  const SunTransmittanceAtRadius sun_at_ground(a, t, a.bottom_radius);
+  std::unique_ptr<GroundIrradiance> sky_at_ground;
+  if (order > 1) sky_at_ground = std::make_unique<GroundIrradiance>(a, irradiance.sampler());
+
+  for (int z = 0; z < a.scattering_r_size; ++z) {
+    const DensitySlice& slice = g.slices[size_t(z)];
+    const float r = slice.r;
+    const std::vector<double>& nodes = slice.nodes;
+    const std::vector<double>& weights = slice.weights;
+    const std::vector<v4f>& node_harmonics = slice.node_harmonics;
+    const std::vector<float>& output_mu = slice.output_mu;
+    const std::vector<v4f>& output_harmonics = slice.output_harmonics;
+    const std::array<std::vector<float>, 3>& moment_scale = slice.moment_scale;
 
     // incident_radiance() for all directions of node j shares the (mu, r)
     // part of its table lookups and the transmittance to the ground: do the
     // (mu, r) interpolation once, leaving rows of (nu, mu_s) texels whose
     // mu_s columns are exactly those of this step's output.
     struct NodeRows {
-      std::vector<vec3> first, second;  // order 1: single Rayleigh, single aerosol; else: multiple scattering
+      std::vector<v4f> first, second;  // order 1: single Rayleigh, single aerosol; else: multiple scattering
       bool ground = false;
       float ground_distance = 0.0f;
       vec3 ground_transmittance{0.0f};
@@ -409,10 +790,10 @@ Table3D compute_scattering_density_table(const AtmosphereParams& a, const Table2
       n.ground = ray_intersects_ground(a, r, mu_w);
       const float u_mu = scattering_u_mu(a, r, mu_w, n.ground), u_r = scattering_u_r(a, r);
       if (order == 1) {
-        interpolate_mu_r_row(single_rayleigh, u_mu, u_r, n.first);
-        interpolate_mu_r_row(single_aerosol, u_mu, u_r, n.second);
+        interpolate_mu_r_row(single_rayleigh, u_mu, u_r, 0, n.first);
+        interpolate_mu_r_row(single_aerosol, u_mu, u_r, 0, n.second);
       } else {
-        interpolate_mu_r_row(multiple_scattering, u_mu, u_r, n.first);
+        interpolate_mu_r_row(multiple_scattering, u_mu, u_r, 0, n.first);
       }
       if (n.ground) {
         n.ground_distance = distance_to_bottom_atmosphere_boundary(a, r, mu_w);
@@ -427,9 +808,10 @@ Table3D compute_scattering_density_table(const AtmosphereParams& a, const Table2
                                          nu_unused2, ground_unused2);
       const vec3 sun(std::sqrt(std::max(0.0f, 1.0f - mu_s * mu_s)), 0.0f, mu_s);
 
-      // L_lm, accumulated node by node.
-      std::vector<vec3> coefficients(size_t(kShCount), vec3(0.0f));
-      std::array<vec3, kPhiIntervals + 1> radiance{};
+      // L_lm per channel in ShLayout, accumulated node by node.
+      std::array<std::vector<v4f>, 3> coefficients;
+      for (auto& c : coefficients) c.assign(size_t(sh_size / 4), splat(0.0f));
+      std::array<std::array<float, kDensityPhiSamples>, 3> radiance{};
       for (size_t j = 0; j < nodes.size(); ++j) {
         const float mu_w = float(nodes[j]);
         const float sin_w = std::sqrt(std::max(0.0f, 1.0f - mu_w * mu_w));
@@ -441,111 +823,172 @@ Table3D compute_scattering_density_table(const AtmosphereParams& a, const Table2
           scattering_nu_tiles(a, nu_w, tile, f);
           const size_t x0 = size_t(int(tile) * a.scattering_mu_s_size + mu_s_index);
           const size_t x1 = size_t(std::min(int(tile) + 1, a.scattering_nu_size - 1) * a.scattering_mu_s_size + mu_s_index);
-          vec3 value = n.first[x0] * (1.0f - f) + n.first[x1] * f;
-          if (order == 1) value = phase_weighted_scattering(a, value, n.second[x0] * (1.0f - f) + n.second[x1] * f, nu_w);
+          vec3 value = to_vec3(n.first[x0] * splat(1.0f - f) + n.first[x1] * splat(f));
+          if (order == 1)
+            value = phase_weighted_scattering(a, value, to_vec3(n.second[x0] * splat(1.0f - f) + n.second[x1] * splat(f)),
+                                              nu_w);
           if (n.ground) {
             const float mu_s_ground = mu_s_at_ground(a, r, mu_s, nu_w, n.ground_distance);
-            const vec3 ground_irradiance = order == 1 ? compute_direct_irradiance(a, t, a.bottom_radius, mu_s_ground)
-                                                      : irradiance_lookup(a, e, a.bottom_radius, mu_s_ground);
+            // compute_direct_irradiance() or irradiance_lookup() at the ground.
+            const vec3 ground_irradiance = order == 1 ? a.solar_irradiance * sun_at_ground(mu_s_ground) *
+                                                            std::max(mu_s_ground, 0.0f)
+                                                      : (*sky_at_ground)(mu_s_ground);
             value += n.ground_transmittance * ground_radiance(a, ground_irradiance);
           }
-          radiance[size_t(l)] = value;
+          for (int c = 0; c < 3; ++c) radiance[size_t(c)][size_t(l)] = value[c];
         }
-        const std::array<float, kShCount>& legendre = node_harmonics[j];
-        for (int m = 0; m <= L; ++m) {
-          // ∫_0^{2π} L cos(m phi) dphi, trapezoidal rule on the symmetric circle.
-          const float* fw = &fourier_weight[size_t(m * (kPhiIntervals + 1))];
-          vec3 fourier(0.0f);
-          for (int l = 0; l <= kPhiIntervals; ++l) fourier += radiance[size_t(l)] * fw[l];
-          fourier *= float(weights[j]);
-          for (int l = m; l <= L; ++l) coefficients[size_t(sh_index(l, m))] += fourier * legendre[size_t(sh_index(l, m))];
+        // ∫_0^{2π} L cos(m phi) dphi (trapezoidal rule on the symmetric
+        // circle) for every m, from the sums and differences of the mirror pairs.
+        const v4f* harmonics = &node_harmonics[j * size_t(sh_size / 4)];
+        const float weight = float(weights[j]);
+        for (int c = 0; c < 3; ++c) {
+          std::array<v4f, kEvenVectors> even{};
+          std::array<v4f, kOddVectors> odd{};
+          const std::array<float, kDensityPhiSamples>& samples = radiance[size_t(c)];
+          for (int l = 0; l < kDensityPhiPairs; ++l) {
+            const v4f sum = splat(samples[size_t(l)] + samples[size_t(kPhiIntervals - l)]);
+            const v4f difference = splat(samples[size_t(l)] - samples[size_t(kPhiIntervals - l)]);
+            for (int k = 0; k < kEvenVectors; ++k) even[size_t(k)] += sum * even_weight[size_t(l)][size_t(k)];
+            for (int k = 0; k < kOddVectors; ++k) odd[size_t(k)] += difference * odd_weight[size_t(l)][size_t(k)];
+          }
+          // L_lm += w_j F_m Λ_lm(mu_j) for l = m..L.
+          v4f* out = coefficients[size_t(c)].data();
+          for (int m = 0; m <= L; ++m) {
+            const float fourier = (m % 2 == 0 ? even[size_t(m / 2 / 4)][m / 2 % 4] : odd[size_t(m / 2 / 4)][m / 2 % 4]) * weight;
+            const v4f f4 = splat(fourier);
+            const int begin = layout.offset[size_t(m)] / 4;
+            const v4f* h = harmonics + begin;
+            for (int k = 0; k < layout.vectors(m); ++k) out[begin + k] += f4 * h[k];
+          }
         }
       }
 
-      // Scale by beta_s p_l of both phase functions.
-      vec3 beta_rayleigh, beta_aerosol, extinction;
-      medium_at(a, r, beta_rayleigh, beta_aerosol, extinction);
-      for (int l = 0; l <= L; ++l) {
-        const vec3 c = beta_rayleigh * float(rayleigh_moments[size_t(l)]) + beta_aerosol * float(aerosol_moments[size_t(l)]);
-        for (int m = 0; m <= l; ++m) coefficients[size_t(sh_index(l, m))] *= c;
+      // Scale by beta_s p_l of both phase functions, and broadcast each
+      // coefficient for the sums over the output directions.
+      std::array<std::vector<v4f>, 3> scaled;
+      for (int c = 0; c < 3; ++c) {
+        const std::vector<v4f>& coefficient = coefficients[size_t(c)];
+        scaled[size_t(c)].resize(size_t(sh_size));
+        for (int i = 0; i < sh_size; ++i)
+          scaled[size_t(c)][size_t(i)] = splat(coefficient[size_t(i / 4)][i % 4] * moment_scale[size_t(c)][size_t(i)]);
       }
-
-      // Evaluate at every texel of this (r, mu_s).
-      std::array<vec3, L + 1> azimuthal{};
-      for (int y = 0; y < a.scattering_mu_size; ++y) {
-        float r_v, mu = output_mu[size_t(y)], mu_s_v, nu;
-        bool ground;
-        const std::array<float, kShCount>& legendre = output_harmonics[size_t(y)];
-        for (int m = 0; m <= L; ++m) {
-          vec3 sum(0.0f);
-          for (int l = m; l <= L; ++l) sum += coefficients[size_t(sh_index(l, m))] * legendre[size_t(sh_index(l, m))];
-          azimuthal[size_t(m)] = sum;
+      // A_m(mu) = Σ_l L_lm p_l Λ_lm(mu) at every output mu, 4 mu at a time:
+      // azimuthal[(c * (L + 1) + m) * mu_vectors + y / 4].
+      std::vector<v4f> azimuthal(size_t(3 * (L + 1) * mu_vectors), splat(0.0f));
+      for (int m = 0; m <= L; ++m)
+        for (int yv = 0; yv < mu_vectors; ++yv) {
+          v4f sum0 = splat(0.0f), sum1 = splat(0.0f), sum2 = splat(0.0f);
+          for (int i = layout.offset[size_t(m)]; i < layout.offset[size_t(m)] + L + 1 - m; ++i) {
+            const v4f h = output_harmonics[size_t(i) * size_t(mu_vectors) + size_t(yv)];
+            sum0 += scaled[0][size_t(i)] * h;
+            sum1 += scaled[1][size_t(i)] * h;
+            sum2 += scaled[2][size_t(i)] * h;
+          }
+          azimuthal[size_t((0 * (L + 1) + m) * mu_vectors + yv)] = sum0;
+          azimuthal[size_t((1 * (L + 1) + m) * mu_vectors + yv)] = sum1;
+          azimuthal[size_t((2 * (L + 1) + m) * mu_vectors + yv)] = sum2;
         }
-        const float spread = std::sqrt(std::max(0.0f, (1.0f - mu * mu) * (1.0f - mu_s * mu_s)));
-        for (int nu_index = 0; nu_index < a.scattering_nu_size; ++nu_index) {
-          const int x = nu_index * a.scattering_mu_s_size + mu_s_index;
-          r_mu_mu_s_nu_from_scattering_texel(a, vec3(float(x), float(y), float(z)), r_v, mu, mu_s_v, nu, ground);
-          const float c = spread < 1e-6f ? 1.0f : clamp_cosine((nu - mu * mu_s) / spread);
-          // Σ_m A_m cos(m phi) with the Chebyshev recurrence for cos(m phi).
-          float c_prev = 1.0f, c_m = c;
-          vec3 value = azimuthal[0];
+
+      // Evaluate at every texel of this (r, mu_s): Σ_m A_m cos(m phi) with
+      // the Chebyshev recurrence for cos(m phi), phi the azimuth of the
+      // texel's view from the sun's vertical plane.
+      std::vector<v4f> cos_azimuth(static_cast<size_t>(mu_vectors), splat(1.0f));
+      for (int nu_index = 0; nu_index < a.scattering_nu_size; ++nu_index) {
+        for (int y = 0; y < mu_size; ++y) {
+          const float mu = output_mu[size_t(y)];
+          const float nu = clamp_nu(mu, mu_s, tile_nu[size_t(nu_index)]);
+          const float spread = std::sqrt(std::max(0.0f, (1.0f - mu * mu) * (1.0f - mu_s * mu_s)));
+          cos_azimuth[size_t(y / 4)][y % 4] = spread < 1e-6f ? 1.0f : clamp_cosine((nu - mu * mu_s) / spread);
+        }
+        const int x = nu_index * a.scattering_mu_s_size + mu_s_index;
+        for (int yv = 0; yv < mu_vectors; ++yv) {
+          const v4f c = cos_azimuth[size_t(yv)];
+          const v4f two_c = c + c;
+          const v4f* a0 = &azimuthal[size_t(yv)];
+          const size_t channel = size_t((L + 1) * mu_vectors);
+          v4f c_prev = splat(1.0f), c_m = c;
+          v4f value0 = a0[0], value1 = a0[channel], value2 = a0[2 * channel];
           for (int m = 1; m <= L; ++m) {
-            value += azimuthal[size_t(m)] * c_m;
-            const float c_next = 2.0f * c * c_m - c_prev;
+            const size_t i = size_t(m * mu_vectors);
+            value0 += a0[i] * c_m;
+            value1 += a0[channel + i] * c_m;
+            value2 += a0[2 * channel + i] * c_m;
+            const v4f c_next = two_c * c_m - c_prev;
             c_prev = c_m;
             c_m = c_next;
           }
-          // A truncated expansion can ring slightly below zero next to sharp features.
-          density.at(x, y, z) = max(value, vec3(0.0f));
+          for (int lane = 0; lane < 4 && yv * 4 + lane < mu_size; ++lane)
+            // A truncated expansion can ring slightly below zero next to sharp
+            // features (not clamped for the signed fields of the tail solver).
+            density.at(x, yv * 4 + lane, z) = clamp_ringing
+                                                  ? max(vec3(value0[lane], value1[lane], value2[lane]), vec3(0.0f))
+                                                  : vec3(value0[lane], value1[lane], value2[lane]);
         }
       }
     });
     if (progress) progress(double(z + 1) / double(a.scattering_r_size));
   }
-  return density;
+}
+
+Table3D compute_multiple_scattering_table(const AtmosphereParams& a, const Table3D& density,
+                                          const StepProgress& progress) {
+  Table3D result;
+  compute_multiple_scattering_table(a, *make_order_geometry(a), density, progress, result);
+  return result;
 }
 
 // compute_multiple_scattering() of functions.glsl for every texel. For each
 // node of a view ray, the (mu, r) part of the trilinear lookup of the density
 // is the same for all texels of the row: it is done once, leaving a 1D row of
-// (nu, mu_s) texels to interpolate per texel.
-Table3D compute_multiple_scattering_table(const AtmosphereParams& a, const Table3D& density,
-                                          const StepProgress& progress) {
+// (nu, mu_s) texels to interpolate per texel. Per texel and node only the
+// sun's zenith cosine changes: mu_s_t = (r mu_s + t nu) / r_t is two
+// multiply-adds with the node's r / r_t and t / r_t, its texel coordinate in a
+// nu tile comes from a fine table (MuSCoordinate), and the lookups in the two
+// nu tiles around nu share it (the tiles are mu_s_size texels apart).
+void compute_multiple_scattering_table(const AtmosphereParams& a, const OrderGeometry& geometry, const Table3D& density,
+                                       const StepProgress& progress, Table3D& result) {
   const int width = a.scattering_nu_size * a.scattering_mu_s_size;
-  Table3D result(width, a.scattering_mu_size, a.scattering_r_size);
+  const int mu_s_size = a.scattering_mu_s_size;
+  resize_table(result, width, a.scattering_mu_size, a.scattering_r_size);
   const TexelColumns columns = make_texel_columns(a);
-  const MuSCoordinate u_of_mu_s(a);
+  // The texel coordinate within a nu tile, in [0, mu_s_size - 1].
+  const MuSCoordinate texel_of_mu_s(a, float(mu_s_size - 1));
   for_each_view_ray(a, progress, [&](int y, int z) {
-    const ViewRay ray = make_view_ray(a, y, z, MULTIPLE_SCATTERING_INTERVALS);
+    const ViewRay& ray = geometry.rays[size_t(y) + size_t(z) * size_t(a.scattering_mu_size)];
     // Per texel: nu and its tiles, as in scattering_lookup().
-    std::vector<float> nu(static_cast<size_t>(width)), tile(static_cast<size_t>(width)), lerp(static_cast<size_t>(width));
+    std::vector<float> nu(static_cast<size_t>(width)), lerp(static_cast<size_t>(width));
+    std::vector<int> tile_start(static_cast<size_t>(width));
     for (int x = 0; x < width; ++x) {
       nu[size_t(x)] = clamp_nu(ray.mu, columns.mu_s[size_t(x)], columns.tile_nu[size_t(x)]);
-      scattering_nu_tiles(a, nu[size_t(x)], tile[size_t(x)], lerp[size_t(x)]);
+      float tile;
+      scattering_nu_tiles(a, nu[size_t(x)], tile, lerp[size_t(x)]);
+      tile_start[size_t(x)] = int(tile) * mu_s_size;
     }
     // Node by node (outer loop): the density row of the node stays in cache.
-    std::vector<vec3> row, sum(static_cast<size_t>(width), vec3(0.0f));
-    const float inverse_nu_size = 1.0f / float(a.scattering_nu_size);
+    // The row is padded with zeros: the upper nu tile of the last tile (whose
+    // weight is 0) and the texel after the last of a tile (weight 0 too).
+    std::vector<v4f> row, sum(static_cast<size_t>(width), splat(0.0f));
     for (int i = 0; i < ray.nodes.count; ++i) {
-      interpolate_mu_r_row(density, scattering_u_mu(a, ray.r_t[size_t(i)], ray.mu_t[size_t(i)], ray.ground),
-                           scattering_u_r(a, ray.r_t[size_t(i)]), row);
-      const vec3 weight = ray.nodes.weight[i];
+      const float r_t = ray.r_t[size_t(i)];
+      interpolate_mu_r_row(density, scattering_u_mu(a, r_t, ray.mu_t[size_t(i)], ray.ground),
+                           scattering_u_r(a, r_t), mu_s_size + 1, row);
+      const v4f weight = to_v4f(ray.nodes.weight[i]);
+      const float along_mu_s = ray.r / r_t, along_nu = ray.nodes.t[i] / r_t;
+      const v4f* values = row.data();
       for (int x = 0; x < width; ++x) {
-        const float mu_s_t = clamp_cosine(
-            mu_s_along_ray(ray.r, columns.mu_s[size_t(x)], nu[size_t(x)], ray.nodes.t[i], ray.r_t[size_t(i)]));
-        const float u_mu_s = u_of_mu_s(mu_s_t);
-        int x0, x1;
-        float fx;
-        detail::linear_tap((tile[size_t(x)] + u_mu_s) * inverse_nu_size, width, x0, x1, fx);
-        vec3 value = (row[size_t(x0)] * (1.0f - fx) + row[size_t(x1)] * fx) * (1.0f - lerp[size_t(x)]);
-        detail::linear_tap((tile[size_t(x)] + 1.0f + u_mu_s) * inverse_nu_size, width, x0, x1, fx);
-        value += (row[size_t(x0)] * (1.0f - fx) + row[size_t(x1)] * fx) * lerp[size_t(x)];
+        const float mu_s_t = clamp_cosine(along_mu_s * columns.mu_s[size_t(x)] + along_nu * nu[size_t(x)]);
+        const float coordinate = texel_of_mu_s(mu_s_t);
+        const int k = int(coordinate);
+        const float f = coordinate - float(k), l = lerp[size_t(x)];
+        const v4f* lower = values + tile_start[size_t(x)] + k;
+        const v4f* upper = lower + mu_s_size;
+        const v4f value = (lower[0] * splat(1.0f - f) + lower[1] * splat(f)) * splat(1.0f - l) +
+                          (upper[0] * splat(1.0f - f) + upper[1] * splat(f)) * splat(l);
         sum[size_t(x)] += weight * value;
       }
     }
-    for (int x = 0; x < width; ++x) result.at(x, y, z) = sum[size_t(x)];
+    for (int x = 0; x < width; ++x) result.at(x, y, z) = to_vec3(sum[size_t(x)]);
   });
-  return result;
 }
 
 }  // namespace atmos::precompute

@@ -2,13 +2,19 @@
 //
 // Each step evaluates the shared functions of physics/functions.glsl. The
 // integrals along rays hoist everything that does not depend on the sun out of
-// the per-texel loop (all texels of one (r, mu) row share a view ray), and the
-// scattering density uses the spherical-harmonic structure of the phase
-// functions instead of a full sphere of directions per texel; tests check
-// both against the straightforward forms in functions.glsl.
+// the per-texel loop (all texels of one (r, mu) row share a view ray), the
+// sky irradiance shares the (mu, r) part of its lookups along rings of
+// directions, and the scattering density uses the spherical-harmonic
+// structure of the phase functions instead of a full sphere of directions per
+// texel; tests check all of them against the straightforward forms in
+// functions.glsl. What the orders of a wavelength triple share (their view
+// rays' nodes, the density's quadrature) is computed once (OrderGeometry), and
+// the inner loops run on vectors of 4 floats (the three channels, or four
+// texels or points of the solar disc at a time).
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "physics/shader_cpp.hpp"
@@ -70,6 +76,40 @@ Table3D compute_scattering_density_table(const AtmosphereParams& atmosphere, con
 
 Table3D compute_multiple_scattering_table(const AtmosphereParams& atmosphere, const Table3D& scattering_density,
                                           const StepProgress& progress);
+
+// What the steps of the scattering orders need that depends on the atmosphere
+// of one wavelength triple only — the quadrature nodes of the multiple
+// scattering's view rays, the spherical-harmonic quadrature of the density —
+// computed once per triple and shared by its orders. The forms with an
+// OrderGeometry write into `out`, reusing its memory.
+struct OrderGeometry;
+std::shared_ptr<const OrderGeometry> make_order_geometry(const AtmosphereParams& atmosphere);
+void compute_scattering_density_table(const AtmosphereParams& atmosphere, const OrderGeometry& geometry,
+                                      const Table2D& transmittance, const Table3D& single_rayleigh,
+                                      const Table3D& single_aerosol, const Table3D& multiple_scattering,
+                                      const Table2D& irradiance, int order, const StepProgress& progress,
+                                      Table3D& out, bool clamp_ringing = true);
+void compute_multiple_scattering_table(const AtmosphereParams& atmosphere, const OrderGeometry& geometry,
+                                       const Table3D& scattering_density, const StepProgress& progress, Table3D& out);
+
+// The light scattered more than K times, T = Σ_{n > K} v_n, where v_n is
+// order n (its radiance M_n and the sky irradiance E_{n-1} whose ground
+// reflection order n + 1 includes), from v_{K+1} = (next_radiance,
+// next_irradiance): GMRES on (I - A) T = v_{K+1}, A one scattering order
+// (tail.cpp). Stops when the residual of every channel is below `tolerance`
+// relative to |v_{K+1}|, or after `max_iterations` applications of A, each
+// costing about one order; keeps at most `restart` + 1 fields (tables of the
+// size of a scattering table) at a time.
+struct ScatteringTail {
+  Table3D radiance;    // Σ_{n > K} M_n, radiance like an order's multiple scattering table
+  Table2D irradiance;  // Σ_{n >= K} E_n, sky irradiance like compute_indirect_irradiance_table
+  int iterations = 0;  // applications of A
+  glm::dvec3 relative_residual{0.0};  // |v_{K+1} - (I - A) T| / |v_{K+1}| per channel
+};
+ScatteringTail solve_scattering_tail(const AtmosphereParams& atmosphere, const OrderGeometry& geometry,
+                                     const Table2D& transmittance, const Table3D& next_radiance,
+                                     const Table2D& next_irradiance, double tolerance, int max_iterations, int restart,
+                                     const StepProgress& progress);
 
 // Legendre moments p_l = 2π ∫ P(x) P_l(x) dx, l = 0..max_degree, of a phase
 // function P (so that P(x) = Σ (2l + 1) / (4π) p_l P_l(x); p_0 = 1 when P is
