@@ -1,13 +1,13 @@
 // atmos — compute shader of the engine plugin's aerial-perspective volume
 // (GLSL only, appended by gpu/shader_source.cpp after the shared
-// definitions, functions.glsl, aerial_perspective.glsl and composite.glsl,
+// definitions, functions.glsl, aerial_perspective.glsl, table_bindings.glsl and composite.glsl,
 // with VARIANT_LOW_SUN defined: whether the sun may be low in the volume). One invocation per direction:
-// compute_aerial_perspective_column of composite.glsl, stored slice by slice.
+// the march of composite.glsl (aerial_perspective_march_begin / _slice), each
+// slice stored as it is reached.
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
-layout(binding = 0) uniform sampler2D spectral_transmittance_texture;
-layout(binding = 4) uniform sampler3D multiple_scattering_texture;
+// The tables: table_bindings.glsl (units 0-4 read here).
 
 layout(binding = 0, rgba32f) writeonly uniform image3D ap_rayleigh_image;
 layout(binding = 1, rgba32f) writeonly uniform image3D ap_single_rayleigh_image;
@@ -27,14 +27,17 @@ void main() {
   frame.sun_direction = sun_direction;
   frame.ap_t_far = ap_t_far;
   frame.ap_t_min = ap_t_min;
+  frame.sky_view = uniform_sky_view_frame();
   frame.low_sun = VARIANT_LOW_SUN;
-  AerialPerspectiveColumn c = compute_aerial_perspective_column(
+  AerialPerspectiveMarch march = aerial_perspective_march_begin(
       ATMOSPHERE, SPECTRAL, spectral_transmittance_texture, multiple_scattering_texture, frame, column.x, column.y);
   for (int s = 0; s < AP_SLICES; ++s) {
+    AerialPerspectiveSlice slice = aerial_perspective_march_slice(
+        ATMOSPHERE, SPECTRAL, spectral_transmittance_texture, multiple_scattering_texture, frame, march, s);
     ivec3 texel = ivec3(column, s);
-    imageStore(ap_rayleigh_image, texel, vec4(c.single_rayleigh[s] + c.multiple[s], 1.0));
-    imageStore(ap_single_rayleigh_image, texel, vec4(c.single_rayleigh[s], 1.0));
-    imageStore(ap_aerosol_image, texel, vec4(c.aerosol[s], 1.0));
-    imageStore(ap_transmittance_image, texel, vec4(c.transmittance[s], 1.0));
+    imageStore(ap_rayleigh_image, texel, vec4(slice.single_rayleigh + slice.multiple, 1.0));
+    imageStore(ap_single_rayleigh_image, texel, vec4(slice.single_rayleigh, 1.0));
+    imageStore(ap_aerosol_image, texel, vec4(slice.aerosol, 1.0));
+    imageStore(ap_transmittance_image, texel, vec4(slice.transmittance, 1.0));
   }
 }

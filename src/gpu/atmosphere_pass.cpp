@@ -24,9 +24,12 @@ namespace {
 
 constexpr int kMaxImageSize = 16384;
 
-// Texture units of the pass (the layout(binding) of atmosphere_pass.frag.glsl).
-constexpr GLuint kColourUnit = 7;
+// Texture units of the pass (the layout(binding) of atmosphere_pass.frag.glsl;
+// 0-7: the tables, gpu::TableUnit). Colour and albedo share a unit: a
+// surface mode reads one of them. 16 units in all, the minimum GL 4.5
+// guarantees per stage.
 constexpr GLuint kDepthUnit = 8;
+constexpr GLuint kColourUnit = 9;
 constexpr GLuint kAlbedoUnit = 9;
 constexpr GLuint kNormalUnit = 10;
 constexpr GLuint kShadowUnit = 11;
@@ -106,7 +109,7 @@ struct AtmospherePass::Impl {
   std::unique_ptr<gpu::GpuTables> tables;
   std::unique_ptr<gpu::GpuTimer> timer;
   // The program variants (gpu::PassVariant::index), compiled on first use.
-  GLuint programs[64] = {};
+  GLuint programs[gpu::PassVariant::kCount] = {};
   // The aerial-perspective volume: its compute programs (sun high, sun low)
   // and textures (see composite.glsl).
   GLuint volume_programs[2] = {0, 0};
@@ -117,8 +120,12 @@ struct AtmospherePass::Impl {
   GLuint own_output = 0;
   int own_width = 0;
   int own_height = 0;
+  // The sky / surface mask (atmosphere_pass.frag.glsl), the frame's size.
+  GLuint stencil = 0;
+  int stencil_width = 0;
+  int stencil_height = 0;
   GLuint depth_sampler = 0;   // nearest, no comparison: the engine's depth as a value
-  GLuint shadow_sampler = 0;  // linear, clamped, no comparison
+  GLuint shadow_sampler = 0;  // linear, clamped, with depth comparison (PCF)
   double own_sun_lux = 0.0;   // the atmosphere's sun illuminance
   PassTimings timings;
 
@@ -136,6 +143,8 @@ struct AtmospherePass::Impl {
     if (vertex_array != 0) glDeleteVertexArrays(1, &vertex_array);
     if (framebuffer != 0) glDeleteFramebuffers(1, &framebuffer);
     if (own_output != 0) glDeleteTextures(1, &own_output);
+    if (stencil != 0) glDeleteRenderbuffers(1, &stencil);
+    stencil = 0;
     if (depth_sampler != 0) glDeleteSamplers(1, &depth_sampler);
     if (shadow_sampler != 0) glDeleteSamplers(1, &shadow_sampler);
     vertex_array = framebuffer = own_output = depth_sampler = shadow_sampler = 0;
@@ -171,8 +180,6 @@ AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const Tables& table
     p.tables = std::make_unique<gpu::GpuTables>(atmosphere, tables, TexturePrecision::full);
     p.timer = std::make_unique<gpu::GpuTimer>();
     p.own_sun_lux = gpu::own_sun_illuminance(p.tables->params(), p.tables->radiance_to_srgb());
-    gpu::AssembledSource vertex;
-    vertex.append("vertex shader", gpu::fullscreen_vertex_shader_source());
     glCreateVertexArrays(1, &p.vertex_array);
     glCreateFramebuffers(1, &p.framebuffer);
     glCreateTextures(GL_TEXTURE_3D, 4, p.volume);
@@ -185,13 +192,14 @@ AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const Tables& table
     glSamplerParameteri(p.depth_sampler, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     glSamplerParameteri(p.depth_sampler, GL_TEXTURE_COMPARE_MODE, GL_NONE);
     glCreateSamplers(1, &p.shadow_sampler);
-    // Read at texel centres (composite.glsl: shadow_visibility filters the
-    // comparisons itself); CLAMP_TO_EDGE as the CPU twin's texture().
-    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    // Percentage-closer filtering by the texture unit (composite.glsl:
+    // shadow_visibility); CLAMP_TO_EDGE as the CPU twin's texture().
+    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_COMPARE_MODE, GL_NONE);
+    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
     gpu::check_gl("while creating the atmosphere pass");
 
     // Drivers (llvmpipe's JIT in particular) compile shaders at their first
@@ -290,8 +298,9 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   const bool shadows = input.shadow_map != 0;
   if (shadows) {
     const TextureInfo shadow = texture_info(input.shadow_map, "shadow map");
-    if (!is_depth_format(shadow.format))
-      throw Error("plugin input: the shadow map's format is not a depth format nor GL_R32F");
+    if (!is_depth_format(shadow.format) || shadow.format == GL_R32F)
+      throw Error("plugin input: the shadow map's format is not a depth format (GL_DEPTH_COMPONENT*, "
+                  "GL_DEPTH*_STENCIL8: it is read with depth comparison)");
   }
 
   physics::PassFrame frame =
@@ -334,7 +343,8 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   PassTimings timings;
   const bool sky_view_camera = physics::camera_uses_sky_view(p.tables->params(), camera_f);
   if (sky_view_camera) {
-    const double ms = p.tables->update_sky_view(camera_f, sun_f, input.timed ? p.timer.get() : nullptr);
+    const double ms =
+        p.tables->update_sky_view(camera_f, sun_f, frame.sky_view, input.timed ? p.timer.get() : nullptr);
     timings.sky_view_ms = ms;
   }
 
@@ -350,6 +360,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     glProgramUniform3f(volume_program, 1, frame.sun_direction.x, frame.sun_direction.y, frame.sun_direction.z);
     glProgramUniform1f(volume_program, 24, frame.ap_t_far);
     glProgramUniform1f(volume_program, 25, frame.ap_t_min);
+    gpu::set_sky_view_frame_uniforms(volume_program, frame.sky_view);
     for (GLuint unit = 0; unit < 5; ++unit) {
       glBindTextureUnit(unit, p.tables->texture(int(unit)));
       glBindSampler(unit, 0);
@@ -363,7 +374,20 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     for (GLuint i = 0; i < 4; ++i) glBindImageTexture(i, 0, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
   }
 
-  // Pass 3: every pixel.
+  // Passes 3-5: every pixel, the sky's and the surfaces' by separate
+  // programs over a stencil mask (see atmosphere_pass.frag.glsl).
+  if (p.stencil == 0 || p.stencil_width != input.width || p.stencil_height != input.height) {
+    if (p.stencil != 0) glDeleteRenderbuffers(1, &p.stencil);
+    glCreateRenderbuffers(1, &p.stencil);
+    glNamedRenderbufferStorage(p.stencil, GL_STENCIL_INDEX8, input.width, input.height);
+    p.stencil_width = input.width;
+    p.stencil_height = input.height;
+  }
+  glNamedFramebufferRenderbuffer(p.framebuffer, GL_STENCIL_ATTACHMENT, GL_RENDERBUFFER, p.stencil);
+  gpu::check_gl("while preparing the plugin's stencil mask");
+  if (glCheckNamedFramebufferStatus(p.framebuffer, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw Error("plugin: this OpenGL driver cannot render to the output texture with an 8-bit stencil buffer");
+
   gpu::PassVariant variant;
   variant.sky_view_camera = sky_view_camera;
   variant.low_sun = low_sun;
@@ -371,40 +395,56 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   variant.gbuffer = input.surfaces == SurfaceMode::gbuffer;
   variant.volume = frame.volume;
   variant.blend = frame.volume && frame.volume_weight < 1.0f;
-  GLuint& program = p.programs[variant.index()];
-  if (program == 0) {
-    gpu::AssembledSource vertex;
-    vertex.append("vertex shader", gpu::fullscreen_vertex_shader_source());
-    program = gpu::link_program(
-        vertex, gpu::atmosphere_pass_fragment_shader_source(p.tables->params(), p.tables->spectral(), variant));
+  const auto program_of = [&](gpu::PassVariant::Pixels pixels) {
+    // The mask does not depend on the rest of the variant: one program.
+    gpu::PassVariant v = pixels == gpu::PassVariant::Pixels::classify ? gpu::PassVariant{} : variant;
+    v.pixels = pixels;
+    GLuint& program = p.programs[v.index()];
+    if (program == 0)
+      program = gpu::link_program(gpu::atmosphere_pass_vertex_shader_source(),
+                                  gpu::atmosphere_pass_fragment_shader_source(p.tables->params(),
+                                                                              p.tables->spectral(), v));
+    return program;
+  };
+  const GLuint classify_program = program_of(gpu::PassVariant::Pixels::classify);
+  const GLuint sky_program = program_of(gpu::PassVariant::Pixels::sky);
+  const GLuint surface_program = program_of(gpu::PassVariant::Pixels::surface);
+  const physics::SkyViewFrame sky_view = frame.sky_view;
+  for (GLuint program : {classify_program, sky_program, surface_program}) {
+    glProgramUniform3f(program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
+    glProgramUniform3f(program, 1, frame.sun_direction.x, frame.sun_direction.y, frame.sun_direction.z);
+    glProgramUniformMatrix4fv(program, 2, 1, GL_FALSE, glm::value_ptr(frame.inverse_projection));
+    glProgramUniformMatrix3fv(program, 6, 1, GL_FALSE, glm::value_ptr(frame.view_to_world));
+    glProgramUniform1i(program, 9, frame.depth_encoding);
+    glProgramUniform1f(program, 10, frame.log2_depth_far);
+    glProgramUniformMatrix3fv(program, 12, 1, GL_FALSE, glm::value_ptr(frame.radiance_to_srgb));
+    glProgramUniform1f(program, 15, frame.light_scale);
+    glProgramUniform1i(program, 16, frame.sun_disc ? 1 : 0);
+    glProgramUniform1i(program, 18, frame.shadow_steps);
+    glProgramUniformMatrix4fv(program, 19, 1, GL_FALSE, glm::value_ptr(frame.shadow_matrix));
+    glProgramUniform2f(program, 23, float(input.width), float(input.height));
+    glProgramUniform1f(program, 24, frame.ap_t_far);
+    glProgramUniform1f(program, 25, frame.ap_t_min);
+    glProgramUniform2f(program, 26, frame.shadow_map_size.x, frame.shadow_map_size.y);
+    glProgramUniform1f(program, 27, frame.shadow_depth_bias);
+    glProgramUniform1f(program, 28, frame.volume_weight);
+    glProgramUniform3fv(program, 29, 1, glm::value_ptr(frame.inverse_sun_srgb));
+    glProgramUniform4fv(program, 30, 1, glm::value_ptr(frame.depth_column));
+    glProgramUniform1f(program, 31, frame.depth_column_view_z);
+    gpu::set_sky_view_frame_uniforms(program, sky_view);
   }
-  glUseProgram(program);
-  glProgramUniform3f(program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
-  glProgramUniform3f(program, 1, frame.sun_direction.x, frame.sun_direction.y, frame.sun_direction.z);
-  glProgramUniformMatrix4fv(program, 2, 1, GL_FALSE, glm::value_ptr(frame.inverse_projection));
-  glProgramUniformMatrix3fv(program, 6, 1, GL_FALSE, glm::value_ptr(frame.view_to_world));
-  glProgramUniform1i(program, 9, frame.depth_encoding);
-  glProgramUniform1f(program, 10, frame.log2_depth_far);
-  glProgramUniformMatrix3fv(program, 12, 1, GL_FALSE, glm::value_ptr(frame.radiance_to_srgb));
-  glProgramUniform1f(program, 15, frame.light_scale);
-  glProgramUniform1i(program, 16, frame.sun_disc ? 1 : 0);
-  glProgramUniform1i(program, 18, frame.shadow_steps);
-  glProgramUniformMatrix4fv(program, 19, 1, GL_FALSE, glm::value_ptr(frame.shadow_matrix));
-  glProgramUniform2f(program, 23, float(input.width), float(input.height));
-  glProgramUniform1f(program, 24, frame.ap_t_far);
-  glProgramUniform1f(program, 25, frame.ap_t_min);
-  glProgramUniform2f(program, 26, frame.shadow_map_size.x, frame.shadow_map_size.y);
-  glProgramUniform1f(program, 27, frame.shadow_depth_bias);
-  glProgramUniform1f(program, 28, frame.volume_weight);
   p.tables->bind();
   for (GLuint unit = 0; unit < gpu::kTableUnitCount; ++unit) glBindSampler(unit, 0);
-  glBindTextureUnit(kColourUnit, input.surfaces == SurfaceMode::lit_colour ? input.colour : 0);
   glBindTextureUnit(kDepthUnit, input.depth);
-  glBindTextureUnit(kAlbedoUnit, input.surfaces == SurfaceMode::gbuffer ? input.albedo : 0);
-  glBindTextureUnit(kNormalUnit, input.surfaces == SurfaceMode::gbuffer ? input.normal : 0);
+  if (input.surfaces == SurfaceMode::lit_colour) {
+    glBindTextureUnit(kColourUnit, input.colour);
+    glBindTextureUnit(kNormalUnit, 0);
+  } else {
+    glBindTextureUnit(kAlbedoUnit, input.albedo);
+    glBindTextureUnit(kNormalUnit, input.normal);
+  }
   glBindTextureUnit(kShadowUnit, shadows ? input.shadow_map : 0);
-  for (GLuint unit : {kColourUnit, kAlbedoUnit, kNormalUnit}) glBindSampler(unit, p.depth_sampler);
-  glBindSampler(kDepthUnit, p.depth_sampler);
+  for (GLuint unit : {kDepthUnit, kColourUnit, kNormalUnit}) glBindSampler(unit, p.depth_sampler);
   glBindSampler(kShadowUnit, p.shadow_sampler);
   for (GLuint i = 0; i < 4; ++i) {
     glBindTextureUnit(kVolumeUnit + i, p.volume[i]);
@@ -414,7 +454,25 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   glBindFramebuffer(GL_FRAMEBUFFER, p.framebuffer);
   glViewport(0, 0, input.width, input.height);
   if (input.timed) p.timer->begin();
+  glEnable(GL_STENCIL_TEST);
+  glStencilMask(0xFF);
+  const GLint clear_stencil = 0;
+  glClearNamedFramebufferiv(p.framebuffer, GL_STENCIL, 0, &clear_stencil);
+  // Mark the sky: 1 where the classifying program keeps the pixel.
+  glStencilFunc(GL_ALWAYS, 1, 0xFF);
+  glStencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
+  glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+  glUseProgram(classify_program);
   glDrawArrays(GL_TRIANGLES, 0, 3);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
+  glStencilFunc(GL_EQUAL, 1, 0xFF);
+  glUseProgram(sky_program);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glStencilFunc(GL_EQUAL, 0, 0xFF);
+  glUseProgram(surface_program);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glDisable(GL_STENCIL_TEST);
   if (input.timed) timings.composite_ms = p.timer->end_ms();
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   gpu::check_gl("while compositing the atmosphere");

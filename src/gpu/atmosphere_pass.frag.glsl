@@ -1,25 +1,35 @@
-// atmos — fragment shader of the engine plugin's pass (GLSL only, appended by
-// gpu/shader_source.cpp after the shared definitions, functions.glsl,
-// aerial_perspective.glsl and composite.glsl). One full-screen triangle over
-// the engine's image; each fragment reads the engine's buffers at its pixel
-// and writes composite_pixel(). The program variant (gpu/shader_source.cpp)
-// defines SKY_VIEW_CAMERA, VARIANT_SURFACE_MODE, VARIANT_LOW_SUN,
-// VARIANT_SHADOWS, VARIANT_VOLUME and VARIANT_BLEND as constants.
+// atmos — fragment shaders of the engine plugin's pass (GLSL only, appended
+// by gpu/shader_source.cpp after the shared definitions, functions.glsl,
+// aerial_perspective.glsl, table_bindings.glsl and composite.glsl). Each
+// draws one full-screen triangle over the engine's image; the program
+// variant (gpu/shader_source.cpp) defines VARIANT_PIXELS and the constants
+// SKY_VIEW_CAMERA, VARIANT_SURFACE_MODE, VARIANT_LOW_SUN, VARIANT_SHADOWS,
+// VARIANT_VOLUME and VARIANT_BLEND.
+//
+// Why three programs. Software rasterisers run both sides of every branch,
+// so one program for every pixel would charge each pixel for the sky AND
+// for a surface. But they do skip blocks of pixels that fail the stencil
+// test before shading. So the pass first marks the sky pixels in a stencil
+// buffer (PIXELS_CLASSIFY: a depth read and a discard), then draws the sky
+// program where the mark is and the surface program where it is not: each
+// pixel pays for its own kind only (half the cost of a frame that is half
+// sky, on llvmpipe; GPUs, which branch per warp, lose nothing).
+#define PIXELS_CLASSIFY 0
+#define PIXELS_SKY 1
+#define PIXELS_SURFACE 2
 
-layout(binding = 0) uniform sampler2D spectral_transmittance_texture;
-layout(binding = 1) uniform sampler3D scattering_texture;
-layout(binding = 2) uniform sampler3D single_aerosol_texture;
-layout(binding = 3) uniform sampler2D irradiance_texture;
-layout(binding = 4) uniform sampler3D multiple_scattering_texture;
-layout(binding = 5) uniform sampler2D sky_view_rayleigh_texture;
-layout(binding = 6) uniform sampler2D sky_view_aerosol_texture;
-// The engine's textures (texelFetch: one texel per pixel).
-layout(binding = 7) uniform sampler2D engine_colour;
+// The engine's textures (texelFetch: one texel per pixel). Colour and albedo
+// share a unit: a surface mode reads one of them.
 layout(binding = 8) uniform sampler2D engine_depth;
+#if VARIANT_SURFACE_MODE == SURFACE_GBUFFER
 layout(binding = 9) uniform sampler2D engine_albedo;
 layout(binding = 10) uniform sampler2D engine_normal;
-// The sun's shadow map, read as depth (a sampler object without comparison).
-layout(binding = 11) uniform sampler2D shadow_map;
+#else
+layout(binding = 9) uniform sampler2D engine_colour;
+#endif
+// The sun's shadow map, read with comparison and linear filtering (the
+// pass's sampler object): percentage-closer filtering in one fetch.
+layout(binding = 11) uniform sampler2DShadow shadow_map;
 // This frame's aerial-perspective volume (aerial_perspective.comp.glsl).
 layout(binding = 12) uniform sampler3D ap_rayleigh;
 layout(binding = 13) uniform sampler3D ap_single_rayleigh;
@@ -43,8 +53,27 @@ layout(location = 25) uniform float ap_t_min;
 layout(location = 26) uniform vec2 shadow_map_size;
 layout(location = 27) uniform float shadow_depth_bias;
 layout(location = 28) uniform float volume_weight;
+layout(location = 29) uniform vec3 inverse_sun_srgb;
+layout(location = 30) uniform vec4 depth_column;
+layout(location = 31) uniform float depth_column_view_z;
+// The sky-view frame: locations 40-43 (table_bindings.glsl).
+
+// The pixel's PixelRay, interpolated from the vertex shader's corners
+// (atmosphere_pass.vert.glsl).
+layout(location = 0) noperspective in vec4 ray_world;
+layout(location = 1) noperspective in float ray_view_z;
 
 layout(location = 0) out vec4 frag_color;
+
+#if VARIANT_PIXELS == PIXELS_CLASSIFY
+
+// Keeps the sky pixels (the draw's stencil operation marks them).
+void main() {
+  if (!depth_is_sky(texelFetch(engine_depth, ivec2(gl_FragCoord.xy), 0).r, depth_encoding)) discard;
+  frag_color = vec4(0.0);
+}
+
+#else
 
 void main() {
   ivec2 pixel = ivec2(gl_FragCoord.xy);
@@ -53,10 +82,14 @@ void main() {
   frame.sun_direction = sun_direction;
   frame.inverse_projection = inverse_projection;
   frame.view_to_world = view_to_world;
+  frame.depth_column = depth_column;
+  frame.depth_column_view_z = depth_column_view_z;
   frame.depth_encoding = depth_encoding;
   frame.log2_depth_far = log2_depth_far;
   frame.surface_mode = VARIANT_SURFACE_MODE;
   frame.radiance_to_srgb = radiance_to_srgb;
+  frame.inverse_sun_srgb = inverse_sun_srgb;
+  frame.sky_view = uniform_sky_view_frame();
   frame.light_scale = light_scale;
   frame.sun_disc = sun_disc;
   frame.volume = VARIANT_VOLUME;
@@ -70,21 +103,33 @@ void main() {
   frame.shadow_matrix = shadow_matrix;
   frame.shadow_map_size = shadow_map_size;
   frame.shadow_depth_bias = shadow_depth_bias;
+  PixelRay ray;
+  ray.world = ray_world;
+  ray.view_z = ray_view_z;
+  float dither = pixel_dither(gl_FragCoord.xy);
+#if VARIANT_PIXELS == PIXELS_SKY
+  vec3 rgb = composite_sky_pixel(ATMOSPHERE, SPECTRAL, spectral_transmittance_texture, scattering_texture,
+                                 single_aerosol_texture, multiple_scattering_texture, irradiance_texture,
+                                 sky_view_rayleigh_texture, sky_view_aerosol_texture, sky_view_surface_texture,
+                                 SKY_VIEW_CAMERA, ap_rayleigh, ap_single_rayleigh, ap_aerosol, ap_transmittance,
+                                 frame, shadow_map, ray, dither);
+#else
   float depth = texelFetch(engine_depth, pixel, 0).r;
   vec3 colour = vec3(0.0);
   vec3 albedo = vec3(0.0);
   vec3 normal = vec3(0.0, 0.0, 1.0);
-  if (VARIANT_SURFACE_MODE == SURFACE_GBUFFER) {
-    albedo = texelFetch(engine_albedo, pixel, 0).rgb;
-    normal = texelFetch(engine_normal, pixel, 0).rgb;
-  } else {
-    colour = texelFetch(engine_colour, pixel, 0).rgb;
-  }
-  vec2 ndc = gl_FragCoord.xy / image_size * 2.0 - 1.0;
-  vec3 rgb = composite_pixel(ATMOSPHERE, SPECTRAL, spectral_transmittance_texture, scattering_texture,
-                             single_aerosol_texture, multiple_scattering_texture, irradiance_texture,
-                             sky_view_rayleigh_texture, sky_view_aerosol_texture, SKY_VIEW_CAMERA, ap_rayleigh,
-                             ap_single_rayleigh, ap_aerosol, ap_transmittance, frame, shadow_map,
-                             ndc, depth, colour, albedo, normal, pixel_dither(gl_FragCoord.xy));
+#if VARIANT_SURFACE_MODE == SURFACE_GBUFFER
+  albedo = texelFetch(engine_albedo, pixel, 0).rgb;
+  normal = texelFetch(engine_normal, pixel, 0).rgb;
+#else
+  colour = texelFetch(engine_colour, pixel, 0).rgb;
+#endif
+  vec3 rgb = composite_surface_pixel(ATMOSPHERE, SPECTRAL, spectral_transmittance_texture, scattering_texture,
+                                     single_aerosol_texture, multiple_scattering_texture, irradiance_texture,
+                                     ap_rayleigh, ap_single_rayleigh, ap_aerosol, ap_transmittance, frame, shadow_map,
+                                     ray, depth, colour, albedo, normal, dither);
+#endif
   frag_color = vec4(rgb, 1.0);
 }
+
+#endif

@@ -44,10 +44,8 @@ double own_sun_illuminance(const physics::AtmosphereParams& params, const glm::m
 // This frame's sky-view table on the CPU, texel by texel as the GPU pass
 // computes it (for cameras in the atmosphere).
 struct CpuSkyView {
-  std::vector<glm::vec3> rayleigh;
-  std::vector<glm::vec3> aerosol;
-  physics::sampler2D rayleigh_sampler() const { return {SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT, rayleigh.data()}; }
-  physics::sampler2D aerosol_sampler() const { return {SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT, aerosol.data()}; }
+  std::vector<glm::vec3> textures[3];  // rayleigh, aerosol, surface (functions.glsl: view_ray_terms)
+  physics::sampler2D sampler(int i) const { return {SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT, textures[i].data()}; }
 };
 CpuSkyView compute_sky_view_cpu(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
                                 const precompute::TableSamplers& samplers, const glm::vec3& camera,

@@ -26,7 +26,6 @@ layout(binding = ATMOS_UNIT_4) uniform sampler3D atmos_multiple_scattering_textu
 vec3 atmos_sky_radiance(vec3 camera, vec3 view_ray, vec3 sun, out vec3 transmittance) {
   vec3 channels = sky_radiance(ATMOSPHERE, SPECTRAL, atmos_optical_depth_texture, atmos_scattering_texture,
                                atmos_single_aerosol_texture, atmos_multiple_scattering_texture,
-                               atmos_irradiance_texture, atmos_irradiance_texture, false,
                                camera_above_ground(ATMOSPHERE, camera), view_ray, sun, transmittance);
   vec3 s = ATMOS_RADIANCE_TO_SRGB * ATMOSPHERE.solar_irradiance;
   transmittance = clamp(ATMOS_RADIANCE_TO_SRGB * (ATMOSPHERE.solar_irradiance * transmittance) / max(s, vec3(1e-30)),

@@ -258,20 +258,17 @@ GpuTables::GpuTables(const Atmosphere& atmosphere, const Tables& tables, Texture
   radiance_to_srgb_ = physics::channels_to_srgb_matrix(tables.wavelengths_nm);
   clear_gl_errors();
   try {
-    AssembledSource vertex;
-    vertex.append("vertex shader", fullscreen_vertex_shader_source());
-    sky_view_program_ = link_program(vertex, sky_view_fragment_shader_source(*params_, *spectral_));
     // The sky-view table: recomputed every frame, read with GL_LINEAR +
     // CLAMP_TO_EDGE like the precomputed tables.
-    glCreateTextures(GL_TEXTURE_2D, 2, sky_view_textures_);
+    glCreateTextures(GL_TEXTURE_2D, 3, sky_view_textures_);
     glCreateFramebuffers(1, &sky_view_framebuffer_);
-    for (int i = 0; i < 2; ++i) {
+    for (int i = 0; i < 3; ++i) {
       glTextureStorage2D(sky_view_textures_[i], 1, GL_RGBA32F, SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT);
       set_table_sampling(sky_view_textures_[i]);
       glNamedFramebufferTexture(sky_view_framebuffer_, GLenum(GL_COLOR_ATTACHMENT0 + i), sky_view_textures_[i], 0);
     }
-    const GLenum attachments[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-    glNamedFramebufferDrawBuffers(sky_view_framebuffer_, 2, attachments);
+    const GLenum attachments[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+    glNamedFramebufferDrawBuffers(sky_view_framebuffer_, 3, attachments);
     check_gl("while creating the sky-view table");
     if (glCheckNamedFramebufferStatus(sky_view_framebuffer_, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
       throw Error("the RGBA32F sky-view target is not supported by this OpenGL driver");
@@ -302,12 +299,15 @@ GpuTables::GpuTables(const Atmosphere& atmosphere, const Tables& tables, Texture
 GpuTables::~GpuTables() { release(); }
 
 void GpuTables::release() {
-  if (sky_view_program_ != 0) glDeleteProgram(sky_view_program_);
+  for (GLuint& program : sky_view_programs_) {
+    if (program != 0) glDeleteProgram(program);
+    program = 0;
+  }
   if (sky_view_framebuffer_ != 0) glDeleteFramebuffers(1, &sky_view_framebuffer_);
   if (vertex_array_ != 0) glDeleteVertexArrays(1, &vertex_array_);
-  glDeleteTextures(2, sky_view_textures_);
+  glDeleteTextures(3, sky_view_textures_);
   glDeleteTextures(5, textures_);
-  sky_view_program_ = sky_view_framebuffer_ = vertex_array_ = 0;
+  sky_view_framebuffer_ = vertex_array_ = 0;
   for (GLuint& t : sky_view_textures_) t = 0;
   for (GLuint& t : textures_) t = 0;
 }
@@ -316,19 +316,39 @@ void GpuTables::bind(GLuint first_unit) const {
   for (GLuint unit = 0; unit < 5; ++unit) glBindTextureUnit(first_unit + unit, textures_[unit]);
   glBindTextureUnit(first_unit + kSkyViewRayleighUnit, sky_view_textures_[0]);
   glBindTextureUnit(first_unit + kSkyViewAerosolUnit, sky_view_textures_[1]);
+  glBindTextureUnit(first_unit + kSkyViewSurfaceUnit, sky_view_textures_[2]);
 }
 
-double GpuTables::update_sky_view(const glm::vec3& camera, const glm::vec3& sun, GpuTimer* timer) {
-  glUseProgram(sky_view_program_);
-  glProgramUniform3f(sky_view_program_, 0, camera.x, camera.y, camera.z);
-  glProgramUniform3f(sky_view_program_, 7, sun.x, sun.y, sun.z);
+physics::SkyViewFrame GpuTables::sky_view_frame(const glm::vec3& camera, const glm::vec3& sun) const {
+  return physics::sky_view_frame(*params_, physics::camera_above_ground(*params_, camera), sun);
+}
+
+void set_sky_view_frame_uniforms(GLuint program, const physics::SkyViewFrame& frame) {
+  glProgramUniform3fv(program, kSkyViewFrameLocation + 0, 1, &frame.zenith.x);
+  glProgramUniform3fv(program, kSkyViewFrameLocation + 1, 1, &frame.sun_side.x);
+  glProgramUniform3fv(program, kSkyViewFrameLocation + 2, 1, &frame.across.x);
+  glProgramUniform1f(program, kSkyViewFrameLocation + 3, frame.theta_horizon);
+}
+
+double GpuTables::update_sky_view(const glm::vec3& camera, const glm::vec3& sun, const physics::SkyViewFrame& frame,
+                                  GpuTimer* timer) {
+  const bool low_sun = physics::sun_may_be_low_on_view_rays(*params_, camera, sun);
+  GLuint& program = sky_view_programs_[low_sun ? 1 : 0];
+  if (program == 0) {
+    AssembledSource vertex;
+    vertex.append("vertex shader", fullscreen_vertex_shader_source());
+    program = link_program(vertex, sky_view_fragment_shader_source(*params_, *spectral_, low_sun));
+  }
+  glUseProgram(program);
+  glProgramUniform3f(program, 0, camera.x, camera.y, camera.z);
+  glProgramUniform3f(program, 7, sun.x, sun.y, sun.z);
+  set_sky_view_frame_uniforms(program, frame);
   for (GLuint unit = 0; unit < 5; ++unit) {
     glBindTextureUnit(unit, textures_[unit]);
     glBindSampler(unit, 0);
   }
   // The table's own textures must not be bound for reading while drawn to.
-  glBindTextureUnit(kSkyViewRayleighUnit, 0);
-  glBindTextureUnit(kSkyViewAerosolUnit, 0);
+  for (GLuint unit : {kSkyViewRayleighUnit, kSkyViewAerosolUnit, kSkyViewSurfaceUnit}) glBindTextureUnit(unit, 0);
   glBindVertexArray(vertex_array_);
   glBindFramebuffer(GL_FRAMEBUFFER, sky_view_framebuffer_);
   glViewport(0, 0, SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT);

@@ -78,10 +78,18 @@ enum TableUnit : GLuint {
   kSingleAerosolUnit = 2,      // single aerosol, phase-free
   kIrradianceUnit = 3,         // indirect (sky) irradiance
   kMultipleScatteringUnit = 4, // multiple scattering / P_R
-  kSkyViewRayleighUnit = 5,    // this frame's sky-view table
+  kSkyViewRayleighUnit = 5,    // this frame's sky-view table (functions.glsl: view_ray_terms)
   kSkyViewAerosolUnit = 6,
-  kTableUnitCount = 7,
+  kSkyViewSurfaceUnit = 7,
+  kTableUnitCount = 8,
 };
+
+// Uniform locations of the sky-view table's frame (table_bindings.glsl:
+// uniform_sky_view_frame), the same in every program that reads the table.
+constexpr GLint kSkyViewFrameLocation = 40;  // 40..43
+
+// Sets those uniforms of `program` (a program without them ignores them).
+void set_sky_view_frame_uniforms(GLuint program, const physics::SkyViewFrame& frame);
 
 // The tables of one atmosphere on the GPU, its parameters as the shaders
 // see them, and the per-frame sky-view table (functions.glsl: sky_view_frame)
@@ -99,16 +107,24 @@ class GpuTables {
   const glm::mat3& radiance_to_srgb() const { return radiance_to_srgb_; }
 
   // Binds the five tables to units first_unit + 0..4 and the sky-view table
-  // to first_unit + 5, 6 (see TableUnit).
+  // to first_unit + 5..7 (see TableUnit).
   void bind(GLuint first_unit = 0) const;
   GLuint texture(int index) const { return textures_[index]; }
   GLuint sky_view_texture(int index) const { return sky_view_textures_[index]; }
 
+  // The frame of the sky-view table for a camera (m, planet-centred, in the
+  // atmosphere; below the ground counts as on it) and the sun's direction:
+  // computed once per frame here, uploaded to the table's pass and to its
+  // readers alike.
+  physics::SkyViewFrame sky_view_frame(const glm::vec3& camera, const glm::vec3& sun) const;
+
   // Computes this frame's sky-view table for a camera in the atmosphere
   // (camera_uses_sky_view) at `camera` (m, planet-centred) with the sun in
-  // direction `sun`; returns its GPU time in ms (0 without a timer). Leaves the sky-view
-  // framebuffer bound and the tables bound to units 0..4.
-  double update_sky_view(const glm::vec3& camera, const glm::vec3& sun, GpuTimer* timer);
+  // direction `sun`, in the frame `frame` (sky_view_frame); returns its GPU
+  // time in ms (0 without a timer). Leaves the sky-view framebuffer bound and
+  // the tables bound to units 0..4.
+  double update_sky_view(const glm::vec3& camera, const glm::vec3& sun, const physics::SkyViewFrame& frame,
+                         GpuTimer* timer);
 
  private:
   void release();
@@ -116,9 +132,10 @@ class GpuTables {
   std::unique_ptr<physics::SpectralSets> spectral_;
   glm::mat3 radiance_to_srgb_{1.0f};
   GLuint textures_[5] = {0, 0, 0, 0, 0};
-  GLuint sky_view_program_ = 0;
+  GLuint sky_view_programs_[2] = {0, 0};  // without, with the low-sun integration (compiled on first use)
   GLuint sky_view_framebuffer_ = 0;
-  GLuint sky_view_textures_[2] = {0, 0};  // single Rayleigh + multiple / P_R, single aerosol (RGBA32F)
+  // Single Rayleigh + multiple / P_R, single aerosol, the ray's end (RGBA32F).
+  GLuint sky_view_textures_[3] = {0, 0, 0};
   GLuint vertex_array_ = 0;
 };
 

@@ -138,8 +138,12 @@ physics::PassFrame make_pass_frame(const FrameInput& input, const PlanetFrame& p
   physics::PassFrame frame{};
   frame.camera = glm::vec3(camera_planet);
   frame.sun_direction = glm::vec3(glm::normalize(input.sun_direction));
-  frame.inverse_projection = glm::mat4(glm::inverse(input.projection));
-  frame.view_to_world = glm::mat3(glm::dmat3(camera_to_world) / planet.units_per_metre);
+  const glm::dmat4 inverse_projection = glm::inverse(input.projection);
+  const glm::dmat3 view_to_world = glm::dmat3(camera_to_world) / planet.units_per_metre;
+  frame.inverse_projection = glm::mat4(inverse_projection);
+  frame.view_to_world = glm::mat3(view_to_world);
+  frame.depth_column = glm::vec4(glm::vec3(view_to_world * glm::dvec3(inverse_projection[2])), inverse_projection[2].w);
+  frame.depth_column_view_z = float(inverse_projection[2].z);
   frame.depth_encoding = input.depth_encoding == DepthEncoding::standard     ? DEPTH_STANDARD
                          : input.depth_encoding == DepthEncoding::reversed_z ? DEPTH_REVERSED_Z
                                                                              : DEPTH_LOGARITHMIC;
@@ -147,6 +151,9 @@ physics::PassFrame make_pass_frame(const FrameInput& input, const PlanetFrame& p
       input.depth_encoding == DepthEncoding::logarithmic ? float(std::log2(1.0 + input.log_depth_far)) : 0.0f;
   frame.surface_mode = input.surfaces == SurfaceMode::gbuffer ? SURFACE_GBUFFER : SURFACE_LIT_COLOUR;
   frame.radiance_to_srgb = radiance_to_srgb;
+  frame.inverse_sun_srgb = 1.0f / glm::max(radiance_to_srgb * params.solar_irradiance, glm::vec3(1e-30f));
+  frame.sky_view = physics::sky_view_frame(params, physics::camera_above_ground(params, frame.camera),
+                                           frame.sun_direction);
   frame.light_scale =
       float((input.sun_illuminance_lux > 0.0 ? input.sun_illuminance_lux / own_sun_lux : 1.0) / input.nits_per_unit);
   frame.sun_disc = input.sun_disc;
@@ -179,16 +186,20 @@ CpuSkyView compute_sky_view_cpu(const physics::AtmosphereParams& params, const p
                                 const precompute::TableSamplers& samplers, const glm::vec3& camera,
                                 const glm::vec3& sun) {
   CpuSkyView view;
-  view.rayleigh.assign(size_t(SKY_VIEW_WIDTH) * SKY_VIEW_HEIGHT, glm::vec3(0.0f));
-  view.aerosol.assign(view.rayleigh.size(), glm::vec3(0.0f));
+  for (auto& t : view.textures) t.assign(size_t(SKY_VIEW_WIDTH) * SKY_VIEW_HEIGHT, glm::vec3(0.0f));
+  const physics::SkyViewFrame frame =
+      physics::sky_view_frame(params, physics::camera_above_ground(params, camera), sun);
+  const bool low_sun = physics::sun_may_be_low_on_view_rays(params, camera, sun);
   tbb::parallel_for(0, SKY_VIEW_HEIGHT, [&](int y) {
     for (int x = 0; x < SKY_VIEW_WIDTH; ++x) {
       // The texel centre, as gl_FragCoord gives it to the sky-view pass.
       const glm::vec2 uv((float(x) + 0.5f) / float(SKY_VIEW_WIDTH), (float(y) + 0.5f) / float(SKY_VIEW_HEIGHT));
       const size_t i = size_t(y) * SKY_VIEW_WIDTH + size_t(x);
       physics::compute_sky_view_texel(params, spectral, samplers.spectral_optical_depth, samplers.scattering,
-                                      samplers.single_aerosol, samplers.multiple_scattering, camera, sun, uv,
-                                      view.rayleigh[i], view.aerosol[i]);
+                                      samplers.single_aerosol, samplers.multiple_scattering,
+                                      samplers.indirect_irradiance, frame, camera, sun, uv, low_sun,
+                                      view.textures[0][i],
+                                      view.textures[1][i], view.textures[2][i]);
     }
   });
   return view;
@@ -203,14 +214,16 @@ CpuVolume compute_volume_cpu(const physics::AtmosphereParams& params, const phys
   if (!frame.volume) return volume;
   tbb::parallel_for(0, AP_HEIGHT, [&](int y) {
     for (int x = 0; x < AP_WIDTH; ++x) {
-      const auto c = std::make_unique<physics::AerialPerspectiveColumn>(physics::compute_aerial_perspective_column(
+      auto march = std::make_unique<physics::AerialPerspectiveMarch>(physics::aerial_perspective_march_begin(
           params, spectral, samplers.spectral_optical_depth, samplers.multiple_scattering, frame, x, y));
       for (int z = 0; z < AP_SLICES; ++z) {
+        const physics::AerialPerspectiveSlice slice = physics::aerial_perspective_march_slice(
+            params, spectral, samplers.spectral_optical_depth, samplers.multiple_scattering, frame, *march, z);
         const size_t i = (size_t(z) * AP_HEIGHT + size_t(y)) * AP_WIDTH + size_t(x);
-        volume.textures[0][i] = c->single_rayleigh[z] + c->multiple[z];
-        volume.textures[1][i] = c->single_rayleigh[z];
-        volume.textures[2][i] = c->aerosol[z];
-        volume.textures[3][i] = c->transmittance[z];
+        volume.textures[0][i] = slice.single_rayleigh + slice.multiple;
+        volume.textures[1][i] = slice.single_rayleigh;
+        volume.textures[2][i] = slice.aerosol;
+        volume.textures[3][i] = slice.transmittance;
       }
     }
   });
@@ -227,6 +240,8 @@ std::vector<AerialPerspectiveSample> aerial_perspective_cpu(const Atmosphere& at
   physics::PassFrame frame{};
   frame.camera = glm::vec3(camera);
   frame.sun_direction = glm::vec3(glm::normalize(sun));
+  frame.sky_view = physics::sky_view_frame(params, physics::camera_above_ground(params, frame.camera),
+                                           frame.sun_direction);
   frame.volume_weight = use_volume ? aerial_perspective_volume_weight(params, camera) : 0.0f;
   frame.volume = frame.volume_weight > 0.0f;
   aerial_perspective_reach(params, camera, frame.ap_t_min, frame.ap_t_far);
@@ -262,14 +277,10 @@ std::vector<glm::vec3> composite_cpu(const Atmosphere& atmosphere, const Tables&
   const bool sky_view_camera = physics::camera_uses_sky_view(params, frame.camera);
   // Cameras above the atmosphere evaluate every ray; their table stays unread.
   CpuSkyView sky_view;
-  if (sky_view_camera) {
-    sky_view = compute_sky_view_cpu(params, *spectral, samplers, frame.camera, frame.sun_direction);
-  } else {
-    sky_view.rayleigh.assign(size_t(SKY_VIEW_WIDTH) * SKY_VIEW_HEIGHT, glm::vec3(0.0f));
-    sky_view.aerosol = sky_view.rayleigh;
-  }
+  if (sky_view_camera) sky_view = compute_sky_view_cpu(params, *spectral, samplers, frame.camera, frame.sun_direction);
   const CpuVolume volume = compute_volume_cpu(params, *spectral, samplers, frame);
-  const physics::sampler2D shadow_map{buffers.shadow_width, buffers.shadow_height, buffers.shadow_depth.data()};
+  const physics::sampler2DShadow shadow_map{buffers.shadow_width, buffers.shadow_height,
+                                           buffers.shadow_depth.data()};
   std::vector<glm::vec3> out(pixels.size());
   tbb::parallel_for(size_t(0), pixels.size(), [&](size_t k) {
     const glm::ivec2 pixel = pixels[k];
@@ -278,11 +289,12 @@ std::vector<glm::vec3> composite_cpu(const Atmosphere& atmosphere, const Tables&
     const glm::vec2 centre(float(pixel.x) + 0.5f, float(pixel.y) + 0.5f);
     const glm::vec2 ndc = centre / glm::vec2(float(input.width), float(input.height)) * 2.0f - 1.0f;
     const bool gbuffer = frame.surface_mode == SURFACE_GBUFFER;
+    const physics::PixelRay ray = physics::pixel_ray(frame.inverse_projection, frame.view_to_world, ndc);
     out[k] = physics::composite_pixel(
         params, *spectral, samplers.spectral_optical_depth, samplers.scattering, samplers.single_aerosol,
-        samplers.multiple_scattering, samplers.indirect_irradiance, sky_view.rayleigh_sampler(),
-        sky_view.aerosol_sampler(), sky_view_camera, volume.sampler(0), volume.sampler(1), volume.sampler(2),
-        volume.sampler(3), frame, shadow_map, ndc, buffers.depth[i],
+        samplers.multiple_scattering, samplers.indirect_irradiance, sky_view.sampler(0), sky_view.sampler(1),
+        sky_view.sampler(2), sky_view_camera, volume.sampler(0), volume.sampler(1), volume.sampler(2),
+        volume.sampler(3), frame, shadow_map, ray, buffers.depth[i],
         gbuffer ? glm::vec3(0.0f) : buffers.colour[i], gbuffer ? buffers.albedo[i] : glm::vec3(0.0f),
         gbuffer ? buffers.normal[i] : glm::vec3(0.0f, 0.0f, 1.0f), physics::pixel_dither(centre));
   });

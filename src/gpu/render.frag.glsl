@@ -1,20 +1,13 @@
 // atmos — fragment shader of the renderer (GLSL only, appended by
 // gpu/shader_source.cpp after the shared definitions, the ATMOSPHERE constant,
-// functions.glsl and camera.glsl). One full-screen triangle; each fragment is
+// functions.glsl, table_bindings.glsl and camera.glsl). One full-screen triangle; each fragment is
 // one pixel of the image: its view ray, the radiance reaching the camera along
 // it, and that radiance converted to linear sRGB (cd/m² scale).
 
-// The optical depth of every wavelength triple (SPECTRAL), side by side.
-layout(binding = 0) uniform sampler2D spectral_transmittance_texture;
-layout(binding = 1) uniform sampler3D scattering_texture;
-layout(binding = 2) uniform sampler3D single_aerosol_texture;
-layout(binding = 3) uniform sampler2D irradiance_texture;
-layout(binding = 4) uniform sampler3D multiple_scattering_texture;
-// This frame's sky-view table (sky_view.frag.glsl). SKY_VIEW_CAMERA (true or
-// false, defined by gpu/shader_source.cpp) selects the program variant: true
-// for cameras in the atmosphere (camera_uses_sky_view), which read the table.
-layout(binding = 5) uniform sampler2D sky_view_rayleigh_texture;
-layout(binding = 6) uniform sampler2D sky_view_aerosol_texture;
+// The tables and the sky-view table: table_bindings.glsl. SKY_VIEW_CAMERA
+// (true or false, defined by gpu/shader_source.cpp) selects the program
+// variant: true for cameras in the atmosphere (camera_uses_sky_view), which
+// read the sky-view table.
 
 layout(location = 0) uniform vec3 camera;           // m, planet-centred
 layout(location = 1) uniform vec3 camera_right;
@@ -46,8 +39,8 @@ void main() {
   }
   vec3 radiance = radiance_along_view_ray(ATMOSPHERE, SPECTRAL, spectral_transmittance_texture, scattering_texture,
                                           single_aerosol_texture, multiple_scattering_texture, irradiance_texture,
-                                          sky_view_rayleigh_texture, sky_view_aerosol_texture, SKY_VIEW_CAMERA, camera,
-                                          view_ray,
-                                          sun_direction, true);
+                                          sky_view_rayleigh_texture, sky_view_aerosol_texture,
+                                          sky_view_surface_texture, SKY_VIEW_CAMERA, uniform_sky_view_frame(), camera,
+                                          view_ray, sun_direction, true);
   frag_color = vec4(radiance_to_srgb * radiance, 1.0);
 }

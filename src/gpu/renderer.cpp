@@ -218,7 +218,8 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   // sky_radiance); the test is the shared function's, on the same floats.
   double gpu_ms = 0.0;
   const bool sky_view_camera = physics::camera_uses_sky_view(tables_->params(), frame.position);
-  if (sky_view_camera) gpu_ms += tables_->update_sky_view(frame.position, sun, timer_.get());
+  const physics::SkyViewFrame sky_view = tables_->sky_view_frame(frame.position, sun);
+  if (sky_view_camera) gpu_ms += tables_->update_sky_view(frame.position, sun, sky_view, timer_.get());
   last_sky_view_ms_ = gpu_ms;
 
   // Pass 2: the image, in tiles.
@@ -235,6 +236,7 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   glProgramUniform2f(program, 6, frame.image_size.x, frame.image_size.y);
   glProgramUniform3f(program, 7, sun.x, sun.y, sun.z);
   glProgramUniformMatrix3fv(program, 9, 1, GL_FALSE, &matrix[0][0]);
+  gpu::set_sky_view_frame_uniforms(program, sky_view);
   tables_->bind();
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
@@ -288,15 +290,10 @@ Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camer
 
   // The sky-view table, texel by texel as the sky-view pass computes it.
   const bool sky_view_camera = physics::camera_uses_sky_view(params, frame.position);
+  const physics::SkyViewFrame sky_view_frame =
+      physics::sky_view_frame(params, physics::camera_above_ground(params, frame.position), sun);
   gpu::CpuSkyView sky_view;
-  if (sky_view_camera) {
-    sky_view = gpu::compute_sky_view_cpu(params, *spectral, samplers, frame.position, sun);
-  } else {
-    sky_view.rayleigh.assign(size_t(SKY_VIEW_WIDTH) * SKY_VIEW_HEIGHT, glm::vec3(0.0f));
-    sky_view.aerosol = sky_view.rayleigh;
-  }
-  const physics::sampler2D sky_view_rayleigh_sampler = sky_view.rayleigh_sampler();
-  const physics::sampler2D sky_view_aerosol_sampler = sky_view.aerosol_sampler();
+  if (sky_view_camera) sky_view = gpu::compute_sky_view_cpu(params, *spectral, samplers, frame.position, sun);
 
   Image image;
   image.width = camera.width;
@@ -315,8 +312,9 @@ Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camer
         if (valid) {
           const glm::vec3 radiance = physics::radiance_along_view_ray(
               params, *spectral, samplers.spectral_optical_depth, samplers.scattering, samplers.single_aerosol,
-              samplers.multiple_scattering, samplers.indirect_irradiance, sky_view_rayleigh_sampler,
-              sky_view_aerosol_sampler, sky_view_camera, frame.position, view_ray, sun, true);
+              samplers.multiple_scattering, samplers.indirect_irradiance, sky_view.sampler(0),
+              sky_view.sampler(1), sky_view.sampler(2), sky_view_camera, sky_view_frame, frame.position, view_ray,
+              sun, true);
           rgb = matrix * radiance;
         }
         dst[3 * x + 0] = rgb.x;

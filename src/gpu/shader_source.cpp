@@ -136,6 +136,14 @@ std::string AssembledSource::locate(int line) const {
 // locate() maps back to the files.
 namespace {
 
+// The most knots of the atmosphere's piecewise-linear density profiles (at
+// least 1): the trip count of profile_density's loop in shaders.
+int density_knot_bound(const physics::AtmosphereParams& params) {
+  int bound = 1;
+  for (int i = 0; i < params.constituent_count; ++i) bound = std::max(bound, params.density[i].knot_count);
+  return bound;
+}
+
 AssembledSource shared_fragment_shader_source(const physics::AtmosphereParams& params,
                                               const physics::SpectralSets& spectral) {
   AssembledSource s;
@@ -144,7 +152,9 @@ AssembledSource shared_fragment_shader_source(const physics::AtmosphereParams& p
   s.append("macros", "#define IN(T) in T\n#define OUT(T) out T\n#define INOUT(T) inout T\n#define INLINE\n");
   // Shaders only run the run-time integration (see RAY_MAP_CAPACITY).
   s.append("capacities", "#define RAY_ARRAYS_FOR_RUNTIME\n#define SPECTRAL_SET_CAPACITY " +
-                             std::to_string(spectral.count) + "\n");
+                             std::to_string(spectral.count) + "\n#define SPECTRAL_COUNT(s) SPECTRAL_SET_CAPACITY\n" +
+                             "#define CONSTITUENT_COUNT(a) " + std::to_string(params.constituent_count) + "\n" +
+                             "#define DENSITY_KNOT_BOUND " + std::to_string(density_knot_bound(params)) + "\n");
   s.append("definitions.glsl", embedded("src/physics/definitions.glsl"));
   s.append("ATMOSPHERE", atmosphere_params_glsl(params));
   s.append("SPECTRAL", spectral_sets_glsl(spectral));
@@ -159,14 +169,17 @@ AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& p
                                               const physics::SpectralSets& spectral, bool sky_view_camera) {
   AssembledSource s = shared_fragment_shader_source(params, spectral);
   s.append("variant", std::string("#define SKY_VIEW_CAMERA ") + (sky_view_camera ? "true" : "false") + "\n");
+  s.append("table_bindings.glsl", embedded("src/gpu/table_bindings.glsl"));
   s.append("camera.glsl", embedded("src/gpu/camera.glsl"));
   s.append("render.frag.glsl", embedded("src/gpu/render.frag.glsl"));
   return s;
 }
 
 AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams& params,
-                                                const physics::SpectralSets& spectral) {
+                                                const physics::SpectralSets& spectral, bool low_sun) {
   AssembledSource s = shared_fragment_shader_source(params, spectral);
+  s.append("variant", std::string("#define SKY_VIEW_LOW_SUN ") + (low_sun ? "true" : "false") + "\n");
+  s.append("table_bindings.glsl", embedded("src/gpu/table_bindings.glsl"));
   s.append("sky_view.frag.glsl", embedded("src/gpu/sky_view.frag.glsl"));
   return s;
 }
@@ -180,9 +193,21 @@ AssembledSource atmosphere_pass_fragment_shader_source(const physics::Atmosphere
                           "\n#define VARIANT_LOW_SUN " + flag(variant.low_sun) + "\n#define VARIANT_SHADOWS " +
                           flag(variant.shadows) + "\n#define VARIANT_VOLUME " + flag(variant.volume) +
                           "\n#define VARIANT_BLEND " + flag(variant.blend) +
-                          "\n#define VARIANT_SURFACE_MODE " + (variant.gbuffer ? "1" : "0") + "\n");
+                          "\n#define VARIANT_SURFACE_MODE " + (variant.gbuffer ? "1" : "0") +
+                          "\n#define VARIANT_PIXELS " + std::to_string(int(variant.pixels)) + "\n");
+  s.append("table_bindings.glsl", embedded("src/gpu/table_bindings.glsl"));
+  s.append("pixel_ray.glsl", embedded("src/gpu/pixel_ray.glsl"));
   s.append("composite.glsl", embedded("src/gpu/composite.glsl"));
   s.append("atmosphere_pass.frag.glsl", embedded("src/gpu/atmosphere_pass.frag.glsl"));
+  return s;
+}
+
+AssembledSource atmosphere_pass_vertex_shader_source() {
+  AssembledSource s;
+  s.append("header", "#version 450 core\n");
+  s.append("macros", "#define IN(T) in T\n#define OUT(T) out T\n#define INOUT(T) inout T\n#define INLINE\n");
+  s.append("pixel_ray.glsl", embedded("src/gpu/pixel_ray.glsl"));
+  s.append("atmosphere_pass.vert.glsl", embedded("src/gpu/atmosphere_pass.vert.glsl"));
   return s;
 }
 
@@ -190,6 +215,8 @@ AssembledSource aerial_perspective_compute_shader_source(const physics::Atmosphe
                                                         const physics::SpectralSets& spectral, bool low_sun) {
   AssembledSource s = shared_fragment_shader_source(params, spectral);
   s.append("variant", std::string("#define VARIANT_LOW_SUN ") + (low_sun ? "true" : "false") + "\n");
+  s.append("table_bindings.glsl", embedded("src/gpu/table_bindings.glsl"));
+  s.append("pixel_ray.glsl", embedded("src/gpu/pixel_ray.glsl"));
   s.append("composite.glsl", embedded("src/gpu/composite.glsl"));
   s.append("aerial_perspective.comp.glsl", embedded("src/gpu/aerial_perspective.comp.glsl"));
   return s;

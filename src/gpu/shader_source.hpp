@@ -47,22 +47,29 @@ AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& p
                                               const physics::SpectralSets& spectral, bool sky_view_camera);
 
 // The fragment shader of the sky-view pass: the same shared part, then
-// sky_view.frag.glsl.
+// sky_view.frag.glsl; `low_sun`: with the twilight integration
+// (functions.glsl: sun_may_be_low_on_view_rays).
 AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams& params,
-                                                const physics::SpectralSets& spectral);
+                                                const physics::SpectralSets& spectral, bool low_sun);
 
 // The program variants of the engine plugin's pass: what composite.glsl
 // treats as constants (see PassFrame).
 struct PassVariant {
+  // Which pixels the program draws (atmosphere_pass.frag.glsl: PIXELS_*):
+  // it marks the sky pixels in the stencil buffer, or shades the sky's, or
+  // the surfaces'.
+  enum class Pixels { classify = 0, sky = 1, surface = 2 };
+  Pixels pixels = Pixels::sky;
   bool sky_view_camera = true;  // camera in the atmosphere: reads the sky-view table
   bool low_sun = false;         // integrates single scattering where the sun is low
   bool shadows = false;         // a shadow map: light shafts
   bool gbuffer = false;         // lights surfaces from albedo + normal
   bool volume = false;          // surfaces read the aerial-perspective volume
   bool blend = false;           // ... mixed with the exact evaluation (cameras in the blend band)
+  static constexpr int kCount = 3 * 64;
   int index() const {
-    return (sky_view_camera ? 1 : 0) | (low_sun ? 2 : 0) | (shadows ? 4 : 0) | (gbuffer ? 8 : 0) | (volume ? 16 : 0) |
-           (blend ? 32 : 0);
+    return int(pixels) * 64 + ((sky_view_camera ? 1 : 0) | (low_sun ? 2 : 0) | (shadows ? 4 : 0) |
+                               (gbuffer ? 8 : 0) | (volume ? 16 : 0) | (blend ? 32 : 0));
   }
 };
 
@@ -71,6 +78,10 @@ struct PassVariant {
 AssembledSource atmosphere_pass_fragment_shader_source(const physics::AtmosphereParams& params,
                                                       const physics::SpectralSets& spectral,
                                                       const PassVariant& variant);
+
+// The vertex shader of the engine plugin's pass: pixel_ray.glsl and
+// atmosphere_pass.vert.glsl (each pixel's PixelRay, interpolated).
+AssembledSource atmosphere_pass_vertex_shader_source();
 
 // The compute shader of the plugin's aerial-perspective volume: the shared
 // part, composite.glsl and aerial_perspective.comp.glsl.

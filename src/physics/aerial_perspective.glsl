@@ -23,7 +23,7 @@ INLINE vec3 channel_transmittance_along_ray(IN(AtmosphereParams) atmosphere, IN(
                                             IN(sampler2D) spectral_transmittance_texture, float r, float mu, float d,
                                             bool ray_r_mu_intersects_ground) {
   vec3 sum = vec3(0.0f);
-  for (int k = 0; k < spectral.count; ++k) {
+  for (int k = 0; k < SPECTRAL_COUNT(spectral); ++k) {
     vec3 t = transmittance_along_ray(spectral.set[k], spectral_transmittance_texture, r, mu, d,
                                      ray_r_mu_intersects_ground);
     sum += spectral.to_channels[k] * (spectral.set[k].solar_irradiance * t);

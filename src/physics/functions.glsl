@@ -73,13 +73,25 @@ INLINE float horizon_mu(IN(AtmosphereParams) atmosphere, float r) {
 
 INLINE float profile_density(IN(DensityProfile) profile, float altitude) {
   if (profile.scale_height > 0.0f) return exp(-altitude / profile.scale_height);
-  for (int i = 1; i < profile.knot_count; ++i) {
-    if (altitude >= profile.knot_altitude[i - 1] && altitude <= profile.knot_altitude[i]) {
-      float t = (altitude - profile.knot_altitude[i - 1]) / (profile.knot_altitude[i] - profile.knot_altitude[i - 1]);
-      return mix(profile.knot_density[i - 1], profile.knot_density[i], t);
-    }
+  // Piecewise linear between the knots, 0 outside them: the first segment
+  // that contains the altitude. A loop of constant length (DENSITY_KNOT_BOUND:
+  // in shaders the most knots of the atmosphere's constituents, see
+  // shader_source.cpp) without early exits. Shader compilers do not fold the
+  // atmosphere's constants through the function calls, and software
+  // rasterisers run every iteration and both sides of every branch anyway:
+  // a loop bounded by the profile's own count, with a return inside, cost
+  // the aerial-perspective volume 3x its time on llvmpipe.
+  float density = 0.0f;
+  bool found = false;
+  for (int i = 1; i < DENSITY_KNOT_BOUND; ++i) {
+    float a0 = profile.knot_altitude[i - 1];
+    float a1 = profile.knot_altitude[i];
+    bool inside = !found && i < profile.knot_count && altitude >= a0 && altitude <= a1;
+    float t = clamp((altitude - a0) / max(a1 - a0, 1e-30f), 0.0f, 1.0f);
+    density = inside ? mix(profile.knot_density[i - 1], profile.knot_density[i], t) : density;
+    found = found || inside;
   }
-  return 0.0f;
+  return density;
 }
 
 // Scattering coefficients of the Rayleigh-phase and aerosol-phase
@@ -90,7 +102,7 @@ INLINE void medium_at(IN(AtmosphereParams) atmosphere, float r, OUT(vec3) raylei
   aerosol_scattering = vec3(0.0f);
   extinction = vec3(0.0f);
   float altitude = r - atmosphere.bottom_radius;
-  for (int i = 0; i < atmosphere.constituent_count; ++i) {
+  for (int i = 0; i < CONSTITUENT_COUNT(atmosphere); ++i) {
     float density = profile_density(atmosphere.density[i], altitude);
     vec3 scattering = atmosphere.scattering[i] * density;
     if (atmosphere.is_aerosol[i] != 0) {
@@ -974,7 +986,7 @@ INLINE void spectral_single_scattering(IN(AtmosphereParams) atmosphere, IN(Spect
   rayleigh = vec3(0.0f);
   aerosol = vec3(0.0f);
   if (ray_in_planet_shadow(atmosphere, mu_s, mu_s_at_ray_end(r, mu, mu_s, nu, d))) return;
-  for (int k = 0; k < spectral.count; ++k) {
+  for (int k = 0; k < SPECTRAL_COUNT(spectral); ++k) {
     vec3 set_rayleigh;
     vec3 set_aerosol;
     integrate_single_scattering(spectral.set[k], spectral_transmittance_texture, r, mu, mu_s, nu, d,
@@ -993,14 +1005,16 @@ INLINE void spectral_single_scattering(IN(AtmosphereParams) atmosphere, IN(Spect
 // once per wavelength triple of `spectral` (each with its own medium and
 // tile of `spectral_transmittance_texture`) and is converted to the tables'
 // channels, so that twilight colours are those of the spectrum, not of three
-// samples of it.
+// samples of it. `low_sun_path` false drops the integration (shaders pass a
+// constant, see sun_may_be_low_on_view_rays: software rasterisers run both
+// sides of every branch); it must be true wherever the sun may be low.
 INLINE void scattering_along_ray(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
                                  IN(sampler2D) spectral_transmittance_texture, IN(sampler3D) scattering_texture,
                                  IN(sampler3D) single_aerosol_texture, IN(sampler3D) multiple_scattering_texture,
                                  float r, float mu, float mu_s, float nu, bool ray_r_mu_intersects_ground, float d,
-                                 OUT(vec3) rayleigh, OUT(vec3) aerosol) {
+                                 bool low_sun_path, OUT(vec3) rayleigh, OUT(vec3) aerosol) {
   float mu_s_end = mu_s_at_ray_end(r, mu, mu_s, nu, d);
-  float low_sun = low_sun_weight(mu_s, mu_s_end);
+  float low_sun = low_sun_path ? low_sun_weight(mu_s, mu_s_end) : 0.0f;
   rayleigh = vec3(0.0f);
   aerosol = vec3(0.0f);
   if (low_sun < 1.0f) {
@@ -1009,7 +1023,7 @@ INLINE void scattering_along_ray(IN(AtmosphereParams) atmosphere, IN(SpectralSet
     aerosol = (1.0f - low_sun) *
               scattering_lookup(atmosphere, single_aerosol_texture, r, mu, mu_s, nu, ray_r_mu_intersects_ground);
   }
-  if (low_sun > 0.0f) {
+  if (low_sun_path && low_sun > 0.0f) {
     vec3 single_rayleigh;
     vec3 single_aerosol;
     spectral_single_scattering(atmosphere, spectral, spectral_transmittance_texture, r, mu, mu_s, nu, d,
@@ -1044,7 +1058,7 @@ INLINE void scattering_along_ray(IN(AtmosphereParams) atmosphere, IN(SpectralSet
 INLINE vec3 channel_transmittance(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
                                   IN(sampler2D) spectral_transmittance_texture, int path, float r, float mu) {
   vec3 sum = vec3(0.0f);
-  for (int k = 0; k < spectral.count; ++k) {
+  for (int k = 0; k < SPECTRAL_COUNT(spectral); ++k) {
     vec3 t;
     if (path == PATH_TO_GROUND) {
       t = transmittance_to_ground(spectral.set[k], spectral_transmittance_texture, r, mu);
@@ -1074,8 +1088,10 @@ INLINE vec3 channel_transmittance(IN(AtmosphereParams) atmosphere, IN(SpectralSe
 //    towards the horizon (x = sqrt of the normalised angle from it), between
 //    the nadir and the horizon for ground rays and between the horizon and
 //    the zenith for the others.
-// Texels hold the phase-free values of scattering_along_ray (phase
-// functions are applied per pixel, so the sun's aerosol halo stays sharp).
+// Texels hold view_ray_terms: the phase-free values of scattering_along_ray
+// (phase functions are applied per pixel, so the sun's aerosol halo stays
+// sharp) and what is at the ray's end (the lit ground sphere, or the
+// transmittance to space for the sun disc), in three textures.
 // Used for cameras in the atmosphere: from space, the lit atmosphere near the
 // terminator spans a few degrees of view and the table blurs it (30 % errors
 // at 2 planet radii), so rays are evaluated one by one there.
@@ -1163,70 +1179,6 @@ INLINE vec3 camera_above_ground(IN(AtmosphereParams) atmosphere, vec3 camera) {
   return r < atmosphere.bottom_radius ? camera * (atmosphere.bottom_radius / r) : camera;
 }
 
-// One texel of the sky-view table of a camera in the atmosphere (uv at the
-// texel centre): scattering_along_ray for its view direction.
-INLINE void compute_sky_view_texel(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
-                                   IN(sampler2D) spectral_transmittance_texture,
-                                   IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
-                                   IN(sampler3D) multiple_scattering_texture, vec3 camera, vec3 sun_direction,
-                                   vec2 uv, OUT(vec3) rayleigh, OUT(vec3) aerosol) {
-  camera = camera_above_ground(atmosphere, camera);
-  SkyViewFrame frame = sky_view_frame(atmosphere, camera, sun_direction);
-  bool ground;
-  vec3 view_ray = sky_view_direction(frame, uv, ground);
-  float r = clamp_radius(atmosphere, length(camera));
-  float mu = clamp_cosine(dot(camera, view_ray) / r);
-  float mu_s = clamp_cosine(dot(camera, sun_direction) / r);
-  float nu = clamp_cosine(dot(view_ray, sun_direction));
-  float d = distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ground);
-  scattering_along_ray(atmosphere, spectral, spectral_transmittance_texture, scattering_texture,
-                       single_aerosol_texture, multiple_scattering_texture, r, mu, mu_s, nu, ground, d, rayleigh,
-                       aerosol);
-}
-
-// Radiance scattered towards the camera along the view ray up to the top of
-// the atmosphere or the ground (seed 000 eq. 3.13), and the transmittance of
-// that path. Excludes the sun disc and the light reflected by the ground.
-// With `use_sky_view` (the renderers, for a camera in the atmosphere: see
-// camera_uses_sky_view) the scattering comes from this frame's sky-view
-// table; otherwise scattering_along_ray evaluates the ray itself (the CPU sky
-// model; cameras in space). Shaders pass a constant, so that the compiler
-// drops the path not taken: software rasterisers run both sides of a branch,
-// and all iterations of a loop of constant length.
-INLINE vec3 sky_radiance(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
-                         IN(sampler2D) spectral_transmittance_texture,
-                         IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
-                         IN(sampler3D) multiple_scattering_texture, IN(sampler2D) sky_view_rayleigh_texture,
-                         IN(sampler2D) sky_view_aerosol_texture, bool use_sky_view, vec3 camera, vec3 view_ray,
-                         vec3 sun_direction, OUT(vec3) transmittance) {
-  transmittance = vec3(1.0f);
-  vec3 start = camera;
-  if (!enter_atmosphere(atmosphere, start, view_ray)) return vec3(0.0f);
-  float r = clamp_radius(atmosphere, length(start));
-  float mu = clamp_cosine(dot(start, view_ray) / r);
-  float mu_s = clamp_cosine(dot(start, sun_direction) / r);
-  float nu = clamp_cosine(dot(view_ray, sun_direction));
-  bool ground = ray_intersects_ground(atmosphere, r, mu);
-  if (ground) {
-    transmittance =
-        channel_transmittance(atmosphere, spectral, spectral_transmittance_texture, PATH_TO_GROUND, r, mu);
-  } else {
-    transmittance = channel_transmittance(atmosphere, spectral, spectral_transmittance_texture, PATH_TO_TOP, r, mu);
-  }
-  vec3 rayleigh;
-  vec3 aerosol;
-  if (use_sky_view) {
-    vec2 uv = sky_view_uv(sky_view_frame(atmosphere, camera, sun_direction), view_ray, ground);
-    rayleigh = vec3(texture(sky_view_rayleigh_texture, uv));
-    aerosol = vec3(texture(sky_view_aerosol_texture, uv));
-  } else {
-    scattering_along_ray(atmosphere, spectral, spectral_transmittance_texture, scattering_texture,
-                         single_aerosol_texture, multiple_scattering_texture, r, mu, mu_s, nu, ground,
-                         distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ground), rayleigh, aerosol);
-  }
-  return phase_weighted_scattering(atmosphere, rayleigh, aerosol, nu);
-}
-
 // Irradiance on a surface at radius r whose local zenith is `up`, with
 // normal `normal`: returns the sun's, and the sky's in `sky_irradiance`
 // (the horizontal sky irradiance scaled by the fraction of the sky the
@@ -1261,43 +1213,150 @@ INLINE vec3 sun_disc_radiance(IN(AtmosphereParams) atmosphere) {
   return atmosphere.solar_irradiance / (4.0f * PI * s * s);
 }
 
+// Whether the sun may be low (below LOW_SUN_MU_S_TABLE, where
+// scattering_along_ray integrates single scattering) at some point of the
+// view rays of a camera in the atmosphere. The sun's zenith angle at a point
+// differs from the one above the camera by at most the angle between them
+// seen from the planet centre, which for the points of the atmosphere the
+// camera sees is at most acos(R / r) + acos(R / R_top) (the camera's horizon
+// on the ground sphere plus the top's), here with 0.01 rad to spare for
+// rounding. The sky-view table of a camera for which this is false needs no
+// integration (a program variant without it: by day, the table in half the
+// time).
+INLINE bool sun_may_be_low_on_view_rays(IN(AtmosphereParams) atmosphere, vec3 camera, vec3 sun_direction) {
+  float r = max(length(camera), atmosphere.bottom_radius);
+  float reach = acos(atmosphere.bottom_radius / r) + acos(atmosphere.bottom_radius / atmosphere.top_radius);
+  float sun_zenith = acos(clamp_cosine(dot(camera / r, sun_direction)));
+  return sun_zenith + reach + 0.01f >= acos(LOW_SUN_MU_S_TABLE);
+}
+
+// What the sky-view table holds for one view ray from `camera` (in the
+// atmosphere, at or above the ground): the phase-free scattering along it
+// (scattering_along_ray: single Rayleigh + multiple / P_R, and single
+// aerosol), and in `surface` what lies at its end — for a ray that meets the
+// ground sphere, the radiance of the Lambertian ground lit by the sun and
+// the sky (seed 000 §4.3.3) times the transmittance to it; for the others,
+// the transmittance to the top of the atmosphere, which the sun disc needs.
+// Everything that depends on the direction only, so that a sky pixel is
+// three texture reads (radiance_along_view_ray) instead of the ~15 lookups
+// of the transmittance and irradiance it would otherwise need per pixel.
+INLINE void view_ray_terms(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                           IN(sampler2D) spectral_transmittance_texture, IN(sampler3D) scattering_texture,
+                           IN(sampler3D) single_aerosol_texture, IN(sampler3D) multiple_scattering_texture,
+                           IN(sampler2D) irradiance_texture, vec3 camera, vec3 view_ray, vec3 sun_direction,
+                           bool ground, bool low_sun_path, OUT(vec3) rayleigh, OUT(vec3) aerosol,
+                           OUT(vec3) surface) {
+  float r = clamp_radius(atmosphere, length(camera));
+  float mu = clamp_cosine(dot(camera, view_ray) / r);
+  float mu_s = clamp_cosine(dot(camera, sun_direction) / r);
+  float nu = clamp_cosine(dot(view_ray, sun_direction));
+  float d = distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ground);
+  scattering_along_ray(atmosphere, spectral, spectral_transmittance_texture, scattering_texture,
+                       single_aerosol_texture, multiple_scattering_texture, r, mu, mu_s, nu, ground, d, low_sun_path,
+                       rayleigh, aerosol);
+  if (ground) {
+    vec3 point = camera + view_ray * d;
+    vec3 normal = point / length(point);
+    vec3 sky_irradiance;
+    vec3 sun_irradiance = sun_and_sky_irradiance_at(atmosphere, spectral, spectral_transmittance_texture,
+                                                    irradiance_texture, atmosphere.bottom_radius, normal, normal,
+                                                    sun_direction, sky_irradiance);
+    surface = channel_transmittance(atmosphere, spectral, spectral_transmittance_texture, PATH_TO_GROUND, r, mu) *
+              ground_radiance(atmosphere, sun_irradiance + sky_irradiance);
+  } else {
+    surface = channel_transmittance(atmosphere, spectral, spectral_transmittance_texture, PATH_TO_TOP, r, mu);
+  }
+}
+
+// One texel of the sky-view table (uv at the texel centre) of the camera
+// whose frame is `frame` (sky_view_frame, computed once per frame on the
+// CPU, so that the table and its readers agree on the directions to the
+// last bit): view_ray_terms of its view direction. `low_sun_path`:
+// sun_may_be_low_on_view_rays for the camera (a constant in shaders).
+INLINE void compute_sky_view_texel(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                   IN(sampler2D) spectral_transmittance_texture,
+                                   IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
+                                   IN(sampler3D) multiple_scattering_texture, IN(sampler2D) irradiance_texture,
+                                   IN(SkyViewFrame) frame, vec3 camera, vec3 sun_direction, vec2 uv,
+                                   bool low_sun_path, OUT(vec3) rayleigh, OUT(vec3) aerosol, OUT(vec3) surface) {
+  camera = camera_above_ground(atmosphere, camera);
+  bool ground;
+  vec3 view_ray = sky_view_direction(frame, uv, ground);
+  // The half of the table decides, not the ray's own test: at the horizon
+  // both must agree with the readers' ray_intersects_ground, which chose
+  // this half.
+  view_ray_terms(atmosphere, spectral, spectral_transmittance_texture, scattering_texture, single_aerosol_texture,
+                 multiple_scattering_texture, irradiance_texture, camera, view_ray, sun_direction, ground,
+                 low_sun_path, rayleigh, aerosol, surface);
+}
+
+// Radiance scattered towards the camera along the view ray up to the top of
+// the atmosphere or the ground (seed 000 eq. 3.13), and the transmittance of
+// that path: scattering_along_ray for the ray itself (the GLSL library for
+// engines). Excludes the sun disc and the light reflected by the ground.
+INLINE vec3 sky_radiance(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                         IN(sampler2D) spectral_transmittance_texture, IN(sampler3D) scattering_texture,
+                         IN(sampler3D) single_aerosol_texture, IN(sampler3D) multiple_scattering_texture,
+                         vec3 camera, vec3 view_ray, vec3 sun_direction, OUT(vec3) transmittance) {
+  transmittance = vec3(1.0f);
+  vec3 start = camera;
+  if (!enter_atmosphere(atmosphere, start, view_ray)) return vec3(0.0f);
+  float r = clamp_radius(atmosphere, length(start));
+  float mu = clamp_cosine(dot(start, view_ray) / r);
+  float mu_s = clamp_cosine(dot(start, sun_direction) / r);
+  float nu = clamp_cosine(dot(view_ray, sun_direction));
+  bool ground = ray_intersects_ground(atmosphere, r, mu);
+  transmittance = channel_transmittance(atmosphere, spectral, spectral_transmittance_texture,
+                                        ground ? PATH_TO_GROUND : PATH_TO_TOP, r, mu);
+  vec3 rayleigh;
+  vec3 aerosol;
+  scattering_along_ray(atmosphere, spectral, spectral_transmittance_texture, scattering_texture,
+                       single_aerosol_texture, multiple_scattering_texture, r, mu, mu_s, nu, ground,
+                       distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ground), true, rayleigh, aerosol);
+  return phase_weighted_scattering(atmosphere, rayleigh, aerosol, nu);
+}
+
 // Everything that reaches a camera along a view ray, for a spherical planet:
 // the sky, or the Lambertian ground lit by sun and sky seen through the
 // aerial perspective in front of it, plus (optionally) the sun disc.
 // `camera` is relative to the planet centre; a camera below the ground is
-// treated as standing on it.
+// treated as standing on it. With `use_sky_view` (the renderers, for a
+// camera in the atmosphere: see camera_uses_sky_view) the view ray's terms
+// come from this frame's sky-view table (three texture reads; `sky_view`:
+// the table's frame); otherwise view_ray_terms evaluates them for the ray
+// (the CPU sky model; cameras in space, from where the lit atmosphere near
+// the terminator spans a few degrees that the table would blur). Shaders
+// pass a constant, so that the compiler drops the path not taken: software
+// rasterisers run both sides of a branch.
 INLINE vec3 radiance_along_view_ray(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
-                                    IN(sampler2D) spectral_transmittance_texture, IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
-                                    IN(sampler3D) multiple_scattering_texture, IN(sampler2D) irradiance_texture,
-                                    IN(sampler2D) sky_view_rayleigh_texture, IN(sampler2D) sky_view_aerosol_texture,
-                                    bool use_sky_view, vec3 camera, vec3 view_ray, vec3 sun_direction,
-                                    bool include_sun_disc) {
+                                    IN(sampler2D) spectral_transmittance_texture, IN(sampler3D) scattering_texture,
+                                    IN(sampler3D) single_aerosol_texture, IN(sampler3D) multiple_scattering_texture,
+                                    IN(sampler2D) irradiance_texture, IN(sampler2D) sky_view_rayleigh_texture,
+                                    IN(sampler2D) sky_view_aerosol_texture, IN(sampler2D) sky_view_surface_texture,
+                                    bool use_sky_view, IN(SkyViewFrame) sky_view, vec3 camera, vec3 view_ray,
+                                    vec3 sun_direction, bool include_sun_disc) {
   camera = camera_above_ground(atmosphere, camera);
-  vec3 transmittance;
-  vec3 radiance = sky_radiance(atmosphere, spectral, spectral_transmittance_texture,
-                               scattering_texture, single_aerosol_texture,
-                               multiple_scattering_texture, sky_view_rayleigh_texture, sky_view_aerosol_texture,
-                               use_sky_view, camera, view_ray, sun_direction, transmittance);
+  float nu = clamp_cosine(dot(view_ray, sun_direction));
+  bool in_sun_disc = include_sun_disc && nu > cos(atmosphere.sun_angular_radius);
   vec3 start = camera;
-  if (!enter_atmosphere(atmosphere, start, view_ray)) {
-    // Outside the atmosphere and missing it: only the sun.
-    if (include_sun_disc && dot(view_ray, sun_direction) > cos(atmosphere.sun_angular_radius))
-      radiance += sun_disc_radiance(atmosphere);
-    return radiance;
-  }
+  // Outside the atmosphere and missing it: only the sun.
+  if (!enter_atmosphere(atmosphere, start, view_ray)) return in_sun_disc ? sun_disc_radiance(atmosphere) : vec3(0.0f);
   float r = clamp_radius(atmosphere, length(start));
-  float mu = clamp_cosine(dot(start, view_ray) / r);
-  if (ray_intersects_ground(atmosphere, r, mu)) {
-    vec3 point = start + view_ray * distance_to_bottom_atmosphere_boundary(atmosphere, r, mu);
-    vec3 normal = point / length(point);
-    vec3 sky_irradiance;
-    vec3 sun_irradiance = sun_and_sky_irradiance_at(atmosphere, spectral, spectral_transmittance_texture,
-                                                    irradiance_texture,
-                                                    atmosphere.bottom_radius, normal, normal, sun_direction,
-                                                    sky_irradiance);
-    radiance += transmittance * ground_radiance(atmosphere, sun_irradiance + sky_irradiance);
-  } else if (include_sun_disc && dot(view_ray, sun_direction) > cos(atmosphere.sun_angular_radius)) {
-    radiance += transmittance * sun_disc_radiance(atmosphere);
+  bool ground = ray_intersects_ground(atmosphere, r, clamp_cosine(dot(start, view_ray) / r));
+  vec3 rayleigh;
+  vec3 aerosol;
+  vec3 surface;
+  if (use_sky_view) {
+    vec2 uv = sky_view_uv(sky_view, view_ray, ground);
+    rayleigh = vec3(texture(sky_view_rayleigh_texture, uv));
+    aerosol = vec3(texture(sky_view_aerosol_texture, uv));
+    surface = vec3(texture(sky_view_surface_texture, uv));
+  } else {
+    view_ray_terms(atmosphere, spectral, spectral_transmittance_texture, scattering_texture, single_aerosol_texture,
+                   multiple_scattering_texture, irradiance_texture, start, view_ray, sun_direction, ground, true,
+                   rayleigh, aerosol, surface);
   }
-  return radiance;
+  vec3 radiance = phase_weighted_scattering(atmosphere, rayleigh, aerosol, nu);
+  if (ground) return radiance + surface;
+  return in_sun_disc ? radiance + surface * sun_disc_radiance(atmosphere) : radiance;
 }

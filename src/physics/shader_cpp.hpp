@@ -4,7 +4,8 @@
 // GLSL constructs map as follows:
 //   IN(T) -> const T&,  OUT(T)/INOUT(T) -> T&,  INLINE -> inline,
 //   sampler2D / sampler3D -> read-only views of CPU tables, sampled by
-//   texture() with the exact arithmetic of GL_LINEAR + GL_CLAMP_TO_EDGE.
+//   texture() with the exact arithmetic of GL_LINEAR + GL_CLAMP_TO_EDGE;
+//   sampler2DShadow -> the same with depth comparison (PCF).
 #pragma once
 
 #include <glm/glm.hpp>
@@ -21,6 +22,12 @@ using namespace glm;
 #define OUT(T) T&
 #define INOUT(T) T&
 #define INLINE inline
+// Loop bounds: in C++ the structures' own counts (and the largest knot
+// count); in shaders compile-time constants of the atmosphere (see
+// gpu/shader_source.cpp), which let the compiler unroll the loops.
+#define SPECTRAL_COUNT(s) ((s).count)
+#define CONSTITUENT_COUNT(a) ((a).constituent_count)
+#define DENSITY_KNOT_BOUND MAX_DENSITY_KNOTS
 
 // A 2D table of RGB texels, row-major (x fastest). Texel (x, y) has its centre
 // at texture coordinate ((x + 0.5) / width, (y + 0.5) / height).
@@ -63,6 +70,31 @@ inline vec4 texture(const sampler2D& s, vec2 uv) {
   vec3 a = row0[x0] * (1.0f - fx) + row0[x1] * fx;
   vec3 b = row1[x0] * (1.0f - fx) + row1[x1] * fx;
   return vec4(a * (1.0f - fy) + b * fy, 1.0f);
+}
+
+// A depth texture read with comparison (GL_COMPARE_REF_TO_TEXTURE,
+// GL_LEQUAL, GL_LINEAR, GL_CLAMP_TO_EDGE; depth in x): texture(s, vec3(uv,
+// reference)) weights the results of the four texels of bilinear filtering
+// (1 where reference <= the texel's depth) with the bilinear weights, the
+// percentage-closer filtering that GL 4.5 §8.22.1 describes and llvmpipe
+// implements (GPUs may round the weights to fewer bits).
+struct sampler2DShadow {
+  int width = 0;
+  int height = 0;
+  const vec3* texels = nullptr;
+};
+
+inline float texture(const sampler2DShadow& s, vec3 p) {
+  int x0, x1, y0, y1;
+  float fx, fy;
+  detail::linear_tap(p.x, s.width, x0, x1, fx);
+  detail::linear_tap(p.y, s.height, y0, y1, fy);
+  auto lit = [&](int x, int y) {
+    return p.z <= s.texels[std::size_t(y) * std::size_t(s.width) + std::size_t(x)].x ? 1.0f : 0.0f;
+  };
+  float a = lit(x0, y0) * (1.0f - fx) + lit(x1, y0) * fx;
+  float b = lit(x0, y1) * (1.0f - fx) + lit(x1, y1) * fx;
+  return a * (1.0f - fy) + b * fy;
 }
 
 inline vec4 texture(const sampler3D& s, vec3 uvw) {

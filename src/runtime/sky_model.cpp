@@ -32,11 +32,11 @@ glm::dvec3 SkyModel::radiance(const glm::dvec3& observer, const glm::dvec3& view
   // interpolated from a sky-view table: this is the form the reference
   // tests measure).
   const physics::sampler2D no_sky_view{};
-  return glm::dvec3(physics::radiance_along_view_ray(impl_->params, *impl_->spectral, s.spectral_optical_depth,
-                                                     s.scattering, s.single_aerosol,
-                                                     s.multiple_scattering, s.indirect_irradiance, no_sky_view,
-                                                     no_sky_view, false, glm::vec3(observer), glm::vec3(view),
-                                                     glm::vec3(sun), include_sun_disc));
+  const physics::SkyViewFrame no_frame{};
+  return glm::dvec3(physics::radiance_along_view_ray(
+      impl_->params, *impl_->spectral, s.spectral_optical_depth, s.scattering, s.single_aerosol,
+      s.multiple_scattering, s.indirect_irradiance, no_sky_view, no_sky_view, no_sky_view, false, no_frame,
+      glm::vec3(observer), glm::vec3(view), glm::vec3(sun), include_sun_disc));
 }
 
 void SkyModel::horizontal_irradiance(const glm::dvec3& point, const glm::dvec3& sun, glm::dvec3& sun_irradiance,
