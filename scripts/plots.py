@@ -255,14 +255,26 @@ def plot_convergence(plt, data, out, info):
             ax.text(0.5, 0.5, "one scattering order only:\nnothing to compare", ha="center", va="center",
                     transform=ax.transAxes)
     else:
-        orders = column(header, rows, "order")
-        added = column(header, rows, "added")
-        relative = column(header, rows, "relative")
+        # The last row may be the tail (tail = 1): all orders from `order` on,
+        # solved at once (auto orders that hit the cap), not one more order.
+        tails = column(header, rows, "tail") if "tail" in header else [0] * len(rows)
+        single = [r for r, t in zip(rows, tails) if not t]
+        tail = [r for r, t in zip(rows, tails) if t]
+        orders = column(header, single, "order")
+        added = column(header, single, "added")
+        relative = column(header, single, "relative")
         left.semilogy(orders, added, "o-", color="#1f77b4", label="added by order n")
         right.semilogy(orders, relative, "o-", color="#d62728", label="added / orders 1..n")
+        if tail:
+            first = column(header, tail, "order")
+            left.semilogy(first, column(header, tail, "added"), "s", color="#2ca02c",
+                          label=f"orders {int(first[0])}+ (solved at once)")
+            right.semilogy(first, column(header, tail, "relative"), "s", color="#2ca02c",
+                           label=f"orders {int(first[0])}+ / all the light")
         right.axhline(1e-3, color="0.4", ls="--", lw=0.9, label="--orders auto stops below 0.1 %")
+        ticks = orders + (column(header, tail, "order") if tail else [])
         for ax in (left, right):
-            ax.set_xticks(orders)
+            ax.set_xticks(ticks if len(ticks) <= 20 else ticks[::max(1, len(ticks) // 10)])
             ax.grid(True, which="minor", alpha=0.12)
             ax.legend(fontsize=9, loc="upper right")
     unit = "cd m$^{-2}$" if str(info.get("mode")) == "spectral" else "radiance units"

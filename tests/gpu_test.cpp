@@ -39,10 +39,11 @@
 #include "atmos/colour.hpp"
 #include "atmos/image.hpp"
 #include "atmos/renderer.hpp"
+#include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
 #include "gpu/camera_cpp.hpp"
 #include "gpu/shader_source.hpp"
-#include "table_sizes.hpp"
+#include "gpu_fixture.hpp"
 
 namespace {
 
@@ -171,41 +172,8 @@ bool all_finite(const Image& image) {
   return std::all_of(image.rgb.begin(), image.rgb.end(), [](float v) { return std::isfinite(v); });
 }
 
-// One context and one set of tables per test process (ctest runs each test
-// in its own process; the small tables take about a second).
-class Gpu : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    earth_ = std::make_unique<atmos::Atmosphere>(atmos::load_atmosphere("earth"));
-    atmos::PrecomputeOptions options;
-    options.sizes = atmos_test::small_gpu_sizes();
-    tables_ = std::make_unique<atmos::Tables>(atmos::precompute_tables(*earth_, options));
-    try {
-      context_ = atmos::GlContext::create_headless();
-    } catch (const atmos::Error& e) {
-      context_error_ = e.what();
-    }
-  }
-  static void TearDownTestSuite() {
-    context_.reset();
-    tables_.reset();
-    earth_.reset();
-  }
-  void SetUp() override {
-    // A failure, not a skip: the GL path must be tested wherever the tests run.
-    ASSERT_TRUE(context_ != nullptr) << context_error_;
-  }
-
-  static std::unique_ptr<atmos::Atmosphere> earth_;
-  static std::unique_ptr<atmos::Tables> tables_;
-  static std::unique_ptr<atmos::GlContext> context_;
-  static std::string context_error_;
-};
-
-std::unique_ptr<atmos::Atmosphere> Gpu::earth_;
-std::unique_ptr<atmos::Tables> Gpu::tables_;
-std::unique_ptr<atmos::GlContext> Gpu::context_;
-std::string Gpu::context_error_;
+// The GPU suite: one context and the small Earth tables (gpu_fixture.hpp).
+class Gpu : public atmos_test::EarthGpuTest {};
 
 TEST_F(Gpu, HeadlessContextReportsRenderer) {
   const std::string renderer = context_->renderer_string();
@@ -383,6 +351,75 @@ TEST_F(Gpu, LargeImagesAreTiled) {
     const Difference d = compare(gpu, cpu);
     report(name, "full vs cpu", d);
     EXPECT_LE(d.max_relative, kGroundMaxRelative) << name;
+  }
+}
+
+// The sun disc carries the solar irradiance attenuated by the atmosphere. A
+// narrow view centred on the sun (30° up, seen from 2 m; the disc 53 pixels
+// in radius), minus the sky around the disc, summed over the pixels' solid
+// angles, equals the sun's direct normal irradiance at the camera (SkyModel:
+// the horizontal irradiance / sin 30°), on the GPU and on the CPU; and the
+// disc is limb-darkened (functions.glsl: sun_disc_radiance).
+TEST_F(Gpu, SunDiscCarriesTheAttenuatedSolarIrradiance) {
+  atmos::Renderer renderer(*context_, *earth_, *tables_, TexturePrecision::full);
+  const atmos::SkyModel model(*earth_, *tables_);
+  const glm::dvec3 sun = sun_at(30.0, 0.0);
+  Camera camera;
+  camera.position = {0.0, 0.0, kEarthRadius + 2.0};
+  camera.forward = sun;
+  camera.up = {0.0, 0.0, 1.0};
+  camera.fov_deg = 0.8;
+  camera.width = camera.height = 160;
+  glm::dvec3 sun_irradiance, sky_irradiance;
+  model.horizontal_irradiance(camera.position, sun, sun_irradiance, sky_irradiance);
+  const glm::dvec3 expected = model.to_srgb(sun_irradiance / std::sin(glm::radians(30.0)));
+  const double alpha = earth_->sun_angular_radius_rad;
+  // Pixel (i, j): tangent-plane coordinates from the image centre (the sun),
+  // the angle from the sun and the solid angle.
+  const double pixel = 2.0 * std::tan(glm::radians(camera.fov_deg) / 2.0) / camera.height;
+  struct Pixel {
+    double angle, solid_angle;
+  };
+  auto pixel_at = [&](int i, int j) {
+    const double x = (i + 0.5 - camera.width / 2.0) * pixel, y = (j + 0.5 - camera.height / 2.0) * pixel;
+    const double q = 1.0 + x * x + y * y;
+    return Pixel{std::atan(std::sqrt(x * x + y * y)), pixel * pixel / (q * std::sqrt(q))};
+  };
+  for (const auto& [name, image] : {std::pair<const char*, Image>{"gpu", renderer.render(camera, sun)},
+                                    {"cpu", render_cpu(*earth_, *tables_, camera, sun)}}) {
+    glm::dvec3 background(0.0);
+    int ring = 0;
+    for (int j = 0; j < camera.height; ++j)
+      for (int i = 0; i < camera.width; ++i) {
+        const Pixel p = pixel_at(i, j);
+        if (p.angle < 1.3 * alpha || p.angle > 1.5 * alpha) continue;
+        const size_t k = 3 * (size_t(j) * size_t(camera.width) + size_t(i));
+        background += glm::dvec3(image.rgb[k], image.rgb[k + 1], image.rgb[k + 2]);
+        ++ring;
+      }
+    background /= double(ring);
+    glm::dvec3 irradiance(0.0);
+    for (int j = 0; j < camera.height; ++j)
+      for (int i = 0; i < camera.width; ++i) {
+        const Pixel p = pixel_at(i, j);
+        if (p.angle > 1.2 * alpha) continue;
+        const size_t k = 3 * (size_t(j) * size_t(camera.width) + size_t(i));
+        irradiance += (glm::dvec3(image.rgb[k], image.rgb[k + 1], image.rgb[k + 2]) - background) * p.solid_angle;
+      }
+    std::printf("%s: sun disc %.1f %.1f %.1f lux, direct normal irradiance %.1f %.1f %.1f lux\n", name,
+                irradiance.x, irradiance.y, irradiance.z, expected.x, expected.y, expected.z);
+    // Partly covered edge pixels: ~0.3 % of the disc's light.
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(irradiance[c] / expected[c], 1.0, 0.005) << name << " channel " << c;
+    // Limb darkening: the pixel nearest 0.95 alpha from the centre, against
+    // the centre, 1 - 0.6 (1 - sqrt(1 - 0.95²)) = 0.59.
+    const int centre = camera.width / 2;
+    const int edge = centre + int(std::lround(std::tan(0.95 * alpha) / pixel - 0.5));
+    const size_t c0 = 3 * (size_t(centre) * size_t(camera.width) + size_t(centre));
+    const size_t c1 = 3 * (size_t(centre) * size_t(camera.width) + size_t(edge));
+    const double ratio = (image.rgb[c1 + 1] - background.y) / (image.rgb[c0 + 1] - background.y);
+    std::printf("%s: limb / centre at %.3f of the radius: %.3f\n", name, pixel_at(edge, centre).angle / alpha, ratio);
+    EXPECT_NEAR(ratio, 1.0 - 0.6 * (1.0 - std::sqrt(1.0 - std::pow(pixel_at(edge, centre).angle / alpha, 2))), 0.03)
+        << name;
   }
 }
 

@@ -195,6 +195,35 @@ TEST_F(EarthParams, SunVisibleFractionAtTheHorizon) {
   }
 }
 
+// The sun disc (sun_disc_radiance): limb-darkened by the linear law with
+// u = 3/5, and its radiance integrates over the disc to the solar irradiance
+// (rings of the disc, midpoint rule in theta; the normalisation's small-disc
+// approximation is off by ~alpha², below 1e-4 for every preset's sun).
+TEST_F(EarthParams, SunDiscIsLimbDarkenedAndCarriesTheSolarIrradiance) {
+  const vec3 sun(0.0f, 0.0f, 1.0f);
+  for (double alpha_deg : {0.2665, 0.1748, 0.3685, 0.02781, 2.0}) {
+    AtmosphereParams p = params;
+    p.sun_angular_radius = float(alpha_deg * M_PI / 180.0);
+    const double alpha = p.sun_angular_radius;
+    auto radiance_at = [&](double theta) {
+      return sun_disc_radiance(p, vec3(float(std::sin(theta)), 0.0f, float(std::cos(theta))), sun);
+    };
+    const int rings = 4000;
+    glm::dvec3 irradiance(0.0);
+    for (int i = 0; i < rings; ++i) {
+      const double theta = (i + 0.5) / rings * alpha;
+      irradiance += glm::dvec3(radiance_at(theta)) * (2.0 * M_PI * std::sin(theta) * alpha / rings);
+    }
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(irradiance[c] / p.solar_irradiance[c], 1.0, alpha < 0.01 ? 2e-4 : 2e-3) << alpha_deg << " deg";
+    // Limb darkening: at half the radius mu = sqrt(3/4), at the edge mu -> 0.
+    const vec3 centre = radiance_at(0.0);
+    EXPECT_NEAR(radiance_at(std::asin(0.5 * std::sin(alpha))).y / centre.y, 1.0 - 0.6 * (1.0 - std::sqrt(0.75)), 2e-3);
+    EXPECT_NEAR(radiance_at(0.9999 * alpha).y / centre.y, 0.4, 0.02);
+    EXPECT_EQ(radiance_at(1.001 * alpha).y, 0.0f);
+  }
+}
+
 // The quadrature over the solar disc (sun_disc_node): its weights add up to
 // the visible fraction of the disc, and for a disc wholly in view it has the
 // moments of a uniform disc (mean elevation offset 0, variance alpha² / 4).

@@ -18,6 +18,7 @@
 #include "atmos/atmosphere.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "atmos/plot_data.hpp"
 #include "cli_support.hpp"
 
 namespace {
@@ -329,3 +330,23 @@ TEST(PlotData, BadArgumentsAreOneLineErrors) {
 }
 
 }  // namespace
+
+// The tail of auto orders (all orders after the cap, solved at once) is
+// marked as such in convergence.csv, not written as one more order.
+TEST(PlotData, ConvergenceMarksTheTail) {
+  atmos::Tables tables;
+  atmos::OrderContribution second;
+  second.order = 2;
+  second.added = 0.5;
+  second.relative = 0.25;
+  atmos::OrderContribution tail;
+  tail.order = 65;
+  tail.added = 3.0;
+  tail.relative = 0.6;
+  tail.tail = true;
+  tail.iterations = 12;
+  tables.convergence = {second, tail};
+  std::ostringstream out;
+  atmos_cli::plot_data::write_convergence(out, tables);
+  EXPECT_EQ(out.str(), "order,added,relative,tail\n2,0.5,0.25,0\n65,3,0.6,1\n");
+}

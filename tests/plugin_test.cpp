@@ -30,7 +30,7 @@
 #include "atmos/renderer.hpp"
 #include "atmos/tables.hpp"
 #include "gpu/atmosphere_pass.hpp"
-#include "table_sizes.hpp"
+#include "gpu_fixture.hpp"
 
 namespace {
 
@@ -236,15 +236,13 @@ bool all_finite(const std::vector<glm::vec3>& v) {
                      [](const glm::vec3& c) { return std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z); });
 }
 
-class Plugin : public ::testing::Test {
+// The plugin suite: the GPU fixture (gpu_fixture.hpp) and one pass.
+class Plugin : public atmos_test::EarthGpuTest {
  protected:
   static void SetUpTestSuite() {
-    earth_ = std::make_unique<atmos::Atmosphere>(atmos::load_atmosphere("earth"));
-    atmos::PrecomputeOptions options;
-    options.sizes = atmos_test::small_gpu_sizes();
-    tables_ = std::make_unique<atmos::Tables>(atmos::precompute_tables(*earth_, options));
+    EarthGpuTest::SetUpTestSuite();
+    if (context_ == nullptr) return;
     try {
-      context_ = atmos::GlContext::create_headless();
       pass_ = std::make_unique<atmos::AtmospherePass>(*earth_, *tables_, engine_frame());
     } catch (const atmos::Error& e) {
       error_ = e.what();
@@ -252,9 +250,7 @@ class Plugin : public ::testing::Test {
   }
   static void TearDownTestSuite() {
     pass_.reset();
-    context_.reset();
-    tables_.reset();
-    earth_.reset();
+    EarthGpuTest::TearDownTestSuite();
   }
   void SetUp() override { ASSERT_TRUE(pass_ != nullptr) << error_; }
 
@@ -280,18 +276,8 @@ class Plugin : public ::testing::Test {
     return read_rgb(out, w, h);
   }
 
-  static std::unique_ptr<atmos::Atmosphere> earth_;
-  static std::unique_ptr<atmos::Tables> tables_;
-  static std::unique_ptr<atmos::GlContext> context_;
-  static std::unique_ptr<atmos::AtmospherePass> pass_;
-  static std::string error_;
+  static inline std::unique_ptr<atmos::AtmospherePass> pass_;
 };
-
-std::unique_ptr<atmos::Atmosphere> Plugin::earth_;
-std::unique_ptr<atmos::Tables> Plugin::tables_;
-std::unique_ptr<atmos::GlContext> Plugin::context_;
-std::unique_ptr<atmos::AtmospherePass> Plugin::pass_;
-std::string Plugin::error_;
 
 // Cameras of the comparisons: on the ground, in a valley at 1.5 km looking
 // at a mountain, at 10 km, from orbit (400 km), at sunset, and lit from a

@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -30,6 +31,7 @@
 #include "atmos/image.hpp"
 #include "atmos/reference.hpp"
 #include "atmos/plugin.hpp"
+#include "atmos/post.hpp"
 #include "atmos/renderer.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
@@ -205,6 +207,12 @@ struct RenderOptions {
   std::vector<std::string> outputs;
   std::string precision = "full";
   bool cpu = false;
+  // Camera-like PNG output (PostProcess, include/atmos/post.hpp); without
+  // any of these the PNG is write_png's exp tone map, as before.
+  std::string tonemap = "exp";
+  double bloom = 0.0;
+  bool auto_exposure = false;
+  bool post = false;  // --tonemap, --bloom or --auto-exposure given
 };
 
 struct Shot {
@@ -251,6 +259,42 @@ atmos::Camera make_camera(const glm::dvec3& position, double azimuth, double ele
 void write_outputs(const atmos::Image& image, const std::vector<std::string>& outputs, double exposure) {
   for (const auto& path : outputs) {
     atmos::write_image(image, path, exposure);
+    std::printf("wrote %s\n", path.c_str());
+  }
+}
+
+bool has_png_extension(const std::string& path) {
+  if (path.size() < 4) return false;
+  std::string ext = path.substr(path.size() - 4);
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return ext == ".png";
+}
+
+// PNG outputs through PostProcess (tone map, bloom, auto exposure); EXR
+// outputs keep the HDR values (write_image). A still has no past: with
+// --auto-exposure it is exposed at the converged value directly (the first
+// frame after a reset starts at its target, see AutoExposureSettings).
+void write_outputs_post(atmos::PostProcess& post, const atmos::Image& image, const std::vector<std::string>& outputs,
+                        const RenderOptions& o) {
+  atmos::PostSettings settings;
+  settings.tone_mapping = atmos::parse_tone_mapping(o.tonemap);
+  settings.exposure_ev = o.exposure;
+  settings.bloom.strength = o.bloom;
+  settings.auto_exposure.enabled = o.auto_exposure;
+  bool processed = false;
+  atmos::DisplayImage display;
+  for (const auto& path : outputs) {
+    if (!has_png_extension(path)) {
+      atmos::write_image(image, path, o.exposure);
+    } else {
+      if (!processed) {
+        post.reset();
+        display = post.process_image(image, settings);
+        processed = true;
+        if (o.auto_exposure) std::printf("auto exposure: EV100 %.2f\n", post.current_exposure_ev());
+      }
+      atmos::write_png(display, path);
+    }
     std::printf("wrote %s\n", path.c_str());
   }
 }
@@ -336,11 +380,19 @@ int run_render(const RenderOptions& o, const TableOptions& t, bool use_gallery) 
     renderer = std::make_unique<atmos::Renderer>(
         *context, a, loaded.tables, o.precision == "half" ? atmos::TexturePrecision::half : atmos::TexturePrecision::full);
   }
+  // The post-processing runs on the GPU, also after a --cpu render.
+  std::unique_ptr<atmos::PostProcess> post;
+  if (o.post) {
+    if (!context) context = atmos::GlContext::create_headless();
+    post = std::make_unique<atmos::PostProcess>();
+  }
   for (const Shot& shot : shots) {
     const atmos::Image image =
         o.cpu ? atmos::render_cpu(a, loaded.tables, shot.camera, shot.sun) : renderer->render(shot.camera, shot.sun);
     if (use_gallery) {
       write_outputs(image, {shot.name + ".png", shot.name + ".exr"}, shot.exposure);
+    } else if (post) {
+      write_outputs_post(*post, image, o.outputs.empty() ? std::vector<std::string>{"atmos.png"} : o.outputs, o);
     } else {
       write_outputs(image, o.outputs.empty() ? std::vector<std::string>{"atmos.png"} : o.outputs, o.exposure);
     }
@@ -369,8 +421,13 @@ int run_precompute(const TableOptions& t) {
                                          ? "the three wavelengths"
                                          : "linear sRGB (spectral precomputation, CIE 1931 2 deg observer)");
   std::printf("cache           %s\n", loaded.status.c_str());
-  for (const auto& c : loaded.tables.convergence)
-    std::printf("order %-3d       adds %.3e of the light gathered so far\n", c.order, c.relative);
+  for (const auto& c : loaded.tables.convergence) {
+    if (c.tail)
+      std::printf("orders %d+      add %.3e of all the light (solved at once: %d GMRES steps, residual %.1e)\n",
+                  c.order, c.relative, c.iterations, c.residual);
+    else
+      std::printf("order %-3d       adds %.3e of the light gathered so far\n", c.order, c.relative);
+  }
   if (loaded.tables.timings.empty()) std::printf("steps           none computed: the cache file is valid\n");
   for (const auto& step : loaded.tables.timings) std::printf("time %-22s %8.3f s\n", step.name.c_str(), step.seconds);
   std::printf("time total                   %8.3f s\n", seconds);
@@ -586,6 +643,50 @@ void bench_plugin(const atmos::Atmosphere& atmosphere, const atmos::Tables& tabl
   glDeleteTextures(2, textures);
 }
 
+// The post-processing chain (PostProcess) over a rendered sky at w x h: the
+// filmic operator, bloom (strength 0.05) and auto exposure, each pass's GPU
+// time the median of 5 frames after a warm-up (shader compilation, the
+// pyramid's textures).
+void bench_post(atmos::Renderer& renderer, const atmos::Camera& camera, int w, int h) {
+  const atmos::Image hdr = renderer.render(camera, atmos::direction_from_azimuth_elevation(180.0, 12.0));
+  GLuint texture = 0;
+  glCreateTextures(GL_TEXTURE_2D, 1, &texture);
+  glTextureStorage2D(texture, 1, GL_RGBA32F, w, h);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  glTextureSubImage2D(texture, 0, 0, 0, w, h, GL_RGB, GL_FLOAT, hdr.rgb.data());
+  atmos::PostProcess post;
+  atmos::PostSettings settings;
+  settings.tone_mapping = atmos::ToneMapping::filmic;
+  settings.bloom.strength = 0.05;
+  settings.auto_exposure.enabled = true;
+  atmos::PostInput input;
+  input.colour = texture;
+  input.width = w;
+  input.height = h;
+  input.dt_s = 1.0 / 60.0;
+  input.timed = true;
+  // The warm-up frame also starts the eye adaptation: in the timed frames the
+  // bloom's bright pass does the exposure's reduction (post.bloom includes
+  // it, post.exposure is the adaptation alone; docs/post.md).
+  post.process(input, settings);
+  std::vector<double> bloom, exposure, tone_map;
+  for (int i = 0; i < 5; ++i) {
+    post.process(input, settings);
+    bloom.push_back(post.last_timings().bloom_ms);
+    exposure.push_back(post.last_timings().exposure_ms);
+    tone_map.push_back(post.last_timings().tone_map_ms);
+  }
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  std::printf("post.bloom.%dx%d\t%.1f\tms\n", w, h, median(bloom));
+  std::printf("post.exposure.%dx%d\t%.1f\tms\n", w, h, median(exposure));
+  std::printf("post.tonemap.%dx%d\t%.1f\tms\n", w, h, median(tone_map));
+  std::fflush(stdout);
+  glDeleteTextures(1, &texture);
+}
+
 int run_bench(const TableOptions& t, const std::string& size) {
   const atmos::Atmosphere atmosphere = t.atmosphere();
   atmos::PrecomputeOptions options = t.precompute_options();
@@ -634,6 +735,7 @@ int run_bench(const TableOptions& t, const std::string& size) {
   atmos::Renderer spectral_renderer(*context, spectral_atmosphere, spectral_tables);
   time_frames(spectral_renderer, atmos::direction_from_azimuth_elevation(150.0, -3.0), 3, "render.spectral15.twilight");
   bench_plugin(atmosphere, tables, w, h);
+  bench_post(renderer, camera, w, h);
   return 0;
 }
 
@@ -691,6 +793,16 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"half", "full"}))
       ->capture_default_str();
   render_cmd->add_flag("--cpu", render.cpu, "Render on the CPU with the same functions (no OpenGL)");
+  auto* tonemap_opt = render_cmd->add_option("--tonemap", render.tonemap, "PNG tone mapping: exp|reinhard|filmic|aces")
+                          ->check(CLI::IsMember({"exp", "reinhard", "filmic", "aces"}))
+                          ->capture_default_str();
+  auto* bloom_opt = render_cmd->add_option("--bloom", render.bloom,
+                                           "Bloom strength in [0, 1]: the fraction of the light above saturation "
+                                           "spread as glare (PNG)")
+                        ->capture_default_str();
+  auto* auto_exposure_opt =
+      render_cmd->add_flag("--auto-exposure", render.auto_exposure,
+                           "Expose the PNG from the image's log-average luminance (seed 000 eq. 4.28) instead of --exposure");
 
   TableOptions precompute_options;
   auto* precompute_cmd = app.add_subcommand("precompute", "Build or verify the table cache; print sizes and timings");
@@ -746,8 +858,10 @@ int main(int argc, char** argv) {
 
   try {
     for (double* v : {&render.altitude, &render.fov, &render.sun_elevation, &render.sun_azimuth, &render.exposure,
-                      &sample.altitude, &sample.sun_elevation, &sample.sun_azimuth})
+                      &sample.altitude, &sample.sun_elevation, &sample.sun_azimuth, &render.bloom})
       finite(*v, "numeric option");
+    render.post = tonemap_opt->count() > 0 || bloom_opt->count() > 0 || auto_exposure_opt->count() > 0;
+    if (render.bloom < 0.0 || render.bloom > 1.0) throw UsageError("--bloom must be in [0, 1]");
     if (*render_cmd) {
       // Only the planet and table options (and --precision, --cpu) may be
       // given for the gallery (e.g. --planet mars --wavelengths 15).

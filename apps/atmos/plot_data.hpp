@@ -23,7 +23,11 @@
 //                      luminance_cd_m2,red,green,blue: the sky in the sun's
 //                      vertical plane (relative azimuth 0: towards the sun,
 //                      180: away from it), seen from the ground, no sun disc
-//   convergence.csv    order,added,relative: Tables::convergence
+//   convergence.csv    order,added,relative,tail: Tables::convergence; tail 0:
+//                      what order n adds, and that over orders 1..n;
+//                      tail 1 (last row, auto orders that hit the cap): the
+//                      light of all orders from `order` on, solved at once,
+//                      and its share of all the light
 #pragma once
 
 #include <glm/common.hpp>
@@ -204,8 +208,9 @@ inline void write_sky(std::ostream& out, const atmos::Atmosphere& a, const atmos
 }
 
 inline void write_convergence(std::ostream& out, const atmos::Tables& tables) {
-  out << "order,added,relative\n";
-  for (const auto& c : tables.convergence) out << c.order << "," << number(c.added) << "," << number(c.relative) << "\n";
+  out << "order,added,relative,tail\n";
+  for (const auto& c : tables.convergence)
+    out << c.order << "," << number(c.added) << "," << number(c.relative) << "," << (c.tail ? 1 : 0) << "\n";
 }
 
 }  // namespace atmos_cli::plot_data

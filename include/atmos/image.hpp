@@ -5,6 +5,7 @@
 // values unchanged; PNG files are exposed, tone mapped and sRGB encoded.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,18 @@ void write_exr(const Image& image, const std::string& path);
 // `exposure_ev` (EV100; 78 / (100 * 0.65) = 1.2), then clamped to [0, 1] and
 // encoded with the sRGB OETF (IEC 61966-2-1). Throws atmos::Error like write_exr.
 void write_png(const Image& image, const std::string& path, double exposure_ev);
+
+// Display-referred 8-bit pixels (sRGB-encoded), e.g. from PostProcess
+// (post.hpp): width * height * 3 bytes, R G B interleaved, top row first.
+struct DisplayImage {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint8_t> rgb;
+};
+
+// Writes already tone-mapped pixels unchanged as an 8-bit sRGB PNG. Throws
+// atmos::Error naming `path` on inconsistent dimensions or a failed write.
+void write_png(const DisplayImage& image, const std::string& path);
 
 // write_png or write_exr by the extension of `path` (.png / .exr, any case);
 // any other extension throws atmos::Error "unsupported output format ...".

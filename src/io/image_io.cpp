@@ -32,6 +32,7 @@
 
 #include "atmos/atmosphere.hpp"
 #include "atmos/image.hpp"
+#include "post/tone_mapping_cpp.hpp"
 
 namespace atmos {
 
@@ -76,9 +77,16 @@ std::string exr_message(const char* message) {
   return s;
 }
 
-// IEC 61966-2-1 encoding of a linear value in [0, 1].
-double srgb_oetf(double linear) {
-  return linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;
+void encode_png(int width, int height, const std::vector<unsigned char>& pixels, const std::string& path) {
+  std::vector<unsigned char> encoded;
+  auto append = [](void* context, void* data, int size) {
+    auto* out = static_cast<std::vector<unsigned char>*>(context);
+    const auto* bytes = static_cast<const unsigned char*>(data);
+    out->insert(out->end(), bytes, bytes + size);
+  };
+  if (stbi_write_png_to_func(append, &encoded, width, height, 3, pixels.data(), width * 3) == 0)
+    throw Error("cannot write " + path + ": PNG encoding failed");
+  write_file(path, encoded.data(), encoded.size());
 }
 
 std::string lowercase_extension(const std::string& path) {
@@ -144,22 +152,25 @@ void write_exr(const Image& image, const std::string& path) {
 void write_png(const Image& image, const std::string& path, double exposure_ev) {
   check_image(image, path);
   if (!std::isfinite(exposure_ev)) throw Error("cannot write " + path + ": exposure is not finite");
-  const double saturation_luminance = 1.2 * std::exp2(exposure_ev);
+  // The exp operator of PostProcess, from the same definition
+  // (src/post/tone_mapping.glsl): x = L / L_sat, display = 1 - exp(-x),
+  // sRGB encoded. Negative components (colours outside the sRGB gamut) clamp
+  // to black.
+  const float exposure = post::exposure_from_ev100(float(exposure_ev));
   std::vector<unsigned char> pixels(image.rgb.size());
   for (size_t i = 0; i < image.rgb.size(); ++i) {
-    // Negative components (colours outside the sRGB gamut) clamp to black.
-    const double display = std::clamp(1.0 - std::exp(-double(image.rgb[i]) / saturation_luminance), 0.0, 1.0);
-    pixels[i] = static_cast<unsigned char>(std::lround(srgb_oetf(display) * 255.0));
+    const float display = post::display_encoded_channel(image.rgb[i] * exposure, post::TONE_MAP_EXP);
+    pixels[i] = static_cast<unsigned char>(std::lround(display * 255.0f));
   }
-  std::vector<unsigned char> encoded;
-  auto append = [](void* context, void* data, int size) {
-    auto* out = static_cast<std::vector<unsigned char>*>(context);
-    const auto* bytes = static_cast<const unsigned char*>(data);
-    out->insert(out->end(), bytes, bytes + size);
-  };
-  if (stbi_write_png_to_func(append, &encoded, image.width, image.height, 3, pixels.data(), image.width * 3) == 0)
-    throw Error("cannot write " + path + ": PNG encoding failed");
-  write_file(path, encoded.data(), encoded.size());
+  encode_png(image.width, image.height, pixels, path);
+}
+
+void write_png(const DisplayImage& image, const std::string& path) {
+  if (image.width < 1 || image.height < 1 ||
+      image.rgb.size() != size_t(image.width) * size_t(image.height) * 3)
+    throw Error("cannot write " + path + ": display image of " + std::to_string(image.width) + "x" +
+                std::to_string(image.height) + " pixels holds " + std::to_string(image.rgb.size()) + " bytes");
+  encode_png(image.width, image.height, image.rgb, path);
 }
 
 void write_image(const Image& image, const std::string& path, double exposure_ev) {

@@ -1,0 +1,20 @@
+// The C++ side of the post-processing formulas: compiles post/tone_mapping.glsl
+// (the subset of GLSL 4.50 and C++ described in src/physics/definitions.glsl)
+// on top of glm, in namespace atmos::post. The compute shaders of PostProcess
+// embed the same file (post/post_process.cpp), write_png calls it for its
+// 1 - exp tone map.
+#pragma once
+
+#include <glm/glm.hpp>
+
+// The subset's C++ meaning (the same definitions as physics/shader_cpp.hpp;
+// identical redefinitions are allowed when both headers are included).
+#define INLINE inline
+
+namespace atmos::post {
+
+using namespace glm;
+
+#include "post/tone_mapping.glsl"
+
+}  // namespace atmos::post
