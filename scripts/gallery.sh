@@ -16,6 +16,10 @@ mkdir -p "$out/earth" "$out/mars" "$out/venus" "$out/titan"
 for planet in earth mars titan venus; do
   (cd "$out/$planet" && "$atmos" render --planet "$planet" --wavelengths 15 --orders auto)
 done
+# Earth's sunset through the camera-like post chain: filmic tone map and bloom.
+(cd "$out/earth" && "$atmos" render --planet earth --wavelengths 15 --orders auto --look 270,8 --fov 75 \
+  --sun-azimuth 270 --sun-elevation 1 --size 960x540 --exposure 10.5 --tonemap filmic --bloom 0.05 \
+  -o sunset-bloom.png)
 # Under Venus' clouds the gallery exposures show black: the surface sky at
 # EV 5 (its light is underestimated: see README, Planets).
 (cd "$out/venus" && "$atmos" render --planet venus --wavelengths 15 --orders auto --sun-elevation 40 --look 180,10 \

@@ -21,19 +21,7 @@
 
 #include <unistd.h>
 
-// stb_image decodes the PNGs written by the library (internal linkage).
-#define STB_IMAGE_IMPLEMENTATION
-#define STB_IMAGE_STATIC
-#define STBI_ONLY_PNG
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wconversion"
-#pragma GCC diagnostic ignored "-Wsign-conversion"
-#pragma GCC diagnostic ignored "-Wshadow"
-#pragma GCC diagnostic ignored "-Wunused-function"
-#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
-#pragma GCC diagnostic ignored "-Wdouble-promotion"
-#include <stb/stb_image.h>
-#pragma GCC diagnostic pop
+#include "png_decoder.hpp"
 
 #include "atmos/atmosphere.hpp"
 #include "atmos/colour.hpp"

@@ -593,15 +593,21 @@ double PostProcess::last_log_average_luminance() const {
 
 const PostTimings& PostProcess::last_timings() const { return impl_->timings; }
 
-DisplayImage read_display_image(std::uint32_t texture, int width, int height) {
+namespace {
+
+// The RGB of an RGBA texture's level 0, as `Pixels` (DisplayImage: bytes,
+// Image: floats) of `type` (GL_UNSIGNED_BYTE, GL_FLOAT).
+template <typename Pixels>
+Pixels read_rgb(std::uint32_t texture, int width, int height, const char* kind, GLenum type) {
   require(width >= 1 && height >= 1, "cannot read back an image of " + std::to_string(width) + "x" +
                                          std::to_string(height) + " pixels");
-  check_texture(texture, width, height, "display");
-  std::vector<std::uint8_t> rgba(size_t(width) * size_t(height) * 4);
+  check_texture(texture, width, height, kind);
+  using Value = typename decltype(Pixels::rgb)::value_type;
+  std::vector<Value> rgba(size_t(width) * size_t(height) * 4);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
-  glGetTextureImage(texture, 0, GL_RGBA, GL_UNSIGNED_BYTE, GLsizei(rgba.size()), rgba.data());
+  glGetTextureImage(texture, 0, GL_RGBA, type, GLsizei(rgba.size() * sizeof(Value)), rgba.data());
   gpu::check_gl("reading the post-processed image back");
-  DisplayImage image;
+  Pixels image;
   image.width = width;
   image.height = height;
   image.rgb.resize(size_t(width) * size_t(height) * 3);
@@ -610,21 +616,14 @@ DisplayImage read_display_image(std::uint32_t texture, int width, int height) {
   return image;
 }
 
+}  // namespace
+
+DisplayImage read_display_image(std::uint32_t texture, int width, int height) {
+  return read_rgb<DisplayImage>(texture, width, height, "display", GL_UNSIGNED_BYTE);
+}
+
 Image read_linear_image(std::uint32_t texture, int width, int height) {
-  require(width >= 1 && height >= 1, "cannot read back an image of " + std::to_string(width) + "x" +
-                                         std::to_string(height) + " pixels");
-  check_texture(texture, width, height, "linear");
-  std::vector<float> rgba(size_t(width) * size_t(height) * 4);
-  glPixelStorei(GL_PACK_ALIGNMENT, 4);
-  glGetTextureImage(texture, 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)), rgba.data());
-  gpu::check_gl("reading the post-processed image back");
-  Image image;
-  image.width = width;
-  image.height = height;
-  image.rgb.resize(size_t(width) * size_t(height) * 3);
-  for (size_t i = 0; i < size_t(width) * size_t(height); ++i)
-    for (size_t c = 0; c < 3; ++c) image.rgb[3 * i + c] = rgba[4 * i + c];
-  return image;
+  return read_rgb<Image>(texture, width, height, "linear", GL_FLOAT);
 }
 
 }  // namespace atmos
