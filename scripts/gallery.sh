@@ -20,6 +20,9 @@ done
 (cd "$out/earth" && "$atmos" render --planet earth --wavelengths 15 --orders auto --look 270,8 --fov 75 \
   --sun-azimuth 270 --sun-elevation 1 --size 960x540 --exposure 10.5 --tonemap filmic --bloom 0.05 \
   -o sunset-bloom.png)
+# Earth's night sky with the star field (the sun 18° below the horizon).
+(cd "$out/earth" && "$atmos" render --planet earth --wavelengths 15 --orders auto --altitude 2 --look 315,35 \
+  --fov 60 --size 960x540 --sun-elevation -18 --sun-azimuth 135 --exposure -3 -o night-stars.png)
 # Under Venus' clouds the gallery exposures show black: the surface sky at
 # EV 5 (its light is underestimated: see README, Planets).
 (cd "$out/venus" && "$atmos" render --planet venus --wavelengths 15 --orders auto --sun-elevation 40 --look 180,10 \

@@ -411,6 +411,61 @@ TEST_F(Gpu, SunDiscCarriesTheAttenuatedSolarIrradiance) {
   }
 }
 
+// Stars (stars.glsl) behind the atmosphere: the brightest star more than 40°
+// up, seen from 2 m through a 2° view, adds far more than the sky's own light
+// at its pixel with the sun 18° below the horizon, and less than a 1 %
+// contrast (about the eye's threshold) in the daylight sky with the sun 30°
+// up (its pixel with and without the star field); the GPU and CPU renderers
+// agree there.
+TEST_F(Gpu, StarsShineAtNightAndDrownByDay) {
+  float brightest = 100.0f;
+  glm::vec3 star(0.0f);
+  for (int c = 0; c < 6 * STAR_CELLS * STAR_CELLS; ++c) {
+    float magnitude;
+    const glm::vec3 s = atmos::physics::star_of_cell(c, magnitude);
+    if (s.z > std::sin(glm::radians(40.0f)) && magnitude < brightest) {
+      brightest = magnitude;
+      star = s;
+    }
+  }
+  atmos::Renderer renderer(*context_, *earth_, *tables_, TexturePrecision::full);
+  Camera camera;
+  camera.position = {0.0, 0.0, kEarthRadius + 2.0};
+  camera.forward = glm::dvec3(star);
+  camera.up = {0.0, 0.0, 1.0};
+  camera.fov_deg = 2.0;
+  camera.width = camera.height = 64;
+  auto luminance = [](const Image& image, size_t i) {
+    return atmos::srgb_luminance(glm::dvec3(image.rgb[3 * i], image.rgb[3 * i + 1], image.rgb[3 * i + 2]));
+  };
+  // The sun opposite the star's azimuth.
+  const double azimuth = glm::degrees(std::atan2(-double(star.x), -double(star.y)));
+  size_t pixel = 0;  // the star's: the brightest at night
+  for (double elevation : {-18.0, 30.0}) {
+    const glm::dvec3 sun = atmos::direction_from_azimuth_elevation(azimuth, elevation);
+    renderer.set_stars(true);
+    const Image with = renderer.render(camera, sun);
+    renderer.set_stars(false);
+    const Image without = renderer.render(camera, sun);
+    const Image cpu = render_cpu(*earth_, *tables_, camera, sun, true);
+    if (elevation < 0.0)
+      for (size_t i = 0; i < size_t(camera.width) * size_t(camera.height); ++i)
+        if (luminance(with, i) > luminance(with, pixel)) pixel = i;
+    const double sky = luminance(without, pixel);
+    const double contrast = (luminance(with, pixel) - sky) / sky;
+    std::printf("star V = %.2f, sun %+.0f deg: its pixel %.4g cd/m2 (cpu %.4g), without the stars %.4g cd/m2, "
+                "contrast %.3g\n",
+                brightest, elevation, luminance(with, pixel), luminance(cpu, pixel), sky, contrast);
+    EXPECT_NEAR(luminance(cpu, pixel) / luminance(with, pixel), 1.0, 0.01);
+    if (elevation < 0.0) {
+      EXPECT_GT(contrast, 10.0) << "the star is not visible at night";
+    } else {
+      EXPECT_GT(contrast, 0.0);
+      EXPECT_LT(contrast, 0.01) << "the star shows in the daylight sky";
+    }
+  }
+}
+
 TEST_F(Gpu, RejectsMismatchedTables) {
   atmos::Tables other_wavelengths = *tables_;
   other_wavelengths.wavelengths_nm = atmos::spectral_wavelengths(6);

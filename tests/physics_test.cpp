@@ -224,6 +224,58 @@ TEST_F(EarthParams, SunDiscIsLimbDarkenedAndCarriesTheSolarIrradiance) {
   }
 }
 
+// The procedural star field (stars.glsl): the real sky's counts per
+// magnitude (N(V) = 10^(0.5 V + 0.7): 8900 stars brighter than 6.5, the Yale
+// Bright Star Catalogue's 9110), each star inside its own cell (so a pixel
+// finds it by its own cell), and each star's image integrating to its
+// irradiance.
+TEST_F(EarthParams, StarFieldHasTheSkysCountsAndCarriesEachStarsIrradiance) {
+  const int cells = 6 * STAR_CELLS * STAR_CELLS;
+  int brighter_than_6_5 = 0, brighter_than_2 = 0;
+  float brightest = 100.0f;
+  for (int c = 0; c < cells; ++c) {
+    float magnitude;
+    const vec3 star = star_of_cell(c, magnitude);
+    ASSERT_NEAR(length(star), 1.0f, 1e-6f);
+    ASSERT_EQ(star_cell(star), c) << "the star of cell " << c << " lies outside it";
+    brighter_than_6_5 += magnitude < 6.5f ? 1 : 0;
+    brighter_than_2 += magnitude < 2.0f ? 1 : 0;
+    brightest = std::min(brightest, magnitude);
+  }
+  std::printf("%d stars brighter than V = 6.5, %d than 2, brightest %.2f\n", brighter_than_6_5, brighter_than_2,
+              brightest);
+  EXPECT_NEAR(brighter_than_6_5, 8900, 300);
+  EXPECT_NEAR(brighter_than_2, 50, 20);
+  EXPECT_LT(brightest, -0.5f);
+  EXPECT_GT(brightest, -3.0f);
+  // A star of cell 1234, its image 1 mrad wide: the radiance over a cap of
+  // 6 sigma around it integrates to star_irradiance.
+  float magnitude;
+  const vec3 star = star_of_cell(1234, magnitude);
+  const StarField field{true, 1e-3f};
+  const vec3 side = normalize(cross(star, vec3(0.0f, 0.0f, 1.0f)));
+  const vec3 up = cross(side, star);
+  glm::dvec3 irradiance(0.0);
+  const int rings = 600, sectors = 64;
+  for (int i = 0; i < rings; ++i) {
+    const double theta = (i + 0.5) / rings * 6e-3;
+    for (int k = 0; k < sectors; ++k) {
+      const double phi = 2.0 * M_PI * (k + 0.5) / sectors;
+      const vec3 view = normalize(star * float(std::cos(theta)) +
+                                  (side * float(std::cos(phi)) + up * float(std::sin(phi))) * float(std::sin(theta)));
+      irradiance += glm::dvec3(star_field_radiance(params, field, view)) *
+                    (std::sin(theta) * (6e-3 / rings) * (2.0 * M_PI / sectors));
+    }
+  }
+  const vec3 expected = star_irradiance(params, magnitude);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(irradiance[c] / expected[c], 1.0, 2e-3);
+  // A magnitude-0 star gives 10^(-0.4 * 26.74) of the Sun's irradiance at 1 au.
+  EXPECT_NEAR(star_irradiance(params, 0.0f).y / params.solar_irradiance.y *
+                  std::pow(params.sun_angular_radius / SUN_ANGULAR_RADIUS_AT_1_AU, 2.0),
+              std::pow(10.0, -0.4 * 26.74), 1e-3 * std::pow(10.0, -0.4 * 26.74));
+  EXPECT_EQ(star_field_radiance(params, StarField{false, 1e-3f}, star).y, 0.0f);
+}
+
 // The quadrature over the solar disc (sun_disc_node): its weights add up to
 // the visible fraction of the disc, and for a disc wholly in view it has the
 // moments of a uniform disc (mean elevation offset 0, variance alpha² / 4).

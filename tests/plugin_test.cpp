@@ -83,6 +83,7 @@ struct Shot {
   bool infinite_far = false;
   SurfaceMode surfaces = SurfaceMode::lit_colour;
   glm::dvec3 sun{0, 0, 1};
+  bool stars = false;
   // Geometry the engine draws: the ground sphere (planet radius + this, or
   // nothing if < -1e6) and one "mountain" sphere.
   double ground_offset_m = 2.0;
@@ -118,6 +119,7 @@ EngineFrame make_engine_frame(const Shot& shot) {
   in.surfaces = shot.surfaces;
   in.depth_encoding = shot.encoding;
   in.sun_direction = shot.sun;
+  in.stars = shot.stars;
   const glm::dvec3 eye = to_world(f, shot.camera);
   in.view = glm::lookAt(eye, eye + shot.forward, shot.up_hint);
   const double aspect = double(shot.width) / double(shot.height);
@@ -310,6 +312,13 @@ std::vector<std::pair<std::string, Shot>> comparison_shots() {
   Shot gbuffer = ground;
   gbuffer.surfaces = SurfaceMode::gbuffer;
   shots.push_back({"gbuffer", gbuffer});
+  // Night, looking up across a mountain: the star field over the sky pixels.
+  Shot night = ground;
+  night.forward = direction(l, 20.0, 8.0);
+  night.fov_deg = 30.0;
+  night.sun = direction(l, 200.0, -18.0);
+  night.stars = true;
+  shots.push_back({"night_stars", night});
   return shots;
 }
 

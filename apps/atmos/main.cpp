@@ -213,6 +213,7 @@ struct RenderOptions {
   double bloom = 0.0;
   bool auto_exposure = false;
   bool post = false;  // --tonemap, --bloom or --auto-exposure given
+  bool stars = false;  // --stars: the star field even with the sun up (it is on anyway at night)
 };
 
 struct Shot {
@@ -387,8 +388,13 @@ int run_render(const RenderOptions& o, const TableOptions& t, bool use_gallery) 
     post = std::make_unique<atmos::PostProcess>();
   }
   for (const Shot& shot : shots) {
-    const atmos::Image image =
-        o.cpu ? atmos::render_cpu(a, loaded.tables, shot.camera, shot.sun) : renderer->render(shot.camera, shot.sun);
+    // The star field: with --stars, and whenever the sun is below the
+    // horizon of a single render (the gallery's shots are by day or from
+    // space, without).
+    const bool stars = !use_gallery && (o.stars || o.sun_elevation < 0.0);
+    if (renderer) renderer->set_stars(stars);
+    const atmos::Image image = o.cpu ? atmos::render_cpu(a, loaded.tables, shot.camera, shot.sun, stars)
+                                     : renderer->render(shot.camera, shot.sun);
     if (use_gallery) {
       write_outputs(image, {shot.name + ".png", shot.name + ".exr"}, shot.exposure);
     } else if (post) {
@@ -793,6 +799,9 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"half", "full"}))
       ->capture_default_str();
   render_cmd->add_flag("--cpu", render.cpu, "Render on the CPU with the same functions (no OpenGL)");
+  render_cmd->add_flag("--stars", render.stars,
+                       "Draw the star field also with the sun above the horizon (it is drawn whenever the sun is "
+                       "below it)");
   auto* tonemap_opt = render_cmd->add_option("--tonemap", render.tonemap, "PNG tone mapping: exp|reinhard|filmic|aces")
                           ->check(CLI::IsMember({"exp", "reinhard", "filmic", "aces"}))
                           ->capture_default_str();

@@ -108,7 +108,13 @@ struct FrameInput {
   double sun_illuminance_lux = 0.0;
   // cd/m² per unit of the engine's colour (and of the output).
   double nits_per_unit = 1.0;
-  bool sun_disc = true;  // draw the sun's disc in the sky
+  bool sun_disc = true;  // draw the sun's disc in the sky (limb-darkened, attenuated)
+  // Draw the star field behind the atmosphere (src/physics/stars.glsl: a
+  // procedural sky with the real sky's counts per magnitude, attenuated by
+  // the atmosphere and drowned by its light by day; each star's image about
+  // a pixel wide at the image centre). Off by default: turn it on at night,
+  // or always (by day it is invisible but costs a little per sky pixel).
+  bool stars = false;
 
   // Terrain shadows and light shafts (optional): a depth texture rendered
   // from the sun with an orthographic projection, and the matrix from the

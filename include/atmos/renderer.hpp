@@ -110,6 +110,13 @@ class Renderer {
   // 0.5 m resolution at the Earth's surface, enough for the atmosphere).
   Image render(const Camera& camera, const glm::dvec3& sun_direction);
 
+  // The star field behind the atmosphere (src/physics/stars.glsl: a
+  // procedural sky with the real sky's counts per magnitude, attenuated by
+  // the atmosphere and drowned by its light by day). Off by default; the CLI
+  // turns it on when the sun is below the horizon (or with --stars).
+  void set_stars(bool enabled) { stars_ = enabled; }
+  bool stars() const { return stars_; }
+
   // GPU time of the draw of the last render() in milliseconds (all tiles,
   // excluding the read-back); 0 before the first render. From GL_TIME_ELAPSED
   // queries, except on software rasterisers (llvmpipe, softpipe, SwiftShader):
@@ -136,11 +143,18 @@ class Renderer {
   int tile_height_ = 0;
   double last_frame_ms_ = 0.0;
   double last_sky_view_ms_ = 0.0;
+  bool stars_ = false;
 };
 
 // The same image computed on the CPU (all cores, TBB) with the same shared
 // functions and camera model; for tests and as a fallback without OpenGL.
+// `stars`: as Renderer::set_stars.
 Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camera& camera,
-                 const glm::dvec3& sun_direction);
+                 const glm::dvec3& sun_direction, bool stars = false);
+
+// Width (Gaussian sigma, radians) of a star's image in this camera's pixels:
+// 0.6 of a pixel's angular size at the image centre, so that a star lights a
+// pixel or two wherever it falls.
+double star_image_sigma(const Camera& camera);
 
 }  // namespace atmos

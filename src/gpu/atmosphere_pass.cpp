@@ -395,6 +395,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   variant.gbuffer = input.surfaces == SurfaceMode::gbuffer;
   variant.volume = frame.volume;
   variant.blend = frame.volume && frame.volume_weight < 1.0f;
+  variant.stars = frame.stars.enabled;
   const auto program_of = [&](gpu::PassVariant::Pixels pixels) {
     // The mask does not depend on the rest of the variant: one program.
     gpu::PassVariant v = pixels == gpu::PassVariant::Pixels::classify ? gpu::PassVariant{} : variant;
@@ -431,6 +432,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     glProgramUniform3fv(program, 29, 1, glm::value_ptr(frame.inverse_sun_srgb));
     glProgramUniform4fv(program, 30, 1, glm::value_ptr(frame.depth_column));
     glProgramUniform1f(program, 31, frame.depth_column_view_z);
+    glProgramUniform1f(program, 32, frame.stars.sigma);
     gpu::set_sky_view_frame_uniforms(program, sky_view);
   }
   p.tables->bind();

@@ -4,7 +4,7 @@
 // draws one full-screen triangle over the engine's image; the program
 // variant (gpu/shader_source.cpp) defines VARIANT_PIXELS and the constants
 // SKY_VIEW_CAMERA, VARIANT_SURFACE_MODE, VARIANT_LOW_SUN, VARIANT_SHADOWS,
-// VARIANT_VOLUME and VARIANT_BLEND.
+// VARIANT_VOLUME, VARIANT_BLEND and VARIANT_STARS.
 //
 // Why three programs. Software rasterisers run both sides of every branch,
 // so one program for every pixel would charge each pixel for the sky AND
@@ -56,6 +56,7 @@ layout(location = 28) uniform float volume_weight;
 layout(location = 29) uniform vec3 inverse_sun_srgb;
 layout(location = 30) uniform vec4 depth_column;
 layout(location = 31) uniform float depth_column_view_z;
+layout(location = 32) uniform float star_sigma;
 // The sky-view frame: locations 40-43 (table_bindings.glsl).
 
 // The pixel's PixelRay, interpolated from the vertex shader's corners
@@ -92,6 +93,7 @@ void main() {
   frame.sky_view = uniform_sky_view_frame();
   frame.light_scale = light_scale;
   frame.sun_disc = sun_disc;
+  frame.stars = StarField(VARIANT_STARS, star_sigma);
   frame.volume = VARIANT_VOLUME;
   // A constant 1 unless the camera is in the blend band (VARIANT_BLEND).
   frame.volume_weight = VARIANT_BLEND ? volume_weight : 1.0;

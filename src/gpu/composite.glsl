@@ -20,11 +20,11 @@
 #define SURFACE_LIT_COLOUR 0
 #define SURFACE_GBUFFER 1
 
-// The per-frame inputs of the pass. On the GPU, surface_mode, low_sun and
-// shadows are constants of the program variant (software rasterisers run
-// both sides of every branch: a uniform would make every pixel pay for the
-// shadow march, the G-buffer lighting and the twilight integration), the
-// rest are uniforms.
+// The per-frame inputs of the pass. On the GPU, surface_mode, low_sun,
+// shadows and stars.enabled are constants of the program variant (software
+// rasterisers run both sides of every branch: a uniform would make every
+// pixel pay for the shadow march, the G-buffer lighting, the twilight
+// integration and the stars), the rest are uniforms.
 struct PassFrame {
   vec3 camera;              // m, relative to the planet centre
   vec3 sun_direction;       // unit, towards the sun
@@ -40,6 +40,7 @@ struct PassFrame {
   SkyViewFrame sky_view;    // directions of the sky-view table and of the volume (camera clamped above the ground)
   float light_scale;        // (sun illuminance / the atmosphere's own) / nits_per_unit
   bool sun_disc;
+  StarField stars;          // enabled: a constant of the program variant on the GPU
   bool volume;              // surfaces read the aerial-perspective volume (cameras low in the atmosphere)
   float volume_weight;      // 1: the volume alone; below 1, mixed with the exact evaluation (a constant 1 or not)
   float ap_t_min;           // m, no surface is nearer (the camera's altitude above the highest surfaces)
@@ -622,7 +623,7 @@ INLINE vec3 composite_sky_pixel(IN(AtmosphereParams) atmosphere, IN(SpectralSets
                                           single_aerosol_texture, multiple_scattering_texture, irradiance_texture,
                                           sky_view_rayleigh_texture, sky_view_aerosol_texture,
                                           sky_view_surface_texture, use_sky_view, frame.sky_view, frame.camera,
-                                          view_ray, frame.sun_direction, frame.sun_disc);
+                                          view_ray, frame.sun_direction, frame.sun_disc, frame.stars);
   if (frame.shadows) {
     // Up to where the ray leaves the atmosphere or meets the ground.
     vec3 start = camera_above_ground(atmosphere, frame.camera);

@@ -157,6 +157,11 @@ physics::PassFrame make_pass_frame(const FrameInput& input, const PlanetFrame& p
   frame.light_scale =
       float((input.sun_illuminance_lux > 0.0 ? input.sun_illuminance_lux / own_sun_lux : 1.0) / input.nits_per_unit);
   frame.sun_disc = input.sun_disc;
+  // A star's image: 0.6 of a pixel's angular size at the image centre
+  // (projection[1][1] = 1 / tan(half the vertical field of view)), as the
+  // renderer's (star_image_sigma).
+  frame.stars.enabled = input.stars;
+  frame.stars.sigma = float(0.6 * 2.0 / (std::abs(input.projection[1][1]) * double(input.height)));
   frame.volume_weight = aerial_perspective_volume_weight(params, camera_planet);
   frame.volume = frame.volume_weight > 0.0f;
   aerial_perspective_reach(params, camera_planet, frame.ap_t_min, frame.ap_t_far);

@@ -22,6 +22,9 @@ layout(location = 7) uniform vec3 sun_direction;    // unit vector towards the s
 layout(location = 8) uniform vec2 tile_origin;
 // atmos::radiance_to_srgb_matrix; a mat3 takes locations 9 to 11.
 layout(location = 9) uniform mat3 radiance_to_srgb;
+// The star field (stars.glsl): on or off, and the width of a star's image.
+layout(location = 12) uniform bool stars_enabled;
+layout(location = 13) uniform float star_sigma;
 
 layout(location = 0) out vec4 frag_color;
 
@@ -41,6 +44,6 @@ void main() {
                                           single_aerosol_texture, multiple_scattering_texture, irradiance_texture,
                                           sky_view_rayleigh_texture, sky_view_aerosol_texture,
                                           sky_view_surface_texture, SKY_VIEW_CAMERA, uniform_sky_view_frame(), camera,
-                                          view_ray, sun_direction, true);
+                                          view_ray, sun_direction, true, StarField(stars_enabled, star_sigma));
   frag_color = vec4(radiance_to_srgb * radiance, 1.0);
 }

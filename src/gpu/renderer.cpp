@@ -237,6 +237,8 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   glProgramUniform3f(program, 7, sun.x, sun.y, sun.z);
   glProgramUniformMatrix3fv(program, 9, 1, GL_FALSE, &matrix[0][0]);
   gpu::set_sky_view_frame_uniforms(program, sky_view);
+  glProgramUniform1i(program, 12, stars_ ? 1 : 0);
+  glProgramUniform1f(program, 13, float(star_image_sigma(camera)));
   tables_->bind();
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
@@ -278,8 +280,25 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
 
 // --- CPU ------------------------------------------------------------------
 
+double star_image_sigma(const Camera& camera) {
+  validate_camera(camera);
+  const double pixels = double(std::min(camera.width, camera.height));
+  double pixel_angle;
+  switch (camera.projection) {
+    case Projection::perspective:
+      pixel_angle = 2.0 * std::tan(0.5 * camera.fov_deg * M_PI / 180.0) / double(camera.height);
+      break;
+    case Projection::fisheye:
+      pixel_angle = camera.fov_deg * M_PI / 180.0 / pixels;
+      break;
+    default:  // equirect: 2 pi over the width
+      pixel_angle = 2.0 * M_PI / double(camera.width);
+  }
+  return 0.6 * pixel_angle;
+}
+
 Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camera& camera,
-                 const glm::dvec3& sun_direction) {
+                 const glm::dvec3& sun_direction, bool stars) {
   check_tables_match(atmosphere, tables);
   const CameraFrame frame = camera_frame(camera);
   const glm::vec3 sun = sun_vector(sun_direction);
@@ -294,6 +313,7 @@ Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camer
       physics::sky_view_frame(params, physics::camera_above_ground(params, frame.position), sun);
   gpu::CpuSkyView sky_view;
   if (sky_view_camera) sky_view = gpu::compute_sky_view_cpu(params, *spectral, samplers, frame.position, sun);
+  const physics::StarField star_field{stars, float(star_image_sigma(camera))};
 
   Image image;
   image.width = camera.width;
@@ -314,7 +334,7 @@ Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camer
               params, *spectral, samplers.spectral_optical_depth, samplers.scattering, samplers.single_aerosol,
               samplers.multiple_scattering, samplers.indirect_irradiance, sky_view.sampler(0),
               sky_view.sampler(1), sky_view.sampler(2), sky_view_camera, sky_view_frame, frame.position, view_ray,
-              sun, true);
+              sun, true, star_field);
           rgb = matrix * radiance;
         }
         dst[3 * x + 0] = rgb.x;

@@ -158,6 +158,7 @@ AssembledSource shared_fragment_shader_source(const physics::AtmosphereParams& p
   s.append("definitions.glsl", embedded("src/physics/definitions.glsl"));
   s.append("ATMOSPHERE", atmosphere_params_glsl(params));
   s.append("SPECTRAL", spectral_sets_glsl(spectral));
+  s.append("stars.glsl", embedded("src/physics/stars.glsl"));
   s.append("functions.glsl", embedded("src/physics/functions.glsl"));
   s.append("aerial_perspective.glsl", embedded("src/physics/aerial_perspective.glsl"));
   return s;
@@ -194,7 +195,8 @@ AssembledSource atmosphere_pass_fragment_shader_source(const physics::Atmosphere
                           flag(variant.shadows) + "\n#define VARIANT_VOLUME " + flag(variant.volume) +
                           "\n#define VARIANT_BLEND " + flag(variant.blend) +
                           "\n#define VARIANT_SURFACE_MODE " + (variant.gbuffer ? "1" : "0") +
-                          "\n#define VARIANT_PIXELS " + std::to_string(int(variant.pixels)) + "\n");
+                          "\n#define VARIANT_PIXELS " + std::to_string(int(variant.pixels)) +
+                          "\n#define VARIANT_STARS " + flag(variant.stars) + "\n");
   s.append("table_bindings.glsl", embedded("src/gpu/table_bindings.glsl"));
   s.append("pixel_ray.glsl", embedded("src/gpu/pixel_ray.glsl"));
   s.append("composite.glsl", embedded("src/gpu/composite.glsl"));

@@ -66,10 +66,11 @@ struct PassVariant {
   bool gbuffer = false;         // lights surfaces from albedo + normal
   bool volume = false;          // surfaces read the aerial-perspective volume
   bool blend = false;           // ... mixed with the exact evaluation (cameras in the blend band)
-  static constexpr int kCount = 3 * 64;
+  bool stars = false;           // the star field behind the sky
+  static constexpr int kCount = 3 * 128;
   int index() const {
-    return int(pixels) * 64 + ((sky_view_camera ? 1 : 0) | (low_sun ? 2 : 0) | (shadows ? 4 : 0) |
-                               (gbuffer ? 8 : 0) | (volume ? 16 : 0) | (blend ? 32 : 0));
+    return int(pixels) * 128 + ((sky_view_camera ? 1 : 0) | (low_sun ? 2 : 0) | (shadows ? 4 : 0) |
+                                (gbuffer ? 8 : 0) | (volume ? 16 : 0) | (blend ? 32 : 0) | (stars ? 64 : 0));
   }
 };
 

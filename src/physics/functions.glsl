@@ -1348,7 +1348,8 @@ INLINE vec3 sky_radiance(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spect
 
 // Everything that reaches a camera along a view ray, for a spherical planet:
 // the sky, or the Lambertian ground lit by sun and sky seen through the
-// aerial perspective in front of it, plus (optionally) the sun disc.
+// aerial perspective in front of it, plus (optionally) the sun disc and the
+// stars.
 // `camera` is relative to the planet centre; a camera below the ground is
 // treated as standing on it. With `use_sky_view` (the renderers, for a
 // camera in the atmosphere: see camera_uses_sky_view) the view ray's terms
@@ -1364,13 +1365,16 @@ INLINE vec3 radiance_along_view_ray(IN(AtmosphereParams) atmosphere, IN(Spectral
                                     IN(sampler2D) irradiance_texture, IN(sampler2D) sky_view_rayleigh_texture,
                                     IN(sampler2D) sky_view_aerosol_texture, IN(sampler2D) sky_view_surface_texture,
                                     bool use_sky_view, IN(SkyViewFrame) sky_view, vec3 camera, vec3 view_ray,
-                                    vec3 sun_direction, bool include_sun_disc) {
+                                    vec3 sun_direction, bool include_sun_disc, IN(StarField) stars) {
   camera = camera_above_ground(atmosphere, camera);
   float nu = clamp_cosine(dot(view_ray, sun_direction));
-  vec3 sun = include_sun_disc ? sun_disc_radiance(atmosphere, view_ray, sun_direction) : vec3(0.0f);
+  // The light from beyond the atmosphere along the ray: the sun disc and the
+  // stars (stars.glsl), attenuated below like the sun.
+  vec3 beyond = star_field_radiance(atmosphere, stars, view_ray);
+  if (include_sun_disc) beyond += sun_disc_radiance(atmosphere, view_ray, sun_direction);
   vec3 start = camera;
-  // Outside the atmosphere and missing it: only the sun.
-  if (!enter_atmosphere(atmosphere, start, view_ray)) return sun;
+  // Outside the atmosphere and missing it: only what is beyond.
+  if (!enter_atmosphere(atmosphere, start, view_ray)) return beyond;
   float r = clamp_radius(atmosphere, length(start));
   bool ground = ray_intersects_ground(atmosphere, r, clamp_cosine(dot(start, view_ray) / r));
   vec3 rayleigh;
@@ -1388,5 +1392,5 @@ INLINE vec3 radiance_along_view_ray(IN(AtmosphereParams) atmosphere, IN(Spectral
   }
   vec3 radiance = phase_weighted_scattering(atmosphere, rayleigh, aerosol, nu);
   if (ground) return radiance + surface;
-  return radiance + surface * sun;
+  return radiance + surface * beyond;
 }

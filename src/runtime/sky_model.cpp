@@ -36,7 +36,7 @@ glm::dvec3 SkyModel::radiance(const glm::dvec3& observer, const glm::dvec3& view
   return glm::dvec3(physics::radiance_along_view_ray(
       impl_->params, *impl_->spectral, s.spectral_optical_depth, s.scattering, s.single_aerosol,
       s.multiple_scattering, s.indirect_irradiance, no_sky_view, no_sky_view, no_sky_view, false, no_frame,
-      glm::vec3(observer), glm::vec3(view), glm::vec3(sun), include_sun_disc));
+      glm::vec3(observer), glm::vec3(view), glm::vec3(sun), include_sun_disc, physics::StarField{false, 0.0f}));
 }
 
 void SkyModel::horizontal_irradiance(const glm::dvec3& point, const glm::dvec3& sun, glm::dvec3& sun_irradiance,
