@@ -607,7 +607,7 @@ INLINE float pixel_dither(vec2 pixel) {
 // Everything that reaches the camera through one pixel where the engine drew
 // nothing (depth at the clear value), in linear sRGB divided by
 // nits_per_unit (the engine's units): the sky, the planet's sphere below the
-// horizon and the sun disc (radiance_along_view_ray), minus the single
+// horizon, the sun disc and the stars (radiance_along_view_ray), minus the single
 // scattering the terrain shadows. `ray`: the pixel's (pixel_ray); `dither`
 // in [0, 1): the shaft samples' offset for this pixel.
 INLINE vec3 composite_sky_pixel(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
