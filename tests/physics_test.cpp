@@ -276,6 +276,65 @@ TEST_F(EarthParams, StarFieldHasTheSkysCountsAndCarriesEachStarsIrradiance) {
   EXPECT_EQ(star_field_radiance(params, StarField{false, 1e-3f}, star).y, 0.0f);
 }
 
+// Eclipse geometry (eclipse.glsl). The overlap of two discs against the
+// analytic areas of the four cases, and against a fine grid; the visible
+// fraction of the limb-darkened sun against closed forms (no overlap, total,
+// centred annular) and a fine grid of the disc (partial), in units of the
+// sun's angular radius.
+TEST(Eclipse, OverlapAndVisibleLightOfTheLimbDarkenedSun) {
+  const float a = 4.65e-3f;  // the Sun's angular radius from the Earth (rad)
+  // No overlap, total, annular: the closed forms.
+  EXPECT_EQ(circle_overlap_area(a, 1.1f * a, 2.2f * a), 0.0f);
+  EXPECT_NEAR(circle_overlap_area(a, 1.1f * a, 0.05f * a) / (PI * a * a), 1.0, 1e-6);
+  EXPECT_NEAR(circle_overlap_area(a, 0.9f * a, 0.05f * a) / (PI * a * a), 0.81, 1e-5);
+  EXPECT_EQ(sun_visible_fraction_behind_moon(a, 1.1f * a, 2.2f * a), 1.0f);
+  EXPECT_EQ(sun_visible_fraction_behind_moon(a, 1.1f * a, 0.05f * a), 0.0f);
+  // Centred annular: the flux inside radius r of the law 1 - u (1 - mu) is
+  // pi r² (1 - u) + u (2 pi a² / 3) (1 - (1 - r²/a²)^(3/2)).
+  for (double r_over_a : {0.3, 0.6, 0.9, 0.97}) {
+    const double u = SUN_LIMB_DARKENING_U, r = r_over_a;
+    const double inside = M_PI * r * r * (1.0 - u) + u * (2.0 * M_PI / 3.0) * (1.0 - std::pow(1.0 - r * r, 1.5));
+    const double total = M_PI * (1.0 - u / 3.0);
+    EXPECT_NEAR(sun_visible_fraction_behind_moon(a, float(r_over_a) * a, 0.0f), 1.0 - inside / total, 2e-5)
+        << "annular, moon " << r_over_a;
+  }
+  // Partial (and the other cases again) against a grid of 2000 x 2000 points
+  // of the sun's disc: the overlap area (uniform disc) and the visible light
+  // (limb-darkened).
+  const int n = 2000;
+  for (const auto& [b_over_a, d_over_a] : {std::pair<double, double>{1.03, 1.2}, {1.03, 0.5}, {0.5, 0.9}, {0.5, 0.2},
+                                           {2.0, 2.5}, {0.95, 0.02}}) {
+    double covered_area = 0.0, covered_light = 0.0, total_light = 0.0;
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const double x = (i + 0.5) / n * 2.0 - 1.0, y = (j + 0.5) / n * 2.0 - 1.0;
+        const double rho2 = x * x + y * y;
+        if (rho2 >= 1.0) continue;
+        const double intensity = 1.0 - SUN_LIMB_DARKENING_U * (1.0 - std::sqrt(1.0 - rho2));
+        const bool in_moon = (x - d_over_a) * (x - d_over_a) + y * y < b_over_a * b_over_a;
+        total_light += intensity;
+        if (in_moon) {
+          covered_light += intensity;
+          covered_area += 1.0;
+        }
+      }
+    const double cell = 4.0 / (double(n) * n);
+    const float b = float(b_over_a) * a, d = float(d_over_a) * a;
+    EXPECT_NEAR(circle_overlap_area(a, b, d) / (a * a), covered_area * cell, 2e-3)
+        << "moon " << b_over_a << " at " << d_over_a;
+    EXPECT_NEAR(sun_visible_fraction_behind_moon(a, b, d), 1.0 - covered_light / total_light, 2e-3)
+        << "moon " << b_over_a << " at " << d_over_a;
+  }
+  // The visible light grows as the moon moves off the sun.
+  float previous = 0.0f;
+  for (float d = 0.0f; d <= 2.2f * a; d += 0.01f * a) {
+    const float visible = sun_visible_fraction_behind_moon(a, 1.03f * a, d);
+    EXPECT_GE(visible, previous - 1e-6f) << d / a;
+    previous = visible;
+  }
+  EXPECT_EQ(previous, 1.0f);
+}
+
 // The quadrature over the solar disc (sun_disc_node): its weights add up to
 // the visible fraction of the disc, and for a disc wholly in view it has the
 // moments of a uniform disc (mean elevation offset 0, variance alpha² / 4).

@@ -160,6 +160,7 @@ AssembledSource shared_fragment_shader_source(const physics::AtmosphereParams& p
   s.append("SPECTRAL", spectral_sets_glsl(spectral));
   s.append("stars.glsl", embedded("src/physics/stars.glsl"));
   s.append("functions.glsl", embedded("src/physics/functions.glsl"));
+  s.append("eclipse.glsl", embedded("src/physics/eclipse.glsl"));
   s.append("aerial_perspective.glsl", embedded("src/physics/aerial_perspective.glsl"));
   return s;
 }
