@@ -18,6 +18,7 @@
 #include "atmos/colour.hpp"
 #include "atmos/image.hpp"
 #include "cli_support.hpp"
+#include "png_decoder.hpp"
 
 namespace {
 
@@ -198,6 +199,45 @@ void expect_usage_error(const std::string& args, const std::string& needle) {
   EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
   EXPECT_EQ(lines(r.err), 1) << args << "\n" << r.err;
   EXPECT_NE(r.err.find(needle), std::string::npos) << args << "\n" << r.err;
+}
+
+// The example's camera-like output: its PNG through atmos::PostProcess on
+// the composited texture. With the exp operator it is the default PNG
+// (write_png on the CPU) to within one 8-bit step; filmic with bloom, auto
+// exposure and the star field runs and reports its passes.
+TEST(Example, PostProcessAfterThePass) {
+  const fs::path plain = scratch() / "plain.png", post = scratch() / "post.png", filmic = scratch() / "filmic.png";
+  ASSERT_EQ(run_example(kFast + " -o " + plain.string()).code, 0);
+  ExampleRun r = run_example(kFast + " --tonemap exp -o " + post.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("post: bloom"), std::string::npos) << r.out;
+  auto load = [](const fs::path& path) {
+    int w = 0, h = 0, n = 0;
+    unsigned char* data = stbi_load(path.string().c_str(), &w, &h, &n, 3);
+    std::vector<unsigned char> pixels;
+    if (data != nullptr) pixels.assign(data, data + size_t(w) * size_t(h) * 3);
+    stbi_image_free(data);
+    return pixels;
+  };
+  const std::vector<unsigned char> a = load(plain), b = load(post);
+  ASSERT_EQ(a.size(), size_t(160 * 90 * 3));
+  ASSERT_EQ(b.size(), a.size());
+  size_t equal = 0;
+  int worst = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    equal += a[i] == b[i] ? 1 : 0;
+    worst = std::max(worst, std::abs(int(a[i]) - int(b[i])));
+  }
+  std::printf("exp through PostProcess vs write_png: %zu of %zu bytes equal, largest difference %d\n", equal, a.size(),
+              worst);
+  EXPECT_LE(worst, 1);
+  EXPECT_GE(double(equal) / double(a.size()), 0.999);
+  r = run_example(" --scene sunset-shafts --tonemap filmic --bloom 0.05 --auto-exposure --stars" + kFast + " -o " +
+                  filmic.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("auto exposure: EV100"), std::string::npos) << r.out;
+  EXPECT_EQ(load(filmic).size(), a.size());
+  EXPECT_EQ(run_example(kFast + " --bloom 2").code, 2);
 }
 
 TEST(Example, UsageErrorsAreOneLineWithExitCode2) {

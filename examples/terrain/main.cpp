@@ -28,6 +28,7 @@
 #include <atmos/atmosphere.hpp>
 #include <atmos/image.hpp>
 #include <atmos/plugin.hpp>
+#include <atmos/post.hpp>
 #include <atmos/renderer.hpp>
 #include <atmos/tables.hpp>
 
@@ -64,6 +65,13 @@ struct Options {
   int frames = 1;
   double camera_altitude = 0.0, sun_elevation = 0.0, sun_azimuth = 0.0, fov = 0.0;
   std::string look;
+  bool stars = false;
+  // Camera-like PNG output by atmos::PostProcess on the composited texture
+  // (any of these given); without, the PNG is write_png's exp tone map.
+  std::string tonemap = "exp";
+  double bloom = 0.0;
+  bool auto_exposure = false;
+  bool post = false;
 };
 
 double finite(double v, const std::string& name) {
@@ -219,6 +227,7 @@ int run(const Options& o, const engine::SceneOverrides& overrides) {
     input.shadow_map = renderer.shadow_map();  // 0 with --shadow-size 0: no shafts
     input.shadow_matrix = renderer.shadow_matrix();
     input.shadow_steps = o.shadow_steps;
+    input.stars = o.stars;
     input.output = composited.get();
     input.timed = true;  // measure the pass (waits for the GPU: a tool's choice, not a game's)
     pass.render(input);
@@ -247,8 +256,42 @@ int run(const Options& o, const engine::SceneOverrides& overrides) {
   const atmos::Image image = read_image(shown, o.width, o.height, settings.nits_per_unit);
   check_gl_errors("read-back");
   const double exposure = o.exposure_ev.value_or(scene.exposure_ev);
+  // Camera-like output: the post chain runs on the GPU over the composited
+  // texture itself (in the engine's units: nits_per_unit), as an engine
+  // would run it every frame, and only its 8-bit result is read back.
+  atmos::DisplayImage display;
+  if (o.post) {
+    atmos::PostProcess post;
+    atmos::PostSettings post_settings;
+    post_settings.tone_mapping = atmos::parse_tone_mapping(o.tonemap);
+    post_settings.exposure_ev = exposure;
+    post_settings.bloom.strength = o.bloom;
+    post_settings.auto_exposure.enabled = o.auto_exposure;
+    atmos::PostInput in;
+    in.colour = shown;
+    in.width = o.width;
+    in.height = o.height;
+    in.nits_per_unit = settings.nits_per_unit;
+    in.timed = true;
+    const GLuint ldr = post.process(in, post_settings);
+    const atmos::DisplayImage rows_up = atmos::read_display_image(ldr, o.width, o.height);
+    // GL's rows go up, an image's down.
+    display = rows_up;
+    for (int y = 0; y < o.height; ++y)
+      std::copy_n(rows_up.rgb.begin() + std::ptrdiff_t(size_t(o.height - 1 - y) * size_t(o.width) * 3),
+                  size_t(o.width) * 3, display.rgb.begin() + std::ptrdiff_t(size_t(y) * size_t(o.width) * 3));
+    const atmos::PostTimings& t = post.last_timings();
+    std::printf("  post: bloom %.1f ms, exposure %.1f ms, tone map %.1f ms (%s%s)\n", t.bloom_ms, t.exposure_ms,
+                t.tone_map_ms, o.tonemap.c_str(), o.auto_exposure ? ", auto exposure" : "");
+    if (o.auto_exposure) std::printf("  auto exposure: EV100 %.2f\n", post.current_exposure_ev());
+    check_gl_errors("post-processing");
+  }
   for (const std::string& path : o.outputs.empty() ? std::vector<std::string>{scene.name + ".png"} : o.outputs) {
-    atmos::write_image(image, path, exposure);
+    if (o.post && has_extension(path, ".png")) {
+      atmos::write_png(display, path);
+    } else {
+      atmos::write_image(image, path, exposure);
+    }
     std::printf("wrote %s\n", path.c_str());
   }
   return 0;
@@ -296,6 +339,12 @@ int main(int argc, char** argv) {
   app.add_option("--shadow-steps", o.shadow_steps, "Shadow map samples per view ray for light shafts (1-256)")
       ->capture_default_str();
   app.add_option("--frames", o.frames, "Frames to render (timings: median after the first)")->capture_default_str();
+  app.add_flag("--stars", o.stars, "Draw the star field behind the sky (FrameInput::stars)");
+  auto* tonemap_opt = app.add_option("--tonemap", o.tonemap, "PNG through atmos::PostProcess: exp|reinhard|filmic|aces")
+                          ->check(CLI::IsMember({"exp", "reinhard", "filmic", "aces"}));
+  auto* bloom_opt = app.add_option("--bloom", o.bloom, "Bloom strength in [0, 1] (PNG through atmos::PostProcess)");
+  auto* auto_exposure_opt =
+      app.add_flag("--auto-exposure", o.auto_exposure, "Auto exposure (PNG through atmos::PostProcess)");
 
   try {
     app.parse(argc, argv);
@@ -341,6 +390,8 @@ int main(int argc, char** argv) {
     if (o.shadow_size != 0) check_range(o.shadow_size, 16, 16384, "--shadow-size");
     check_range(o.shadow_steps, 1, 256, "--shadow-steps");
     check_range(o.frames, 1, 1000, "--frames");
+    check_range(o.bloom, 0.0, 1.0, "--bloom");
+    o.post = tonemap_opt->count() > 0 || bloom_opt->count() > 0 || auto_exposure_opt->count() > 0;
     for (const std::string& path : o.outputs)
       if (!has_extension(path, ".png") && !has_extension(path, ".exr"))
         throw UsageError("output \"" + path + "\" must end in .png or .exr");
