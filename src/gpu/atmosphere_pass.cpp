@@ -307,7 +307,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
       gpu::make_pass_frame(input, p.frame, p.tables->params(), p.tables->radiance_to_srgb(), p.own_sun_lux);
   if (shadows) {
     const TextureInfo shadow = texture_info(input.shadow_map, "shadow map");
-    gpu::set_shadow_map_size(input, shadow.width, shadow.height, frame);
+    gpu::set_shadow_depth_bias(input, shadow.width, shadow.height, frame);
   }
   const glm::vec3 camera_f = frame.camera;
   const glm::vec3 sun_f = frame.sun_direction;
@@ -423,10 +423,8 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     glProgramUniform1i(program, 16, frame.sun_disc ? 1 : 0);
     glProgramUniform1i(program, 18, frame.shadow_steps);
     glProgramUniformMatrix4fv(program, 19, 1, GL_FALSE, glm::value_ptr(frame.shadow_matrix));
-    glProgramUniform2f(program, 23, float(input.width), float(input.height));
     glProgramUniform1f(program, 24, frame.ap_t_far);
     glProgramUniform1f(program, 25, frame.ap_t_min);
-    glProgramUniform2f(program, 26, frame.shadow_map_size.x, frame.shadow_map_size.y);
     glProgramUniform1f(program, 27, frame.shadow_depth_bias);
     glProgramUniform1f(program, 28, frame.volume_weight);
     glProgramUniform3fv(program, 29, 1, glm::value_ptr(frame.inverse_sun_srgb));

@@ -47,10 +47,8 @@ layout(location = 15) uniform float light_scale;
 layout(location = 16) uniform bool sun_disc;
 layout(location = 18) uniform int shadow_steps;
 layout(location = 19) uniform mat4 shadow_matrix;      // 19-22
-layout(location = 23) uniform vec2 image_size;
 layout(location = 24) uniform float ap_t_far;
 layout(location = 25) uniform float ap_t_min;
-layout(location = 26) uniform vec2 shadow_map_size;
 layout(location = 27) uniform float shadow_depth_bias;
 layout(location = 28) uniform float volume_weight;
 layout(location = 29) uniform vec3 inverse_sun_srgb;
@@ -103,7 +101,6 @@ void main() {
   frame.shadows = VARIANT_SHADOWS;
   frame.shadow_steps = shadow_steps;
   frame.shadow_matrix = shadow_matrix;
-  frame.shadow_map_size = shadow_map_size;
   frame.shadow_depth_bias = shadow_depth_bias;
   PixelRay ray;
   ray.world = ray_world;

@@ -33,9 +33,10 @@ physics::PassFrame make_pass_frame(const FrameInput& input, const PlanetFrame& p
 // one beyond the volume's reach gets its last slice).
 constexpr double kMaxSurfaceAltitude = 25e3;
 
-// The shadow map's size and the depth bias of shadow_visibility: `input`'s
-// shadow_bias_m, or 1.5 texels of the map's footprint, in its depth units.
-void set_shadow_map_size(const FrameInput& input, int width, int height, physics::PassFrame& frame);
+// The depth bias of shadow_visibility for a width x height shadow map:
+// `input`'s shadow_bias_m, or 1.5 texels of the map's footprint, in its
+// depth units.
+void set_shadow_depth_bias(const FrameInput& input, int width, int height, physics::PassFrame& frame);
 
 // The illuminance of the atmosphere's own sun, lux: the luminance of its
 // irradiance in the render channels.

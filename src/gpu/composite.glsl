@@ -49,7 +49,6 @@ struct PassFrame {
   bool shadows;             // a shadow map is given
   int shadow_steps;
   mat4 shadow_matrix;       // camera-relative metres (world axes) -> the light's clip space
-  vec2 shadow_map_size;     // texels
   float shadow_depth_bias;  // in the shadow map's depth units (see make_pass_frame)
 };
 

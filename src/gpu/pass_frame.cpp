@@ -176,8 +176,7 @@ physics::PassFrame make_pass_frame(const FrameInput& input, const PlanetFrame& p
   return frame;
 }
 
-void set_shadow_map_size(const FrameInput& input, int width, int height, physics::PassFrame& frame) {
-  frame.shadow_map_size = glm::vec2(float(width), float(height));
+void set_shadow_depth_bias(const FrameInput& input, int width, int height, physics::PassFrame& frame) {
   // The map's texel footprint (m) from the rows of the camera-relative
   // shadow matrix (clip units per metre), and its depth per metre.
   const glm::dmat4 m(frame.shadow_matrix);
@@ -277,7 +276,7 @@ std::vector<glm::vec3> composite_cpu(const Atmosphere& atmosphere, const Tables&
   const std::unique_ptr<physics::SpectralSets> spectral = physics::make_spectral_sets(atmosphere, tables.sizes);
   const glm::mat3 matrix = physics::channels_to_srgb_matrix(tables.wavelengths_nm);
   physics::PassFrame frame = make_pass_frame(input, planet, params, matrix, own_sun_illuminance(params, matrix));
-  if (input.shadow_map != 0) set_shadow_map_size(input, buffers.shadow_width, buffers.shadow_height, frame);
+  if (input.shadow_map != 0) set_shadow_depth_bias(input, buffers.shadow_width, buffers.shadow_height, frame);
   const precompute::TableSamplers samplers = precompute::make_samplers(tables);
   const bool sky_view_camera = physics::camera_uses_sky_view(params, frame.camera);
   // Cameras above the atmosphere evaluate every ray; their table stays unread.

@@ -136,6 +136,18 @@ std::string AssembledSource::locate(int line) const {
 // locate() maps back to the files.
 namespace {
 
+// The GLSL meaning of the subset macros (the C++ one is in physics/shader_cpp.hpp).
+const char* const kSubsetMacros =
+    "#define IN(T) in T\n#define OUT(T) out T\n#define INOUT(T) inout T\n#define INLINE\n";
+
+// The plugin's per-pixel part after the shared one: the table bindings, the
+// pixel ray and composite.glsl (the pass's fragment and compute shaders).
+void append_composite(AssembledSource& s) {
+  s.append("table_bindings.glsl", embedded("src/gpu/table_bindings.glsl"));
+  s.append("pixel_ray.glsl", embedded("src/gpu/pixel_ray.glsl"));
+  s.append("composite.glsl", embedded("src/gpu/composite.glsl"));
+}
+
 // The most knots of the atmosphere's piecewise-linear density profiles (at
 // least 1): the trip count of profile_density's loop in shaders.
 int density_knot_bound(const physics::AtmosphereParams& params) {
@@ -148,8 +160,7 @@ AssembledSource shared_fragment_shader_source(const physics::AtmosphereParams& p
                                               const physics::SpectralSets& spectral) {
   AssembledSource s;
   s.append("header", "#version 450 core\n");
-  // The GLSL meaning of the subset macros (the C++ one is in physics/shader_cpp.hpp).
-  s.append("macros", "#define IN(T) in T\n#define OUT(T) out T\n#define INOUT(T) inout T\n#define INLINE\n");
+  s.append("macros", kSubsetMacros);
   // Shaders only run the run-time integration (see RAY_MAP_CAPACITY).
   s.append("capacities", "#define RAY_ARRAYS_FOR_RUNTIME\n#define SPECTRAL_SET_CAPACITY " +
                              std::to_string(spectral.count) + "\n#define SPECTRAL_COUNT(s) SPECTRAL_SET_CAPACITY\n" +
@@ -198,9 +209,7 @@ AssembledSource atmosphere_pass_fragment_shader_source(const physics::Atmosphere
                           "\n#define VARIANT_SURFACE_MODE " + (variant.gbuffer ? "1" : "0") +
                           "\n#define VARIANT_PIXELS " + std::to_string(int(variant.pixels)) +
                           "\n#define VARIANT_STARS " + flag(variant.stars) + "\n");
-  s.append("table_bindings.glsl", embedded("src/gpu/table_bindings.glsl"));
-  s.append("pixel_ray.glsl", embedded("src/gpu/pixel_ray.glsl"));
-  s.append("composite.glsl", embedded("src/gpu/composite.glsl"));
+  append_composite(s);
   s.append("atmosphere_pass.frag.glsl", embedded("src/gpu/atmosphere_pass.frag.glsl"));
   return s;
 }
@@ -208,7 +217,7 @@ AssembledSource atmosphere_pass_fragment_shader_source(const physics::Atmosphere
 AssembledSource atmosphere_pass_vertex_shader_source() {
   AssembledSource s;
   s.append("header", "#version 450 core\n");
-  s.append("macros", "#define IN(T) in T\n#define OUT(T) out T\n#define INOUT(T) inout T\n#define INLINE\n");
+  s.append("macros", kSubsetMacros);
   s.append("pixel_ray.glsl", embedded("src/gpu/pixel_ray.glsl"));
   s.append("atmosphere_pass.vert.glsl", embedded("src/gpu/atmosphere_pass.vert.glsl"));
   return s;
@@ -218,9 +227,7 @@ AssembledSource aerial_perspective_compute_shader_source(const physics::Atmosphe
                                                         const physics::SpectralSets& spectral, bool low_sun) {
   AssembledSource s = shared_fragment_shader_source(params, spectral);
   s.append("variant", std::string("#define VARIANT_LOW_SUN ") + (low_sun ? "true" : "false") + "\n");
-  s.append("table_bindings.glsl", embedded("src/gpu/table_bindings.glsl"));
-  s.append("pixel_ray.glsl", embedded("src/gpu/pixel_ray.glsl"));
-  s.append("composite.glsl", embedded("src/gpu/composite.glsl"));
+  append_composite(s);
   s.append("aerial_perspective.comp.glsl", embedded("src/gpu/aerial_perspective.comp.glsl"));
   return s;
 }
