@@ -82,6 +82,12 @@ TEST(Cli, UsageErrorsAreOneLineWithExitCode2) {
   expect_usage_error("precompute --density-scale -3" + kSmall, "--density-scale");
   expect_usage_error("precompute --solar lamp" + kSmall, "--solar");
   expect_usage_error("sample --reference --orders auto" + kSmall, "--orders");
+  expect_usage_error("render --moon 10,20" + kSmall, "--moon");
+  expect_usage_error("render --moon 10,95,0.3" + kSmall, "--moon");
+  expect_usage_error("render --moon 10,20,0" + kSmall, "--moon");
+  expect_usage_error("render --moon 10,20,nan" + kSmall, "finite");
+  expect_usage_error("render --moon 1,2,0.3 --moon 1,2,0.3 --moon 1,2,0.3 --moon 1,2,0.3 --moon 1,2,0.3" + kSmall,
+                     "--moon");
   expect_usage_error("nosuchcommand", "nosuchcommand");
 }
 
@@ -305,6 +311,18 @@ TEST(Cli, SpaceIsBlackAndTheLitLimbBright) {
   std::printf("orbit: lit limb %.0f cd/m2, brightest pixel of the dark half %.3f cd/m2\n", lit_limb, dark_limb);
   EXPECT_GT(lit_limb, 500.0);
   EXPECT_LT(dark_limb, 0.01 * lit_limb);
+}
+
+// --moon in front of the sun: the sky goes dark, on the GPU and the CPU alike.
+TEST(Cli, MoonInFrontOfTheSunDarkensTheSky) {
+  const std::string view = " --sun-elevation 40 --sun-azimuth 180 --look 180,60 --size 16x16";
+  const atmos::Image day = render(view, "day");
+  const atmos::Image eclipse = render(view + " --moon 180,40,0.3", "eclipse");
+  const atmos::Image eclipse_cpu = render(view + " --moon 180,40,0.3 --cpu", "eclipse_cpu");
+  const size_t centre = 3 * (8 * 16 + 8) + 1;  // green of pixel (8, 8)
+  EXPECT_LT(eclipse.rgb[centre], 1e-2 * day.rgb[centre]);
+  EXPECT_GT(eclipse.rgb[centre], 0.0f);
+  EXPECT_NEAR(eclipse_cpu.rgb[centre] / eclipse.rgb[centre], 1.0, 0.01);
 }
 
 TEST(Cli, RenderProjectionsAndCpuPath) {

@@ -1,14 +1,17 @@
 // Unit tests of the brute-force reference (src/reference/reference.cpp)
 // against closed forms: optically thin plane-parallel slabs, optical depths of
 // exponential layers, phase function normalisation and sampling, energy
-// conservation, partial visibility of the sun disc; plus plausibility of the
-// Earth preset. Monte Carlo comparisons allow a few standard errors (all runs
+// conservation, partial visibility of the sun disc, solar eclipses by moons
+// and the limb-darkened disc; plus plausibility of the Earth preset. Monte Carlo comparisons allow a few standard errors (all runs
 // are seeded, hence repeatable) plus a stated deterministic margin.
 #include <gtest/gtest.h>
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -743,6 +746,258 @@ TEST(Reference, ToPointValidated) {
   EXPECT_THROW(atmos::reference_radiance_to_point(a, x, far_side, sun, o), atmos::Error);
   EXPECT_THROW(atmos::reference_transmittance(a, x, far_side), atmos::Error);
   EXPECT_THROW(atmos::reference_radiance_to_point(a, x, x + dvec3(1e3, 0.0, 0.0), 2.0 * sun, o), atmos::Error);
+}
+
+// ---------------------------------------------------------------------------
+// 8. Solar eclipses (ReferenceOptions::moons) and the limb-darkened sun disc
+// (ReferenceOptions::sun_limb_darkening_u).
+
+constexpr double kMoonDistance = 3.844e8;  // m, from the lit point
+
+// A moon seen from `from` at angular radius `beta` (rad), its centre at
+// angle `separation` (rad) from `sun`, towards the unit vector `towards`
+// (normal to sun): centre = from + D (cos d sun + sin d towards), R = D sin β.
+atmos::ReferenceMoon moon_at(const dvec3& from, const dvec3& sun, const dvec3& towards, double separation,
+                             double beta) {
+  const dvec3 dir = std::cos(separation) * sun + std::sin(separation) * towards;
+  return atmos::ReferenceMoon{from + kMoonDistance * dir, kMoonDistance * std::sin(beta)};
+}
+
+// Area of the intersection of two flat discs of radii a and b whose centres
+// are d apart (the lens of two circular segments):
+//   d >= a + b: 0;   d <= |a - b|: π min(a, b)²;   otherwise
+//   A = a² acos((d² + a² - b²)/(2da)) + b² acos((d² + b² - a²)/(2db))
+//       - ½ √((-d + a + b)(d + a - b)(d - a + b)(d + a + b)).
+double circle_overlap(double a, double b, double d) {
+  if (d >= a + b) return 0.0;
+  if (d <= std::abs(a - b)) return kPi * std::min(a, b) * std::min(a, b);
+  return a * a * std::acos((d * d + a * a - b * b) / (2.0 * d * a)) +
+         b * b * std::acos((d * d + b * b - a * a) / (2.0 * d * b)) -
+         0.5 * std::sqrt((-d + a + b) * (d + a - b) * (d - a + b) * (d + a + b));
+}
+
+// Visible fraction of the flux of a flat sun disc of radius a with the
+// linear limb-darkening law I(ρ) = 1 - u (1 - √(1 - ρ²/a²)), behind a moon
+// disc of radius b centred d from it:
+//   f = ∫_0^a I(ρ) (2π - 2φ(ρ)) ρ dρ / (π a² (1 - u/3)),
+// where 2φ(ρ) is the arc of the circle of radius ρ about the sun's centre
+// inside the moon: φ = π if ρ + d <= b, 0 if ρ >= d + b or ρ <= d - b, else
+// acos((ρ² + d² - b²)/(2ρd)). Midpoint rule in ρ, 200000 steps (error < 1e-7).
+double limb_darkened_visible_fraction(double a, double b, double d, double u) {
+  const int n = 200000;
+  double sum = 0.0;
+  for (int k = 0; k < n; ++k) {
+    const double rho = a * (k + 0.5) / n;
+    double phi = 0.0;
+    if (rho + d <= b) phi = kPi;
+    else if (rho < d + b && rho > d - b) phi = std::acos(std::clamp((rho * rho + d * d - b * b) / (2.0 * rho * d), -1.0, 1.0));
+    const double intensity = 1.0 - u * (1.0 - std::sqrt(1.0 - rho * rho / (a * a)));
+    sum += intensity * (2.0 * kPi - 2.0 * phi) * rho;
+  }
+  return sum * (a / n) / (kPi * a * a * (1.0 - u / 3.0));
+}
+
+// A moon well away from the sun direction (90° from it, and behind the
+// planet) blocks no sun sample: the results are bitwise those without moons,
+// for the radiance (air and ground vertices), the radiance to a point and the
+// irradiance (direct sun and sky).
+TEST(Reference, EclipseMoonAwayFromSunChangesNothing) {
+  const Atmosphere a = earth();
+  ReferenceOptions o;
+  o.paths = 300;
+  o.scattering_orders = 3;
+  const dvec3 sun = direction(40.0, 0.0), x(0.0, 0.0, a.bottom_radius_m + 10.0);
+  const dvec3 down = direction(95.0, 60.0);  // the ground ~1 km away
+  const dvec3 p = x + 5e3 * direction(80.0, 200.0);
+  const auto run = [&](const ReferenceOptions& options) {
+    return std::vector<ReferenceResult>{atmos::reference_radiance(a, x, down, sun, options),
+                                        atmos::reference_radiance_to_point(a, x, p, sun, options),
+                                        atmos::reference_horizontal_irradiance(a, x, sun, options)};
+  };
+  const std::vector<ReferenceResult> plain = run(o);
+  o.moons = {atmos::ReferenceMoon{kMoonDistance * direction(130.0, 0.0), 1.7374e6},
+             atmos::ReferenceMoon{-kMoonDistance * sun, 1.7374e6}};
+  const std::vector<ReferenceResult> with_moons = run(o);
+  for (size_t k = 0; k < plain.size(); ++k) {
+    for (double v : plain[k].radiance) EXPECT_GT(v, 0.0) << k;
+    EXPECT_EQ(plain[k].radiance, with_moons[k].radiance) << k;
+    EXPECT_EQ(plain[k].standard_error, with_moons[k].standard_error) << k;
+  }
+}
+
+// A moon much larger than the planet's cross-section, in front of the sun,
+// blocks every sun sample from everywhere in the atmosphere (its angular
+// radius seen from any vertex, >= 0.049 rad, exceeds the parallax of the
+// atmosphere, 0.016 rad, plus α): everything is exactly dark, for every order.
+TEST(Reference, EclipseGiantMoonBlocksAllSunlight) {
+  const Atmosphere a = earth();
+  ReferenceOptions o;
+  o.paths = 200;
+  o.scattering_orders = 3;
+  const dvec3 sun = direction(40.0, 0.0), x(0.0, 0.0, a.bottom_radius_m + 10.0);
+  o.moons = {atmos::ReferenceMoon{4e8 * sun, 2e7}};
+  for (const ReferenceResult& r :
+       {atmos::reference_radiance(a, x, direction(95.0, 60.0), sun, o),
+        atmos::reference_radiance(a, x, direction(60.0, 0.0), sun, o),
+        atmos::reference_radiance_to_point(a, x, x + 5e3 * direction(80.0, 200.0), sun, o),
+        atmos::reference_horizontal_irradiance(a, x, sun, o)}) {
+    for (double v : r.radiance) EXPECT_EQ(v, 0.0);
+  }
+}
+
+// Limb darkening without a moon does not change the sun's irradiance: above
+// the atmosphere (transmittance 1), the horizontal irradiance with K = 1 is
+// E_sun cos θs for u = 0 and u = 0.6 (the weights I(μ)/⟨I⟩ average to 1).
+TEST(Reference, LimbDarkeningKeepsSunIrradiance) {
+  const Atmosphere a = earth();
+  ReferenceOptions o;
+  o.paths = 200000;
+  o.scattering_orders = 1;
+  const dvec3 sun = direction(30.0, 0.0), x(0.0, 0.0, a.top_radius_m + 1000.0);
+  const ReferenceResult uniform = atmos::reference_horizontal_irradiance(a, x, sun, o);
+  o.sun_limb_darkening_u = 0.6;
+  const ReferenceResult darkened = atmos::reference_horizontal_irradiance(a, x, sun, o);
+  for (size_t l = 0; l < 3; ++l) {
+    const double expected = sun_irradiance(a, l) * sun.z;
+    expect_close(uniform.radiance[l], expected, uniform.standard_error[l], 4.0, 2e-5, "u = 0");
+    expect_close(darkened.radiance[l], uniform.radiance[l],
+                 std::hypot(darkened.standard_error[l], uniform.standard_error[l]), 4.0, 2e-5, "u = 0.6 vs u = 0");
+    expect_close(darkened.radiance[l], expected, darkened.standard_error[l], 4.0, 2e-5, "u = 0.6");
+    // The weights vary (0.5 to 1.25): real noise, but small.
+    EXPECT_GT(darkened.standard_error[l], 10.0 * uniform.standard_error[l]);
+    EXPECT_LT(darkened.standard_error[l], 1e-3 * expected);
+  }
+  std::printf("limb darkening u = 0.6, 200000 paths: E/E_expected = %.5f +- %.5f (u = 0: %.7f +- %.7f)\n",
+              darkened.radiance[1] / (sun_irradiance(a, 1) * sun.z),
+              darkened.standard_error[1] / (sun_irradiance(a, 1) * sun.z),
+              uniform.radiance[1] / (sun_irradiance(a, 1) * sun.z),
+              uniform.standard_error[1] / (sun_irradiance(a, 1) * sun.z));
+}
+
+// Direct sun (K = 1) through an empty atmosphere (transmittance 1) on a
+// surface facing the sun, with moons at the distance of ours: the irradiance
+// is E_sun times the visible fraction of the disc, 1 - overlap/(πα²) for a
+// uniform disc (circle_overlap: flat discs of radii α and β = asin(R/D) at
+// separation d; exact to O(α²) ~ 2e-5). Visibility of a sample is 0 or 1:
+// the 4-standard-error test is tight. Cases: partial, total (0 exactly),
+// annular, and two moons on opposite sides of the disc.
+struct EclipseCase {
+  const char* name;
+  double beta1, d1, beta2, d2;  // in units of α; beta2 = 0: one moon
+};
+
+double eclipse_fraction(const Atmosphere& a, ReferenceOptions o, const EclipseCase& c, double u, double& error) {
+  const double alpha = a.sun_angular_radius_rad;
+  const dvec3 x(0.0, 0.0, a.bottom_radius_m), sun(0.0, 0.0, 1.0);
+  o.sun_limb_darkening_u = u;
+  o.moons = {moon_at(x, sun, dvec3(1.0, 0.0, 0.0), c.d1 * alpha, c.beta1 * alpha)};
+  if (c.beta2 > 0.0) o.moons.push_back(moon_at(x, sun, dvec3(-1.0, 0.0, 0.0), c.d2 * alpha, c.beta2 * alpha));
+  const ReferenceResult r = atmos::reference_irradiance(a, x, sun, sun, o);
+  // The three wavelengths share the geometry: the fractions are equal.
+  for (size_t l = 1; l < 3; ++l)
+    EXPECT_NEAR(r.radiance[l] / sun_irradiance(a, l), r.radiance[0] / sun_irradiance(a, 0), 1e-12);
+  error = r.standard_error[1] / sun_irradiance(a, 1);
+  return r.radiance[1] / sun_irradiance(a, 1);
+}
+
+TEST(Reference, EclipseUniformDiscMatchesCircleOverlap) {
+  const Atmosphere a = slab(1000.0, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, PhaseFunction{}, 0.0);
+  ReferenceOptions o;
+  o.scattering_orders = 1;
+  o.paths = 400000;
+  for (const EclipseCase& c : {EclipseCase{"partial", 1.03, 1.2, 0.0, 0.0}, EclipseCase{"total", 1.05, 0.02, 0.0, 0.0},
+                               EclipseCase{"annular", 0.9, 0.05, 0.0, 0.0},
+                               EclipseCase{"two moons", 0.5, 1.2, 0.4, 1.0}}) {
+    double error = 0.0;
+    const double f = eclipse_fraction(a, o, c, 0.0, error);
+    const double overlap = circle_overlap(1.0, c.beta1, c.d1) + (c.beta2 > 0.0 ? circle_overlap(1.0, c.beta2, c.d2) : 0.0);
+    const double expected = 1.0 - overlap / kPi;
+    // The ring integral of the limb-darkened law with u = 0 is the same.
+    EXPECT_NEAR(limb_darkened_visible_fraction(1.0, c.beta1, c.d1, 0.0) -
+                    (c.beta2 > 0.0 ? 1.0 - limb_darkened_visible_fraction(1.0, c.beta2, c.d2, 0.0) : 0.0),
+                expected, 1e-6)
+        << c.name;
+    EXPECT_NEAR(f, expected, 4.0 * error + 1e-4) << c.name << ": +- " << error;
+    if (expected == 0.0) {
+      EXPECT_EQ(f, 0.0) << c.name;
+    }
+    std::printf("eclipse %-9s u = 0: visible %.5f +- %.5f, expected %.5f\n", c.name, f, error, expected);
+  }
+}
+
+// The limb-darkened disc (u = 0.6) behind a moon covering its brighter
+// centre loses more than the uniform disc: a partial eclipse over the centre
+// (against the ring integral of the law) and a centred annular eclipse
+// (against the closed form of the integral, t0 = β²/α²:
+//   f = [(1 - u)(1 - t0) + (2u/3)(1 - t0)^{3/2}] / (1 - u/3)).
+TEST(Reference, EclipseLimbDarkenedDisc) {
+  const Atmosphere a = slab(1000.0, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, PhaseFunction{}, 0.0);
+  ReferenceOptions o;
+  o.scattering_orders = 1;
+  o.paths = 400000;
+  const double u = 0.6;
+  for (const EclipseCase& c : {EclipseCase{"partial", 0.8, 0.3, 0.0, 0.0}, EclipseCase{"annular", 0.5, 0.0, 0.0, 0.0}}) {
+    double e0 = 0.0, e1 = 0.0;
+    const double f0 = eclipse_fraction(a, o, c, 0.0, e0);
+    const double f1 = eclipse_fraction(a, o, c, u, e1);
+    EXPECT_LT(f1, f0 - 4.0 * std::hypot(e0, e1)) << c.name;
+    double expected = limb_darkened_visible_fraction(1.0, c.beta1, c.d1, u);
+    if (c.d1 == 0.0) {
+      const double t0 = c.beta1 * c.beta1;
+      const double closed = ((1.0 - u) * (1.0 - t0) + 2.0 * u / 3.0 * std::pow(1.0 - t0, 1.5)) / (1.0 - u / 3.0);
+      EXPECT_NEAR(expected, closed, 1e-6);
+      expected = closed;
+    }
+    EXPECT_NEAR(f1, expected, 4.0 * e1 + 1e-4) << c.name << ": +- " << e1;
+    std::printf("eclipse %-9s u = %.1f: visible %.5f +- %.5f, expected %.5f (u = 0: %.5f +- %.5f)\n", c.name, u, f1,
+                e1, expected, f0, e0);
+  }
+}
+
+// Bad moons and limb-darkening coefficients are reported by every estimator.
+TEST(Reference, EclipseOptionsValidated) {
+  const Atmosphere a = earth();
+  const dvec3 sun = direction(30.0, 0.0), x(0.0, 0.0, a.bottom_radius_m + 10.0), v = direction(60.0, 90.0);
+  const atmos::ReferenceMoon good{kMoonDistance * sun, 1.7374e6};
+  const auto throws = [&](const ReferenceOptions& o, const std::string& what) {
+    EXPECT_THROW(atmos::reference_radiance(a, x, v, sun, o), atmos::Error) << what;
+    EXPECT_THROW(atmos::reference_radiance_to_point(a, x, x + 1e3 * v, sun, o), atmos::Error) << what;
+    EXPECT_THROW(atmos::reference_horizontal_irradiance(a, x, sun, o), atmos::Error) << what;
+  };
+  ReferenceOptions o;
+  o.paths = 10;
+  o.moons = std::vector<atmos::ReferenceMoon>(8, good);
+  EXPECT_NO_THROW(atmos::reference_radiance(a, x, v, sun, o));
+  o.moons.push_back(good);
+  throws(o, "9 moons");
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  for (const atmos::ReferenceMoon& bad :
+       {atmos::ReferenceMoon{dvec3(nan, 0.0, 4e8), 1e6}, atmos::ReferenceMoon{dvec3(0.0, inf, 4e8), 1e6},
+        atmos::ReferenceMoon{good.centre, 0.0}, atmos::ReferenceMoon{good.centre, -1e6},
+        atmos::ReferenceMoon{good.centre, inf}, atmos::ReferenceMoon{good.centre, nan},
+        // Intersecting the atmosphere: touching its top, straddling it, inside it.
+        atmos::ReferenceMoon{dvec3(0.0, 0.0, a.top_radius_m + 1e5), 1e5},
+        atmos::ReferenceMoon{dvec3(0.0, 0.0, a.top_radius_m + 1e4), 1e5},
+        atmos::ReferenceMoon{dvec3(0.0, 0.0, a.bottom_radius_m + 3e4), 10.0}}) {
+    o.moons = {good, bad};
+    throws(o, "moon radius " + std::to_string(bad.radius));
+  }
+  o.moons = {atmos::ReferenceMoon{dvec3(0.0, 0.0, a.top_radius_m + 1e5 + 1.0), 1e5}};  // just clear of it
+  EXPECT_NO_THROW(atmos::reference_radiance(a, x, v, sun, o));
+  o.moons.clear();
+  for (double u : {-0.01, 1.01, nan}) {
+    o.sun_limb_darkening_u = u;
+    throws(o, "u = " + std::to_string(u));
+  }
+  o.sun_limb_darkening_u = 1.0;
+  EXPECT_NO_THROW(atmos::reference_radiance(a, x, v, sun, o));
+  try {
+    o.moons = {atmos::ReferenceMoon{good.centre, 0.0}};
+    atmos::reference_radiance(a, x, v, sun, o);
+    ADD_FAILURE() << "no error";
+  } catch (const atmos::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("moon 0"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

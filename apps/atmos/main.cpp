@@ -214,6 +214,7 @@ struct RenderOptions {
   bool auto_exposure = false;
   bool post = false;  // --tonemap, --bloom or --auto-exposure given
   bool stars = false;  // --stars: the star field even with the sun up (it is on anyway at night)
+  std::vector<std::string> moons;  // --moon AZ,EL,ANGULAR_RADIUS_DEG, repeatable
 };
 
 struct Shot {
@@ -221,7 +222,19 @@ struct Shot {
   atmos::Camera camera;
   glm::dvec3 sun;
   double exposure;
+  std::vector<atmos::Moon> moons = {};
 };
+
+// --moon AZ,EL,ANGULAR_RADIUS_DEG: a moon at the Moon's mean distance from
+// the camera, in the direction (azimuth, elevation) of the camera's local
+// frame `local`, that looks ANGULAR_RADIUS_DEG wide (atmos::moon_in_sky).
+atmos::Moon parse_moon(const std::string& text, const glm::dvec3& position, const glm::dmat3& local) {
+  const auto v = parse_numbers(text, 3, "--moon");
+  if (v[1] < -90.0 || v[1] > 90.0) throw UsageError("--moon elevation must be in [-90, 90]");
+  if (!(v[2] > 0.0) || v[2] > 10.0) throw UsageError("--moon angular radius must be in (0, 10] degrees");
+  return atmos::moon_in_sky(position, local * atmos::direction_from_azimuth_elevation(v[0], v[1]),
+                            v[2] * M_PI / 180.0);
+}
 
 std::pair<int, int> parse_size(const std::string& text) {
   int w = 0, h = 0;
@@ -355,6 +368,7 @@ int run_render(const RenderOptions& o, const TableOptions& t, bool use_gallery) 
     const atmos::Projection projection = parse_projection(o.projection);
     // Local frame at the point below the camera (the north pole for --altitude).
     atmos::Camera camera = make_camera(position, look_az, look_el, o.fov, projection, w, h);
+    glm::dmat3 local(1.0);
     if (!o.position.empty()) {
       // Express the local (east, north, up) frame of an arbitrary position.
       const glm::dvec3 up = glm::normalize(position);
@@ -362,15 +376,17 @@ int run_render(const RenderOptions& o, const TableOptions& t, bool use_gallery) 
       if (glm::length(east) < 1e-9) east = glm::dvec3(1, 0, 0);
       east = glm::normalize(east);
       const glm::dvec3 north = glm::cross(up, east);
-      const glm::dmat3 local(east, north, up);
+      local = glm::dmat3(east, north, up);
       camera.forward = local * camera.forward;
       camera.up = local * camera.up;
-      shots.push_back({"render", camera, local * atmos::direction_from_azimuth_elevation(o.sun_azimuth, o.sun_elevation),
-                       o.exposure});
-    } else {
-      shots.push_back({"render", camera, atmos::direction_from_azimuth_elevation(o.sun_azimuth, o.sun_elevation),
-                       o.exposure});
     }
+    if (o.moons.size() > size_t(atmos::kMaxMoons))
+      throw UsageError("--moon: at most " + std::to_string(atmos::kMaxMoons) + " moons");
+    std::vector<atmos::Moon> moons;
+    for (const std::string& text : o.moons) moons.push_back(parse_moon(text, position, local));
+    atmos::validate_moons(moons, a.top_radius_m);
+    shots.push_back({"render", camera, local * atmos::direction_from_azimuth_elevation(o.sun_azimuth, o.sun_elevation),
+                     o.exposure, moons});
     atmos::validate_camera(camera);
   }
 
@@ -392,8 +408,11 @@ int run_render(const RenderOptions& o, const TableOptions& t, bool use_gallery) 
     // horizon of a single render (the gallery's shots are by day or from
     // space, without).
     const bool stars = !use_gallery && (o.stars || o.sun_elevation < 0.0);
-    if (renderer) renderer->set_stars(stars);
-    const atmos::Image image = o.cpu ? atmos::render_cpu(a, loaded.tables, shot.camera, shot.sun, stars)
+    if (renderer) {
+      renderer->set_stars(stars);
+      renderer->set_moons(shot.moons);
+    }
+    const atmos::Image image = o.cpu ? atmos::render_cpu(a, loaded.tables, shot.camera, shot.sun, stars, shot.moons)
                                      : renderer->render(shot.camera, shot.sun);
     if (use_gallery) {
       write_outputs(image, {shot.name + ".png", shot.name + ".exr"}, shot.exposure);
@@ -736,6 +755,14 @@ int run_bench(const TableOptions& t, const std::string& size) {
     std::fflush(stdout);
   };
   time_frames(renderer, atmos::direction_from_azimuth_elevation(150.0, 20.0), 5, "render");
+  // A total eclipse seen from the centre of the shadow: the sky-view pass
+  // integrates single scattering along every view ray, eclipsed node by node.
+  {
+    const glm::dvec3 sun = atmos::direction_from_azimuth_elevation(150.0, 40.0);
+    renderer.set_moons({atmos::moon_in_sky(camera.position, sun, 0.27 * M_PI / 180.0)});
+    time_frames(renderer, sun, 3, "render.eclipse");
+    renderer.set_moons({});
+  }
   // Twilight with the spectral tables: the sky-view pass integrates the low
   // sun's single scattering at all 15 wavelengths.
   atmos::Renderer spectral_renderer(*context, spectral_atmosphere, spectral_tables);
@@ -802,6 +829,9 @@ int main(int argc, char** argv) {
   render_cmd->add_flag("--stars", render.stars,
                        "Draw the star field also with the sun above the horizon (it is drawn whenever the sun is "
                        "below it)");
+  render_cmd->add_option("--moon", render.moons,
+                         "A moon AZ,EL,ANGULAR_RADIUS_DEG in the camera's sky (degrees; at the Moon's distance, "
+                         "384 400 km): it eclipses the sun where it covers it; repeatable (at most 4)");
   auto* tonemap_opt = render_cmd->add_option("--tonemap", render.tonemap, "PNG tone mapping: exp|reinhard|filmic|aces")
                           ->check(CLI::IsMember({"exp", "reinhard", "filmic", "aces"}))
                           ->capture_default_str();

@@ -14,9 +14,27 @@
 //  - constituent i: scattering β_s,i(λ)·ρ_i(h), absorption β_a,i(λ)·ρ_i(h),
 //    phase function p_i (Rayleigh, Henyey–Greenstein, Cornette–Shanks);
 //  - Lambertian ground of albedo a(λ);
-//  - sun: uniform disc of angular radius α around direction `sun`, whose
+//  - sun: disc of angular radius α around direction `sun`, whose
 //    irradiance at normal incidence at the top of the atmosphere is
-//    E_sun(λ) (so its radiance is E_sun / (π sin²α)).
+//    E_sun(λ). Its radiance follows the linear limb-darkening law
+//      L(θ) = L_0 (1 - u (1 - μ)),  μ = √(1 - sin²θ / sin²α),
+//    θ the angle from the disc centre, u = sun_limb_darkening_u in [0, 1],
+//    L_0 = E_sun / (π sin²α (1 - u/3)) (u = 0: the uniform disc of radiance
+//    E_sun / (π sin²α));
+//  - moons (ReferenceOptions::moons, at most 8): opaque black spheres outside
+//    the atmosphere that block sunlight (solar eclipses). They only shadow:
+//    a direction towards the sun disc that meets a moon carries no sunlight.
+//    They are not themselves seen (they neither reflect nor hide the
+//    atmosphere from an observer or point outside it).
+//
+// Sunlight enters only through next-event estimation: at every vertex (and at
+// the point of an irradiance) one direction ω is drawn uniformly in the solid
+// angle of the disc and weighted by V_moons(ω) I(μ)/⟨I⟩ (V_moons = 0 if the
+// ray towards ω meets a moon, else 1; I(μ) = 1 - u (1 - μ); ⟨I⟩ = 1 - u/3, the
+// exact cos θ-weighted mean of I over the sampled cap; see reference.cpp,
+// sample_sun, blocked_by_moon and sun_weight), which estimates the partially
+// eclipsed, limb-darkened disc without bias; the planet's own shadow is exact
+// in the same way.
 //
 // Interactions: one atmospheric scattering event or one ground reflection.
 // With `scattering_orders` = K the reference counts the light that underwent
@@ -45,10 +63,27 @@
 
 namespace atmos {
 
+// A moon: an opaque black sphere of radius `radius` (m) centred at `centre`
+// (planet-centred, m). It blocks the sunlight of every sun direction ω sampled
+// from a point o for which the ray o + t ω meets the sphere at some t > 0.
+struct ReferenceMoon {
+  glm::dvec3 centre{0.0};
+  double radius = 0.0;
+};
+
 struct ReferenceOptions {
   int scattering_orders = 4;  // K >= 1: maximum number of interactions counted
   int paths = 20000;          // Monte Carlo paths per estimate (>= 2), first dimension stratified
   std::uint64_t seed = 1;     // the same seed gives bitwise identical results
+  // Solar eclipses: at most 8 moons, each with a finite centre, a finite
+  // radius > 0 and entirely outside the atmosphere (|centre| - radius > Rt);
+  // otherwise the estimators throw Error. Empty: no eclipse.
+  std::vector<ReferenceMoon> moons;
+  // u of the linear limb-darkening law I(μ) = 1 - u (1 - μ) of the sun disc
+  // (relative to its centre), in [0, 1] (else Error). The disc's irradiance at
+  // normal incidence stays E_sun for every u. 0: uniform disc; with no moons
+  // and u = 0 the results are bitwise those of the reference without eclipses.
+  double sun_limb_darkening_u = 0.0;
 };
 
 struct ReferenceResult {

@@ -19,8 +19,10 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "atmos/atmosphere.hpp"
+#include "atmos/eclipse.hpp"
 #include "atmos/image.hpp"
 #include "atmos/tables.hpp"
 
@@ -117,6 +119,14 @@ class Renderer {
   void set_stars(bool enabled) { stars_ = enabled; }
   bool stars() const { return stars_; }
 
+  // The moons that may eclipse the sun (include/atmos/eclipse.hpp), in the
+  // planet-centred frame of the camera; none by default. Throws
+  // atmos::Error as validate_moons does (the previous moons are kept).
+  // With moons, the sky-view table is the eclipsed one: single scattering
+  // integrated along every view ray (as at twilight) over the full azimuth.
+  void set_moons(const std::vector<Moon>& moons);
+  const std::vector<Moon>& moons() const { return moons_; }
+
   // GPU time of the draw of the last render() in milliseconds (all tiles,
   // excluding the read-back); 0 before the first render. From GL_TIME_ELAPSED
   // queries, except on software rasterisers (llvmpipe, softpipe, SwiftShader):
@@ -134,8 +144,11 @@ class Renderer {
   GlContext& context_;
   std::unique_ptr<gpu::GpuTables> tables_;   // the tables and the sky-view table
   std::unique_ptr<gpu::GpuTimer> timer_;
-  std::uint32_t program_ = 0;        // render pass, camera in the atmosphere (reads the sky-view table)
-  std::uint32_t space_program_ = 0;  // render pass, camera above the atmosphere
+  // The render pass's programs: index 1 for a camera in the atmosphere
+  // (reads the sky-view table), 0 above it; + 2 with moons (compiled on
+  // first use).
+  std::uint32_t programs_[4] = {0, 0, 0, 0};
+  std::uint32_t program(bool sky_view_camera, bool eclipse);
   std::uint32_t vertex_array_ = 0;
   std::uint32_t framebuffer_ = 0;             // one RGBA32F tile, reused while large enough
   std::uint32_t tile_texture_ = 0;
@@ -144,13 +157,14 @@ class Renderer {
   double last_frame_ms_ = 0.0;
   double last_sky_view_ms_ = 0.0;
   bool stars_ = false;
+  std::vector<Moon> moons_;
 };
 
 // The same image computed on the CPU (all cores, TBB) with the same shared
 // functions and camera model; for tests and as a fallback without OpenGL.
-// `stars`: as Renderer::set_stars.
+// `stars`: as Renderer::set_stars; `moons`: as Renderer::set_moons.
 Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camera& camera,
-                 const glm::dvec3& sun_direction, bool stars = false);
+                 const glm::dvec3& sun_direction, bool stars = false, const std::vector<Moon>& moons = {});
 
 // Width (Gaussian sigma, radians) of a star's image in this camera's pixels:
 // 0.6 of a pixel's angular size at the image centre, so that a star lights a

@@ -9,8 +9,10 @@
 #include <glm/vec3.hpp>
 
 #include <memory>
+#include <vector>
 
 #include "atmos/atmosphere.hpp"
+#include "atmos/eclipse.hpp"
 #include "atmos/tables.hpp"
 
 namespace atmos {
@@ -26,9 +28,11 @@ class SkyModel {
 
   // Spectral radiance (W m^-2 sr^-1 nm^-1 at the three working wavelengths)
   // reaching `observer` from direction `view`: sky, or lit ground seen
-  // through the aerial perspective, plus the sun disc if asked.
+  // through the aerial perspective, plus the sun disc if asked. With
+  // `moons` (eclipse.hpp; throws atmos::Error as validate_moons does), the
+  // eclipsed sky and ground, and the moons in front of the sun.
   glm::dvec3 radiance(const glm::dvec3& observer, const glm::dvec3& view, const glm::dvec3& sun,
-                      bool include_sun_disc) const;
+                      bool include_sun_disc, const std::vector<Moon>& moons = {}) const;
 
   // Sun and sky irradiance (W m^-2 nm^-1) on a horizontal surface at `point`.
   void horizontal_irradiance(const glm::dvec3& point, const glm::dvec3& sun, glm::dvec3& sun_irradiance,

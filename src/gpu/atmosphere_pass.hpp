@@ -43,14 +43,15 @@ void set_shadow_depth_bias(const FrameInput& input, int width, int height, physi
 double own_sun_illuminance(const physics::AtmosphereParams& params, const glm::mat3& radiance_to_srgb);
 
 // This frame's sky-view table on the CPU, texel by texel as the GPU pass
-// computes it (for cameras in the atmosphere).
+// computes it (for cameras in the atmosphere); with moons, eclipsed and
+// over the full azimuth (SkyViewFrame.full_azimuth).
 struct CpuSkyView {
   std::vector<glm::vec3> textures[3];  // rayleigh, aerosol, surface (functions.glsl: view_ray_terms)
   physics::sampler2D sampler(int i) const { return {SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT, textures[i].data()}; }
 };
 CpuSkyView compute_sky_view_cpu(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
                                 const precompute::TableSamplers& samplers, const glm::vec3& camera,
-                                const glm::vec3& sun);
+                                const glm::vec3& sun, const physics::Moons& moons = physics::no_moons());
 
 // The aerial-perspective volume (composite.glsl) serves cameras below
 // kVolumeMaxAltitude: the terrain and flight views whose surfaces are near,

@@ -328,21 +328,29 @@ void set_sky_view_frame_uniforms(GLuint program, const physics::SkyViewFrame& fr
   glProgramUniform3fv(program, kSkyViewFrameLocation + 1, 1, &frame.sun_side.x);
   glProgramUniform3fv(program, kSkyViewFrameLocation + 2, 1, &frame.across.x);
   glProgramUniform1f(program, kSkyViewFrameLocation + 3, frame.theta_horizon);
+  glProgramUniform1i(program, kSkyViewFrameLocation + 4, frame.full_azimuth ? 1 : 0);
+}
+
+void set_moons_uniforms(GLuint program, const physics::Moons& moons) {
+  glProgramUniform1i(program, kMoonsLocation + 0, moons.count);
+  glProgramUniform4fv(program, kMoonsLocation + 1, MOON_CAPACITY, &moons.sphere[0].x);
 }
 
 double GpuTables::update_sky_view(const glm::vec3& camera, const glm::vec3& sun, const physics::SkyViewFrame& frame,
-                                  GpuTimer* timer) {
-  const bool low_sun = physics::sun_may_be_low_on_view_rays(*params_, camera, sun);
-  GLuint& program = sky_view_programs_[low_sun ? 1 : 0];
+                                  GpuTimer* timer, const physics::Moons& moons) {
+  const bool eclipse = moons.count > 0;
+  const bool low_sun = eclipse || physics::sun_may_be_low_on_view_rays(*params_, camera, sun);
+  GLuint& program = sky_view_programs_[eclipse ? 2 : low_sun ? 1 : 0];
   if (program == 0) {
     AssembledSource vertex;
     vertex.append("vertex shader", fullscreen_vertex_shader_source());
-    program = link_program(vertex, sky_view_fragment_shader_source(*params_, *spectral_, low_sun));
+    program = link_program(vertex, sky_view_fragment_shader_source(*params_, *spectral_, low_sun, eclipse));
   }
   glUseProgram(program);
   glProgramUniform3f(program, 0, camera.x, camera.y, camera.z);
   glProgramUniform3f(program, 7, sun.x, sun.y, sun.z);
   set_sky_view_frame_uniforms(program, frame);
+  if (eclipse) set_moons_uniforms(program, moons);
   for (GLuint unit = 0; unit < 5; ++unit) {
     glBindTextureUnit(unit, textures_[unit]);
     glBindSampler(unit, 0);

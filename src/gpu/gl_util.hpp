@@ -86,10 +86,15 @@ enum TableUnit : GLuint {
 
 // Uniform locations of the sky-view table's frame (table_bindings.glsl:
 // uniform_sky_view_frame), the same in every program that reads the table.
-constexpr GLint kSkyViewFrameLocation = 40;  // 40..43
+constexpr GLint kSkyViewFrameLocation = 40;  // 40..44
 
 // Sets those uniforms of `program` (a program without them ignores them).
 void set_sky_view_frame_uniforms(GLuint program, const physics::SkyViewFrame& frame);
+
+// The uniforms of the frame's moons (table_bindings.glsl: uniform_moons),
+// the same in every program that draws eclipses.
+constexpr GLint kMoonsLocation = 45;  // 45..49
+void set_moons_uniforms(GLuint program, const physics::Moons& moons);
 
 // The tables of one atmosphere on the GPU, its parameters as the shaders
 // see them, and the per-frame sky-view table (functions.glsl: sky_view_frame)
@@ -122,9 +127,10 @@ class GpuTables {
   // (camera_uses_sky_view) at `camera` (m, planet-centred) with the sun in
   // direction `sun`, in the frame `frame` (sky_view_frame); returns its GPU
   // time in ms (0 without a timer). Leaves the sky-view framebuffer bound and
-  // the tables bound to units 0..4.
+  // the tables bound to units 0..4. With moons, the eclipsed table (the
+  // frame must then have full_azimuth).
   double update_sky_view(const glm::vec3& camera, const glm::vec3& sun, const physics::SkyViewFrame& frame,
-                         GpuTimer* timer);
+                         GpuTimer* timer, const physics::Moons& moons = physics::no_moons());
 
  private:
   void release();
@@ -132,7 +138,8 @@ class GpuTables {
   std::unique_ptr<physics::SpectralSets> spectral_;
   glm::mat3 radiance_to_srgb_{1.0f};
   GLuint textures_[5] = {0, 0, 0, 0, 0};
-  GLuint sky_view_programs_[2] = {0, 0};  // without, with the low-sun integration (compiled on first use)
+  // Without, with the low-sun integration, and eclipsed (compiled on first use).
+  GLuint sky_view_programs_[3] = {0, 0, 0};
   GLuint sky_view_framebuffer_ = 0;
   // Single Rayleigh + multiple / P_R, single aerosol, the ray's end (RGBA32F).
   GLuint sky_view_textures_[3] = {0, 0, 0};

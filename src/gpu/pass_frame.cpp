@@ -188,12 +188,12 @@ void set_shadow_depth_bias(const FrameInput& input, int width, int height, physi
 
 CpuSkyView compute_sky_view_cpu(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
                                 const precompute::TableSamplers& samplers, const glm::vec3& camera,
-                                const glm::vec3& sun) {
+                                const glm::vec3& sun, const physics::Moons& moons) {
   CpuSkyView view;
   for (auto& t : view.textures) t.assign(size_t(SKY_VIEW_WIDTH) * SKY_VIEW_HEIGHT, glm::vec3(0.0f));
-  const physics::SkyViewFrame frame =
-      physics::sky_view_frame(params, physics::camera_above_ground(params, camera), sun);
-  const bool low_sun = physics::sun_may_be_low_on_view_rays(params, camera, sun);
+  physics::SkyViewFrame frame = physics::sky_view_frame(params, physics::camera_above_ground(params, camera), sun);
+  frame.full_azimuth = moons.count > 0;
+  const bool low_sun = moons.count > 0 || physics::sun_may_be_low_on_view_rays(params, camera, sun);
   tbb::parallel_for(0, SKY_VIEW_HEIGHT, [&](int y) {
     for (int x = 0; x < SKY_VIEW_WIDTH; ++x) {
       // The texel centre, as gl_FragCoord gives it to the sky-view pass.
@@ -201,7 +201,7 @@ CpuSkyView compute_sky_view_cpu(const physics::AtmosphereParams& params, const p
       const size_t i = size_t(y) * SKY_VIEW_WIDTH + size_t(x);
       physics::compute_sky_view_texel(params, spectral, samplers.spectral_optical_depth, samplers.scattering,
                                       samplers.single_aerosol, samplers.multiple_scattering,
-                                      samplers.indirect_irradiance, frame, camera, sun, uv, low_sun,
+                                      samplers.indirect_irradiance, frame, camera, sun, uv, low_sun, moons,
                                       view.textures[0][i],
                                       view.textures[1][i], view.textures[2][i]);
     }

@@ -25,6 +25,8 @@ layout(location = 9) uniform mat3 radiance_to_srgb;
 // The star field (stars.glsl): on or off, and the width of a star's image.
 layout(location = 12) uniform bool stars_enabled;
 layout(location = 13) uniform float star_sigma;
+// The moons (eclipse.glsl): uniform_moons() of table_bindings.glsl in the
+// variant RENDER_ECLIPSE 1 (with moons), none in RENDER_ECLIPSE 0.
 
 layout(location = 0) out vec4 frag_color;
 
@@ -40,10 +42,16 @@ void main() {
     frag_color = vec4(0.0, 0.0, 0.0, 1.0);
     return;
   }
+#if RENDER_ECLIPSE
+  Moons moons = uniform_moons();
+#else
+  Moons moons = no_moons();
+#endif
   vec3 radiance = radiance_along_view_ray(ATMOSPHERE, SPECTRAL, spectral_transmittance_texture, scattering_texture,
                                           single_aerosol_texture, multiple_scattering_texture, irradiance_texture,
                                           sky_view_rayleigh_texture, sky_view_aerosol_texture,
                                           sky_view_surface_texture, SKY_VIEW_CAMERA, uniform_sky_view_frame(), camera,
-                                          view_ray, sun_direction, true, StarField(stars_enabled, star_sigma));
+                                          view_ray, sun_direction, true, StarField(stars_enabled, star_sigma),
+                                          moons);
   frag_color = vec4(radiance_to_srgb * radiance, 1.0);
 }

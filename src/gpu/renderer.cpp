@@ -25,6 +25,7 @@
 #include "gpu/camera_cpp.hpp"
 #include "gpu/gl_util.hpp"
 #include "gpu/shader_source.hpp"
+#include "physics/moons.hpp"
 #include "physics/parameters.hpp"
 #include "precompute/samplers.hpp"
 
@@ -126,12 +127,14 @@ void validate_camera(const Camera& camera) {
 // --- GPU ------------------------------------------------------------------
 
 void Renderer::release() {
-  if (program_ != 0) glDeleteProgram(program_);
-  if (space_program_ != 0) glDeleteProgram(space_program_);
+  for (std::uint32_t& program : programs_) {
+    if (program != 0) glDeleteProgram(program);
+    program = 0;
+  }
   if (vertex_array_ != 0) glDeleteVertexArrays(1, &vertex_array_);
   if (framebuffer_ != 0) glDeleteFramebuffers(1, &framebuffer_);
   if (tile_texture_ != 0) glDeleteTextures(1, &tile_texture_);
-  program_ = space_program_ = vertex_array_ = framebuffer_ = tile_texture_ = 0;
+  vertex_array_ = framebuffer_ = tile_texture_ = 0;
   timer_.reset();
   tables_.reset();
 }
@@ -145,11 +148,8 @@ Renderer::Renderer(GlContext& context, const Atmosphere& atmosphere, const Table
   try {
     tables_ = std::make_unique<gpu::GpuTables>(atmosphere, tables, precision);
     timer_ = std::make_unique<gpu::GpuTimer>();
-    gpu::AssembledSource vertex;
-    vertex.append("vertex shader", gpu::fullscreen_vertex_shader_source());
-    program_ = gpu::link_program(vertex, gpu::render_fragment_shader_source(tables_->params(), tables_->spectral(), true));
-    space_program_ =
-        gpu::link_program(vertex, gpu::render_fragment_shader_source(tables_->params(), tables_->spectral(), false));
+    program(true, false);
+    program(false, false);
     // Core profile draws need a vertex array object, even an empty one.
     glCreateVertexArrays(1, &vertex_array_);
     gpu::check_gl("while creating the renderer");
@@ -218,12 +218,14 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   // sky_radiance); the test is the shared function's, on the same floats.
   double gpu_ms = 0.0;
   const bool sky_view_camera = physics::camera_uses_sky_view(tables_->params(), frame.position);
-  const physics::SkyViewFrame sky_view = tables_->sky_view_frame(frame.position, sun);
-  if (sky_view_camera) gpu_ms += tables_->update_sky_view(frame.position, sun, sky_view, timer_.get());
+  const physics::Moons moons = physics::make_moons(tables_->params(), moons_);
+  physics::SkyViewFrame sky_view = tables_->sky_view_frame(frame.position, sun);
+  sky_view.full_azimuth = moons.count > 0;
+  if (sky_view_camera) gpu_ms += tables_->update_sky_view(frame.position, sun, sky_view, timer_.get(), moons);
   last_sky_view_ms_ = gpu_ms;
 
   // Pass 2: the image, in tiles.
-  const GLuint program = sky_view_camera ? program_ : space_program_;
+  const GLuint program = this->program(sky_view_camera, moons.count > 0);
   const glm::mat3& matrix = tables_->radiance_to_srgb();
   glUseProgram(program);
   glBindVertexArray(vertex_array_);
@@ -239,6 +241,7 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   gpu::set_sky_view_frame_uniforms(program, sky_view);
   glProgramUniform1i(program, 12, stars_ ? 1 : 0);
   glProgramUniform1f(program, 13, float(star_image_sigma(camera)));
+  gpu::set_moons_uniforms(program, moons);
   tables_->bind();
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
@@ -278,6 +281,22 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   return image;
 }
 
+std::uint32_t Renderer::program(bool sky_view_camera, bool eclipse) {
+  std::uint32_t& program = programs_[(sky_view_camera ? 1 : 0) + (eclipse ? 2 : 0)];
+  if (program == 0) {
+    gpu::AssembledSource vertex;
+    vertex.append("vertex shader", gpu::fullscreen_vertex_shader_source());
+    program = gpu::link_program(vertex, gpu::render_fragment_shader_source(tables_->params(), tables_->spectral(),
+                                                                            sky_view_camera, eclipse));
+  }
+  return program;
+}
+
+void Renderer::set_moons(const std::vector<Moon>& moons) {
+  validate_moons(moons, double(tables_->params().top_radius));
+  moons_ = moons;
+}
+
 // --- CPU ------------------------------------------------------------------
 
 double star_image_sigma(const Camera& camera) {
@@ -298,7 +317,7 @@ double star_image_sigma(const Camera& camera) {
 }
 
 Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camera& camera,
-                 const glm::dvec3& sun_direction, bool stars) {
+                 const glm::dvec3& sun_direction, bool stars, const std::vector<Moon>& moon_list) {
   check_tables_match(atmosphere, tables);
   const CameraFrame frame = camera_frame(camera);
   const glm::vec3 sun = sun_vector(sun_direction);
@@ -308,11 +327,14 @@ Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camer
   const glm::mat3 matrix = srgb_matrix(tables);
 
   // The sky-view table, texel by texel as the sky-view pass computes it.
+  const physics::Moons moons = physics::make_moons(params, moon_list);
   const bool sky_view_camera = physics::camera_uses_sky_view(params, frame.position);
-  const physics::SkyViewFrame sky_view_frame =
+  physics::SkyViewFrame sky_view_frame =
       physics::sky_view_frame(params, physics::camera_above_ground(params, frame.position), sun);
+  sky_view_frame.full_azimuth = moons.count > 0;
   gpu::CpuSkyView sky_view;
-  if (sky_view_camera) sky_view = gpu::compute_sky_view_cpu(params, *spectral, samplers, frame.position, sun);
+  if (sky_view_camera)
+    sky_view = gpu::compute_sky_view_cpu(params, *spectral, samplers, frame.position, sun, moons);
   const physics::StarField star_field{stars, float(star_image_sigma(camera))};
 
   Image image;
@@ -334,7 +356,7 @@ Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camer
               params, *spectral, samplers.spectral_optical_depth, samplers.scattering, samplers.single_aerosol,
               samplers.multiple_scattering, samplers.indirect_irradiance, sky_view.sampler(0),
               sky_view.sampler(1), sky_view.sampler(2), sky_view_camera, sky_view_frame, frame.position, view_ray,
-              sun, true, star_field);
+              sun, true, star_field, moons);
           rgb = matrix * radiance;
         }
         dst[3 * x + 0] = rgb.x;

@@ -170,8 +170,8 @@ AssembledSource shared_fragment_shader_source(const physics::AtmosphereParams& p
   s.append("ATMOSPHERE", atmosphere_params_glsl(params));
   s.append("SPECTRAL", spectral_sets_glsl(spectral));
   s.append("stars.glsl", embedded("src/physics/stars.glsl"));
-  s.append("functions.glsl", embedded("src/physics/functions.glsl"));
   s.append("eclipse.glsl", embedded("src/physics/eclipse.glsl"));
+  s.append("functions.glsl", embedded("src/physics/functions.glsl"));
   s.append("aerial_perspective.glsl", embedded("src/physics/aerial_perspective.glsl"));
   return s;
 }
@@ -179,9 +179,11 @@ AssembledSource shared_fragment_shader_source(const physics::AtmosphereParams& p
 }  // namespace
 
 AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& params,
-                                              const physics::SpectralSets& spectral, bool sky_view_camera) {
+                                              const physics::SpectralSets& spectral, bool sky_view_camera,
+                                              bool eclipse) {
   AssembledSource s = shared_fragment_shader_source(params, spectral);
-  s.append("variant", std::string("#define SKY_VIEW_CAMERA ") + (sky_view_camera ? "true" : "false") + "\n");
+  s.append("variant", std::string("#define SKY_VIEW_CAMERA ") + (sky_view_camera ? "true" : "false") +
+                          "\n#define RENDER_ECLIPSE " + (eclipse ? "1" : "0") + "\n");
   s.append("table_bindings.glsl", embedded("src/gpu/table_bindings.glsl"));
   s.append("camera.glsl", embedded("src/gpu/camera.glsl"));
   s.append("render.frag.glsl", embedded("src/gpu/render.frag.glsl"));
@@ -189,9 +191,11 @@ AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& p
 }
 
 AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams& params,
-                                                const physics::SpectralSets& spectral, bool low_sun) {
+                                                const physics::SpectralSets& spectral, bool low_sun,
+                                                bool eclipse) {
   AssembledSource s = shared_fragment_shader_source(params, spectral);
-  s.append("variant", std::string("#define SKY_VIEW_LOW_SUN ") + (low_sun ? "true" : "false") + "\n");
+  s.append("variant", std::string("#define SKY_VIEW_LOW_SUN ") + (low_sun ? "true" : "false") +
+                          "\n#define SKY_VIEW_ECLIPSE " + (eclipse ? "1" : "0") + "\n");
   s.append("table_bindings.glsl", embedded("src/gpu/table_bindings.glsl"));
   s.append("sky_view.frag.glsl", embedded("src/gpu/sky_view.frag.glsl"));
   return s;

@@ -42,15 +42,18 @@ struct AssembledSource {
 // The fragment shader: "#version 450 core", the GLSL meaning of the subset
 // macros, definitions.glsl, ATMOSPHERE, functions.glsl, camera.glsl and
 // render.frag.glsl; `sky_view_camera`: the variant for cameras in the
-// atmosphere, which reads the sky-view table (see sky_radiance).
+// atmosphere, which reads the sky-view table (see sky_radiance); `eclipse`:
+// with the moons' uniforms (table_bindings.glsl).
 AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& params,
-                                              const physics::SpectralSets& spectral, bool sky_view_camera);
+                                              const physics::SpectralSets& spectral, bool sky_view_camera,
+                                              bool eclipse);
 
 // The fragment shader of the sky-view pass: the same shared part, then
 // sky_view.frag.glsl; `low_sun`: with the twilight integration
-// (functions.glsl: sun_may_be_low_on_view_rays).
+// (functions.glsl: sun_may_be_low_on_view_rays); `eclipse`: with the moons'
+// uniforms (table_bindings.glsl), which needs `low_sun`.
 AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams& params,
-                                                const physics::SpectralSets& spectral, bool low_sun);
+                                                const physics::SpectralSets& spectral, bool low_sun, bool eclipse);
 
 // The program variants of the engine plugin's pass: what composite.glsl
 // treats as constants (see PassFrame).

@@ -22,7 +22,21 @@ layout(location = 40) uniform vec3 sky_view_zenith;
 layout(location = 41) uniform vec3 sky_view_sun_side;
 layout(location = 42) uniform vec3 sky_view_across;
 layout(location = 43) uniform float sky_view_theta_horizon;
+layout(location = 44) uniform bool sky_view_full_azimuth;
 
 SkyViewFrame uniform_sky_view_frame() {
-  return SkyViewFrame(sky_view_zenith, sky_view_sun_side, sky_view_across, sky_view_theta_horizon);
+  return SkyViewFrame(sky_view_zenith, sky_view_sun_side, sky_view_across, sky_view_theta_horizon,
+                      sky_view_full_azimuth);
+}
+
+// The frame's moons (eclipse.glsl: Moons), for the programs that draw
+// eclipses (gl_util: set_moons_uniforms).
+layout(location = 45) uniform int moon_count;
+layout(location = 46) uniform vec4 moon_spheres[MOON_CAPACITY];  // 46..49
+
+Moons uniform_moons() {
+  Moons moons;
+  moons.count = moon_count;
+  for (int i = 0; i < MOON_CAPACITY; ++i) moons.sphere[i] = moon_spheres[i];
+  return moons;
 }

@@ -135,8 +135,10 @@ INLINE PathScattering scattering_to_distance(IN(AtmosphereParams) atmosphere, IN
   if (low_sun_path && low_sun > 0.0f) {
     vec3 single_rayleigh;
     vec3 single_aerosol;
-    spectral_single_scattering(atmosphere, spectral, spectral_transmittance_texture, r, mu, mu_s, nu, t,
-                               single_rayleigh, single_aerosol);
+    float diffuse_visibility;  // 1: no moons here
+    spectral_single_scattering(atmosphere, spectral, spectral_transmittance_texture, r, mu, mu_s, nu, t, no_moons(),
+                               vec3(0.0f), vec3(0.0f), vec3(0.0f), single_rayleigh, single_aerosol,
+                               diffuse_visibility);
     s.single_rayleigh = mix(s.single_rayleigh, single_rayleigh, low_sun);
     s.aerosol = mix(s.aerosol, single_aerosol, low_sun);
   }

@@ -1,5 +1,5 @@
 // The C++ side of the shared physics: compiles definitions.glsl,
-// stars.glsl, functions.glsl, eclipse.glsl and aerial_perspective.glsl as C++ on top of glm, in namespace atmos::physics.
+// stars.glsl, eclipse.glsl, functions.glsl and aerial_perspective.glsl as C++ on top of glm, in namespace atmos::physics.
 //
 // GLSL constructs map as follows:
 //   IN(T) -> const T&,  OUT(T)/INOUT(T) -> T&,  INLINE -> inline,
@@ -117,8 +117,8 @@ inline vec4 texture(const sampler3D& s, vec3 uvw) {
 
 #include "physics/definitions.glsl"
 #include "physics/stars.glsl"
-#include "physics/functions.glsl"
 #include "physics/eclipse.glsl"
+#include "physics/functions.glsl"
 #include "physics/aerial_perspective.glsl"
 
 }  // namespace atmos::physics

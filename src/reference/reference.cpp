@@ -25,7 +25,8 @@
 //    and adds the ground term T(0, d) L_ground deterministically;
 //  - at every vertex does next-event estimation to a point sampled uniformly
 //    in the solid angle of the sun disc (partial disc visibility near the
-//    horizon is then exact) and, while fewer than K interactions were used,
+//    horizon, and behind moons, is then exact), weighted by the disc's
+//    limb darkening (sun_weight) and, while fewer than K interactions were used,
 //    continues in a direction sampled from the phase function mixture
 //    (atmosphere) or the cosine-weighted hemisphere (ground);
 //  - on later segments samples the distance with density σ_ext T: untruncated
@@ -162,6 +163,7 @@ struct Model {
   Spec albedo{};                   // a(λ)
   Spec sun_nee{};                  // L_sun · Ω_sun = E_sun · 2/(1 + cos α)
   double one_minus_cos_alpha = 0.0;  // 1 - cos α = 2 sin²(α/2)
+  double cos_alpha = 1.0;            // cos α
   std::vector<double> grid;        // altitudes (m) delimiting quadrature intervals, 0 .. Rt - Rb
   // Exponential constituents' σ_ext(h_j, λ) at h_j = j Δh, j < table_rows,
   // wavelength-minor; indices of the piecewise-linear constituents.
@@ -311,6 +313,7 @@ Model make_model(const Atmosphere& a, bool steering) {
   }
   const double alpha = a.sun_angular_radius_rad;
   m.one_minus_cos_alpha = 2.0 * std::sin(0.5 * alpha) * std::sin(0.5 * alpha);
+  m.cos_alpha = std::cos(alpha);
   for (int l = 0; l < m.n; ++l) {
     const double w = a.wavelengths_nm[size_t(l)];
     m.albedo[size_t(l)] = a.ground_albedo.at(w);
@@ -454,14 +457,35 @@ bool blocked_by_planet(const Model& m, const dvec3& o, const dvec3& d) {
 }
 
 // Uniform direction in the solid angle of the sun disc around s:
-// cos θ = 1 - ξ1 (1 - cos α), φ = 2π ξ2 (density 1/Ω).
-dvec3 sample_sun(const Model& m, const dvec3& s, reference_detail::Random& rnd) {
-  const double x = rnd.uniform() * m.one_minus_cos_alpha;  // 1 - cos θ, without cancellation
+// cos θ = 1 - ξ1 (1 - cos α), φ = 2π ξ2 (density 1/Ω). Also returns, for the
+// limb darkening, μ² = 1 - sin²θ/sin²α of the sample, computed without
+// cancellation from c = cos θ, C = cos α, c - C = (1 - ξ1)(1 - C):
+//   μ² = (c² - C²)/sin²α = (c - C)(c + C)/((1 - C)(1 + C)) = (1 - ξ1)(c + C)/(1 + C).
+dvec3 sample_sun(const Model& m, const dvec3& s, reference_detail::Random& rnd, double& mu2) {
+  const double xi1 = rnd.uniform();
+  const double x = xi1 * m.one_minus_cos_alpha;  // 1 - cos θ, without cancellation
   const double phi = 2.0 * kPi * rnd.uniform();
   dvec3 b1, b2;
   basis(s, b1, b2);
   const double sin_theta = std::sqrt(std::max(0.0, x * (2.0 - x)));
+  mu2 = (1.0 - xi1) * ((1.0 - x) + m.cos_alpha) / (1.0 + m.cos_alpha);
   return glm::normalize((1.0 - x) * s + sin_theta * (std::cos(phi) * b1 + std::sin(phi) * b2));
+}
+
+// True iff the ray o + t ω (|ω| = 1), t > 0, meets the moon's sphere
+// |y - c| <= R. With q = c - o the closest approach to c is at t* = q·ω, at
+// distance² |q - t* ω|² (computed from the vector, not as |q|² - t*², which
+// would cancel for a moon far away): blocked iff o is inside the sphere
+// (|q| <= R) or t* > 0 and |q - t* ω|² <= R² (from outside, an intersection
+// in front exists iff the closest approach is in front and within R).
+bool blocked_by_moon(const ReferenceMoon& moon, const dvec3& o, const dvec3& w) {
+  const dvec3 q = moon.centre - o;
+  const double r2 = moon.radius * moon.radius;
+  if (glm::dot(q, q) <= r2) return true;
+  const double t = glm::dot(q, w);
+  if (!(t > 0.0)) return false;
+  const dvec3 miss = q - t * w;
+  return glm::dot(miss, miss) <= r2;
 }
 
 // Sun transmittance from o towards ω: exp(-τ(o → top along ω)), zero if the
@@ -577,7 +601,29 @@ struct Context {
   const Model& m;
   dvec3 sun;
   int max_order;
+  const std::vector<ReferenceMoon>& moons;  // checked by check_options and check_moons
+  double limb_u;                            // u of the limb-darkening law, in [0, 1]
 };
+
+// Weight of a sun sample ω (drawn by sample_sun, with its μ²) seen from o,
+// relative to the uniform disc whose next-event estimate is L_sunΩ · (...):
+//   w_sun = V_moons(o, ω) · I(μ) / ⟨I⟩,   I(μ) = 1 - u (1 - μ),   ⟨I⟩ = 1 - u/3,
+// V_moons = 0 if any moon blocks the ray (blocked_by_moon), else 1.
+// ⟨I⟩ is the mean of I over the sampled spherical cap weighted by cos θ,
+// exactly: with c = cos θ, C = cos α, μ = √(c² - C²)/sin α,
+//   ∫_C^1 μ c dc = (c² - C²)^{3/2}/(3 sin α) |_C^1 = sin²α/3,
+//   ∫_C^1 c dc = sin²α/2,  so ⟨μ⟩_cos = 2/3 for every α,
+// which keeps the disc's irradiance at normal incidence, E[L_sunΩ w_sun cos θ],
+// exactly E_sun (L_sunΩ = E_sun / ⟨cos θ⟩). (The plain solid-angle mean,
+// ⟨μ⟩_Ω = 2/3 - sin²α/30 + O(sin⁴α), would instead leave it off by
+// u sin²α / (30 (1 - u/3)) relative: <= 1.1e-6 for the Sun, α = 4.65 mrad.)
+// u = 0 and no moons give exactly 1 (multiplying by it changes no bit).
+double sun_weight(const Context& ctx, const dvec3& o, const dvec3& w, double mu2) {
+  for (const ReferenceMoon& moon : ctx.moons)
+    if (blocked_by_moon(moon, o, w)) return 0.0;
+  if (ctx.limb_u == 0.0) return 1.0;
+  return (1.0 - ctx.limb_u * (1.0 - std::sqrt(std::max(0.0, mu2)))) / (1.0 - ctx.limb_u / 3.0);
+}
 
 bool any_positive(const Model& m, const Spec& s) {
   for (int l = 0; l < m.n; ++l)
@@ -779,14 +825,14 @@ bool sample_analog(const Model& m, const Segment& s, reference_detail::Random& r
 
 // Follows a path from vertex v (interaction number `order`, throughput β)
 // and adds its contributions to `out`:
-//  atmosphere (2):  NEE  β · L_sunΩ · T_sun(ω) · Σ_i σ_s,i p_i(ω·d_in), ω on the disc;
+//  atmosphere (2):  NEE  β · L_sunΩ · w_sun(ω) · T_sun(ω) · Σ_i σ_s,i p_i(ω·d_in), ω on the disc;
 //                   then ω' ~ q(ω') = Σ_i c_i p_i(ω'·d_in), c_i ∝ Σ_λ σ_s,i(λ),
 //                   β *= Σ_i σ_s,i p_i(ω'·d_in) / q(ω');
-//  ground (4):      NEE  β · a/π · L_sunΩ · (n·ω) · T_sun(ω);
+//  ground (4):      NEE  β · a/π · L_sunΩ · w_sun(ω) · (n·ω) · T_sun(ω);
 //                   then ω' cosine-weighted about n (density (n·ω')/π), β *= a;
 // and then samples the next vertex on the segment along ω' (analog if it
 // ends on the ground, forced if it leaves through the top), until the path
-// has used max_order interactions.
+// has used max_order interactions. w_sun: sun_weight (moons, limb darkening).
 void follow_path(const Context& ctx, Vertex v, Spec beta, int order, reference_detail::Random& rnd, Segment& seg,
                  Spec& out) {
   const Model& m = ctx.m;
@@ -796,12 +842,15 @@ void follow_path(const Context& ctx, Vertex v, Spec beta, int order, reference_d
     if (v.ground) {
       if (!any_positive(m, m.albedo)) return;  // a black ground reflects nothing
       const dvec3 normal = glm::normalize(v.p);
-      const dvec3 w = sample_sun(m, ctx.sun, rnd);
+      double mu2 = 0.0;
+      const dvec3 w = sample_sun(m, ctx.sun, rnd, mu2);
       const double cos_n = glm::dot(normal, w);
-      if (cos_n > 0.0) {
+      const double sw = cos_n > 0.0 ? sun_weight(ctx, v.p, w, mu2) : 0.0;
+      if (sw > 0.0) {
         const Spec t = sun_transmittance(m, v.p, w);
         for (int l = 0; l < m.n; ++l)
-          out[size_t(l)] += beta[size_t(l)] * m.albedo[size_t(l)] / kPi * m.sun_nee[size_t(l)] * cos_n * t[size_t(l)];
+          out[size_t(l)] +=
+              beta[size_t(l)] * m.albedo[size_t(l)] / kPi * m.sun_nee[size_t(l)] * sw * cos_n * t[size_t(l)];
       }
       if (order >= ctx.max_order) return;
       // Cosine-weighted hemisphere: cos θ = √ξ1, φ = 2π ξ2.
@@ -824,8 +873,10 @@ void follow_path(const Context& ctx, Vertex v, Spec beta, int order, reference_d
       }
       if (!(c_total > 0.0)) return;
       // Next-event estimation to the sun disc.
-      const dvec3 w = sample_sun(m, ctx.sun, rnd);
-      if (!blocked_by_planet(m, v.p, w)) {
+      double mu2 = 0.0;
+      const dvec3 w = sample_sun(m, ctx.sun, rnd, mu2);
+      const double sw = blocked_by_planet(m, v.p, w) ? 0.0 : sun_weight(ctx, v.p, w, mu2);
+      if (sw > 0.0) {
         const Spec t = sun_transmittance(m, v.p, w);
         const double mu = glm::dot(w, v.d_in);
         std::array<double, 4> p{};
@@ -833,7 +884,7 @@ void follow_path(const Context& ctx, Vertex v, Spec beta, int order, reference_d
         for (int l = 0; l < m.n; ++l) {
           double j = 0.0;
           for (size_t i = 0; i < nc; ++i) j += sigma_s[i][size_t(l)] * p[i];
-          out[size_t(l)] += beta[size_t(l)] * m.sun_nee[size_t(l)] * t[size_t(l)] * j;
+          out[size_t(l)] += beta[size_t(l)] * m.sun_nee[size_t(l)] * sw * t[size_t(l)] * j;
         }
       }
       if (order >= ctx.max_order) return;
@@ -966,9 +1017,33 @@ ReferenceResult estimate(const Model& m, const ReferenceOptions& o, F&& sample) 
   return r;
 }
 
+constexpr size_t kMaxMoons = 8;
+
+// The options alone: K, paths, u in [0, 1], at most kMaxMoons moons, each
+// with a finite centre and a finite radius > 0.
 void check_options(const ReferenceOptions& o) {
   if (o.scattering_orders < 1) throw Error("reference: scattering_orders must be >= 1");
   if (o.paths < 2) throw Error("reference: paths must be >= 2");
+  if (!(o.sun_limb_darkening_u >= 0.0 && o.sun_limb_darkening_u <= 1.0))
+    throw Error("reference: sun_limb_darkening_u must be in [0, 1]");
+  if (o.moons.size() > kMaxMoons)
+    throw Error("reference: at most " + std::to_string(kMaxMoons) + " moons (got " + std::to_string(o.moons.size()) +
+                ")");
+  for (size_t k = 0; k < o.moons.size(); ++k) {
+    const ReferenceMoon& moon = o.moons[k];
+    if (!std::isfinite(moon.centre.x) || !std::isfinite(moon.centre.y) || !std::isfinite(moon.centre.z))
+      throw Error("reference: moon " + std::to_string(k) + ": centre is not finite");
+    if (!std::isfinite(moon.radius) || !(moon.radius > 0.0))
+      throw Error("reference: moon " + std::to_string(k) + ": radius must be finite and > 0");
+  }
+}
+
+// Every moon entirely outside the atmosphere: |centre| - radius > Rt.
+void check_moons(const Model& m, const ReferenceOptions& o) {
+  for (size_t k = 0; k < o.moons.size(); ++k)
+    if (!(glm::length(o.moons[k].centre) - o.moons[k].radius > m.rt))
+      throw Error("reference: moon " + std::to_string(k) +
+                  " intersects the atmosphere (|centre| - radius must exceed the top radius)");
 }
 
 dvec3 check_unit(const dvec3& v, const char* what) {
@@ -1073,8 +1148,10 @@ ReferenceResult radiance_chunk(const Atmosphere& atmosphere, const glm::dvec3& o
                                const glm::dvec3& sun, const ReferenceOptions& options) {
   check_options(options);
   const Model m = make_model(atmosphere, true);
+  check_moons(m, options);
   const dvec3 x = check_position(m, observer, "observer");
-  const Context ctx{m, check_unit(sun, "sun"), options.scattering_orders};
+  const Context ctx{m, check_unit(sun, "sun"), options.scattering_orders, options.moons,
+                    options.sun_limb_darkening_u};
   Segment view_segment;
   build_segment(m, x, check_unit(view, "view"), view_segment);
   const Plan plan = shadow_plan(m, view_segment, ctx.sun);
@@ -1091,9 +1168,11 @@ ReferenceResult radiance_to_point_chunk(const Atmosphere& atmosphere, const glm:
                                         const ReferenceOptions& options) {
   check_options(options);
   const Model m = make_model(atmosphere, true);
+  check_moons(m, options);
   const dvec3 x = check_position(m, observer, "observer");
   const dvec3 p = check_position(m, point, "point");
-  const Context ctx{m, check_unit(sun, "sun"), options.scattering_orders};
+  const Context ctx{m, check_unit(sun, "sun"), options.scattering_orders, options.moons,
+                    options.sun_limb_darkening_u};
   const double len = glm::length(p - x);
   // observer == point: an empty segment (any direction, length 0), every
   // sample 0.
@@ -1111,18 +1190,23 @@ ReferenceResult irradiance_chunk(const Atmosphere& atmosphere, const glm::dvec3&
                                  const glm::dvec3& sun, const ReferenceOptions& options) {
   check_options(options);
   const Model m = make_model(atmosphere, true);
+  check_moons(m, options);
   const dvec3 x = check_position(m, point, "point");
   const dvec3 n = check_unit(normal, "normal");
   // Light reaching the surface has used at most K - 1 interactions.
-  const Context ctx{m, check_unit(sun, "sun"), options.scattering_orders - 1};
+  const Context ctx{m, check_unit(sun, "sun"), options.scattering_orders - 1, options.moons,
+                    options.sun_limb_darkening_u};
   return estimate(m, options, [&](double u, reference_detail::Random& rnd, Workspace& ws) {
     Spec out{};
-    // Direct sun: L_sunΩ · (n·ω) · T_sun(ω), ω uniform on the disc.
-    const dvec3 w = sample_sun(m, ctx.sun, rnd);
+    // Direct sun: L_sunΩ · w_sun(ω) · (n·ω) · T_sun(ω), ω uniform on the
+    // disc, w_sun = sun_weight (moons, limb darkening).
+    double mu2 = 0.0;
+    const dvec3 w = sample_sun(m, ctx.sun, rnd, mu2);
     const double cos_n = glm::dot(n, w);
-    if (cos_n > 0.0) {
+    const double sw = cos_n > 0.0 ? sun_weight(ctx, x, w, mu2) : 0.0;
+    if (sw > 0.0) {
       const Spec t = sun_transmittance(m, x, w);
-      for (int l = 0; l < m.n; ++l) out[size_t(l)] = m.sun_nee[size_t(l)] * cos_n * t[size_t(l)];
+      for (int l = 0; l < m.n; ++l) out[size_t(l)] = m.sun_nee[size_t(l)] * sw * cos_n * t[size_t(l)];
     }
     if (ctx.max_order < 1) return out;
     // Sky: ω' cosine-weighted about n (density (n·ω')/π, stratified in cos²θ),

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "atmos/colour.hpp"
+#include "physics/moons.hpp"
 #include "physics/parameters.hpp"
 #include "precompute/samplers.hpp"
 
@@ -26,7 +27,7 @@ SkyModel::SkyModel(const Atmosphere& atmosphere, const Tables& tables) : impl_(s
 SkyModel::~SkyModel() = default;
 
 glm::dvec3 SkyModel::radiance(const glm::dvec3& observer, const glm::dvec3& view, const glm::dvec3& sun,
-                              bool include_sun_disc) const {
+                              bool include_sun_disc, const std::vector<Moon>& moons) const {
   const auto& s = impl_->samplers;
   // Each ray integrates its own low-sun single scattering (exact, not
   // interpolated from a sky-view table: this is the form the reference
@@ -36,7 +37,8 @@ glm::dvec3 SkyModel::radiance(const glm::dvec3& observer, const glm::dvec3& view
   return glm::dvec3(physics::radiance_along_view_ray(
       impl_->params, *impl_->spectral, s.spectral_optical_depth, s.scattering, s.single_aerosol,
       s.multiple_scattering, s.indirect_irradiance, no_sky_view, no_sky_view, no_sky_view, false, no_frame,
-      glm::vec3(observer), glm::vec3(view), glm::vec3(sun), include_sun_disc, physics::StarField{false, 0.0f}));
+      glm::vec3(observer), glm::vec3(view), glm::vec3(sun), include_sun_disc, physics::StarField{false, 0.0f},
+      physics::make_moons(impl_->params, moons)));
 }
 
 void SkyModel::horizontal_irradiance(const glm::dvec3& point, const glm::dvec3& sun, glm::dvec3& sun_irradiance,

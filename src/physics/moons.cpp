@@ -1,0 +1,56 @@
+// atmos — moons: from the public description (include/atmos/eclipse.hpp) to
+// the Moons of the shared functions (src/physics/eclipse.glsl).
+#include "physics/moons.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "atmos/atmosphere.hpp"
+
+namespace atmos {
+
+namespace {
+bool finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+}  // namespace
+
+Moon moon_in_sky(const glm::dvec3& observer, const glm::dvec3& direction, double angular_radius_rad,
+                 double distance_m) {
+  if (!finite(observer)) throw Error("moon: the observer's position is not finite");
+  if (!finite(direction) || std::abs(glm::length(direction) - 1.0) > 1e-6)
+    throw Error("moon: the direction must be a finite unit vector");
+  if (!(angular_radius_rad > 0.0) || angular_radius_rad > 10.0 * M_PI / 180.0)
+    throw Error("moon: the angular radius must be in (0, 10] degrees, got " +
+                std::to_string(angular_radius_rad * 180.0 / M_PI));
+  if (!(distance_m > 0.0) || !std::isfinite(distance_m))
+    throw Error("moon: the distance must be finite and > 0");
+  return Moon{observer + direction * distance_m, distance_m * std::sin(angular_radius_rad)};
+}
+
+void validate_moons(const std::vector<Moon>& moons, double top_radius_m) {
+  if (moons.size() > size_t(kMaxMoons))
+    throw Error("at most " + std::to_string(kMaxMoons) + " moons are supported, got " + std::to_string(moons.size()));
+  for (size_t i = 0; i < moons.size(); ++i) {
+    const std::string which = "moon " + std::to_string(i + 1) + ": ";
+    if (!finite(moons[i].centre_m)) throw Error(which + "its centre is not finite");
+    if (!(moons[i].radius_m > 0.0) || !std::isfinite(moons[i].radius_m))
+      throw Error(which + "its radius must be finite and > 0");
+    // Float positions in the shaders: ~1e-7 relative; 1e12 m keeps 0.1 km.
+    if (glm::length(moons[i].centre_m) > 1e12) throw Error(which + "farther than 1e12 m from the planet");
+    if (glm::length(moons[i].centre_m) - moons[i].radius_m <= top_radius_m)
+      throw Error(which + "it reaches into the atmosphere (a moon must be a sphere outside it)");
+  }
+}
+
+namespace physics {
+
+Moons make_moons(const AtmosphereParams& params, const std::vector<Moon>& moons) {
+  validate_moons(moons, double(params.top_radius));
+  Moons result = no_moons();
+  result.count = int(moons.size());
+  for (size_t i = 0; i < moons.size(); ++i)
+    result.sphere[i] = vec4(vec3(moons[i].centre_m), float(moons[i].radius_m));
+  return result;
+}
+
+}  // namespace physics
+}  // namespace atmos
