@@ -23,6 +23,16 @@ done
 # Earth's night sky with the star field (the sun 18° below the horizon).
 (cd "$out/earth" && "$atmos" render --planet earth --wavelengths 15 --orders auto --altitude 2 --look 315,35 \
   --fov 60 --size 960x540 --sun-elevation -18 --sun-azimuth 135 --exposure -3 -o night-stars.png)
+# A total solar eclipse (a moon 0.28° wide over the sun, 25° up) from the
+# ground, and the moon's shadow from 4000 km: the moon's elevation there,
+# 49.4698°, puts it on the line from the sun through the ground point
+# 1200 km south of the camera's nadir (at 384 400 km from the camera).
+(cd "$out/earth" && "$atmos" render --planet earth --wavelengths 15 --orders auto --altitude 2 --sun-elevation 25 \
+  --sun-azimuth 180 --moon 180,25,0.28 --look 180,19 --fov 50 --size 960x600 --stars --tonemap filmic \
+  --bloom 0.05 --exposure 4.5 -o eclipse-ground.png)
+(cd "$out/earth" && "$atmos" render --planet earth --wavelengths 15 --orders auto --altitude 4000000 \
+  --sun-elevation 50 --sun-azimuth 180 --moon 180,49.4698,0.28 --look 180,-82 --fov 88 --size 960x600 \
+  --tonemap filmic --exposure 12.5 -o eclipse-orbit.png)
 # Under Venus' clouds the gallery exposures show black: the surface sky at
 # EV 5 (its light is underestimated: see README, Planets).
 (cd "$out/venus" && "$atmos" render --planet venus --wavelengths 15 --orders auto --sun-elevation 40 --look 180,10 \

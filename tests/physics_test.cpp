@@ -224,6 +224,36 @@ TEST_F(EarthParams, SunDiscIsLimbDarkenedAndCarriesTheSolarIrradiance) {
   }
 }
 
+// The solar corona (sun_corona_radiance, Baumbach's law): nothing on the
+// disc or beyond 16 solar radii, 4e-6 of the disc's mean radiance at its
+// limb, and in all about 1.1e-6 of the sun's light (the closed form of the
+// law over rho >= 1 is 2e-6 (0.0532/0.5 + 1.425/5 + 2.565/15) = 1.125e-6;
+// the fade-out beyond 8 radii removes ~2 %).
+TEST_F(EarthParams, SolarCoronaFollowsBaumbachsLaw) {
+  const vec3 sun(0.0f, 0.0f, 1.0f);
+  const double alpha = params.sun_angular_radius;
+  auto corona_at = [&](double rho) {
+    const double theta = std::asin(rho * std::sin(alpha));
+    return sun_corona_radiance(params, vec3(float(std::sin(theta)), 0.0f, float(std::cos(theta))), sun);
+  };
+  EXPECT_EQ(corona_at(0.5).y, 0.0f);
+  EXPECT_EQ(corona_at(16.5).y, 0.0f);
+  const double mean_disc = params.solar_irradiance.y / (4.0 * M_PI * std::pow(std::sin(0.5 * alpha), 2.0));
+  EXPECT_NEAR(corona_at(1.0001).y / mean_disc, 4.04e-6, 0.01e-6);
+  // Rings in rho (log-spaced), small angles: d Omega = 2 pi rho drho sin²alpha.
+  double irradiance = 0.0;
+  const int rings = 20000;
+  for (int i = 0; i < rings; ++i) {
+    const double rho0 = std::pow(16.0, double(i) / rings), rho1 = std::pow(16.0, double(i + 1) / rings);
+    const double rho = 0.5 * (rho0 + rho1);
+    irradiance += corona_at(rho).y * 2.0 * M_PI * rho * (rho1 - rho0) * std::sin(alpha) * std::sin(alpha);
+  }
+  const double fraction = irradiance / params.solar_irradiance.y;
+  std::printf("corona: %.4g of the sun's irradiance\n", fraction);
+  EXPECT_GT(fraction, 1.05e-6);
+  EXPECT_LT(fraction, 1.125e-6);
+}
+
 // The procedural star field (stars.glsl): the real sky's counts per
 // magnitude (N(V) = 10^(0.5 V + 0.7): 8900 stars brighter than 6.5, the Yale
 // Bright Star Catalogue's 9110), each star inside its own cell (so a pixel

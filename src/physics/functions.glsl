@@ -1377,6 +1377,32 @@ INLINE vec3 sun_disc_radiance(IN(AtmosphereParams) atmosphere, vec3 view_ray, ve
   return atmosphere.solar_irradiance * (centre * (1.0f - SUN_LIMB_DARKENING_U * (1.0f - mu)));
 }
 
+// Radiance of the solar corona in direction `view_ray` (0 on the disc
+// itself and in the other hemisphere): the white-light (K + F) corona of
+// Baumbach (1937, Astron. Nachr. 263, 121; Allen's Astrophysical
+// Quantities, 4th ed., §14.4), relative to the disc's mean radiance,
+//   B(rho) / B_sun = 1e-6 (0.0532 rho^-2.5 + 1.425 rho^-7 + 2.565 rho^-17),
+// rho the angular distance from the sun's centre in solar radii: 4e-6 at
+// the limb, 1.1e-6 of the sun's light in all. The law is fitted out to a
+// few solar radii; beyond, the F corona merges into the zodiacal light,
+// which is not modelled: the corona fades out between 8 and 16 solar radii
+// (where it is 3e-10 of the disc's radiance). It is always there, but the
+// sky's own light drowns it except in totality, when a moon hides the disc
+// (and the corona behind the moon itself: see radiance_along_view_ray).
+// Coloured as the sun (the K corona is scattered photospheric light).
+INLINE vec3 sun_corona_radiance(IN(AtmosphereParams) atmosphere, vec3 view_ray, vec3 sun_direction) {
+  float alpha = atmosphere.sun_angular_radius;
+  float sin_alpha = sin(alpha);
+  vec3 c = cross(view_ray, sun_direction);
+  float rho = sqrt(dot(c, c)) / sin_alpha;  // sin theta / sin alpha
+  if (!(rho >= 1.0f) || !(rho < 16.0f) || dot(view_ray, sun_direction) <= 0.0f) return vec3(0.0f);
+  float s = sin(0.5f * alpha);
+  float mean_disc = 1.0f / (4.0f * PI * s * s);  // the disc's mean radiance per unit irradiance
+  float relative = 1e-6f * (0.0532f * pow(rho, -2.5f) + 1.425f * pow(rho, -7.0f) + 2.565f * pow(rho, -17.0f)) *
+                   (1.0f - smoothstep(8.0f, 16.0f, rho));
+  return atmosphere.solar_irradiance * (mean_disc * relative);
+}
+
 // Whether the sun may be low (below LOW_SUN_MU_S_TABLE, where
 // scattering_along_ray integrates single scattering) at some point of the
 // view rays of a camera in the atmosphere. The sun's zenith angle at a point
@@ -1498,8 +1524,8 @@ INLINE vec3 sky_radiance(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spect
 
 // Everything that reaches a camera along a view ray, for a spherical planet:
 // the sky, or the Lambertian ground lit by sun and sky seen through the
-// aerial perspective in front of it, plus (optionally) the sun disc and the
-// stars.
+// aerial perspective in front of it, plus (optionally) the sun disc with
+// its corona, and the stars.
 // `camera` is relative to the planet centre; a camera below the ground is
 // treated as standing on it. With `use_sky_view` (the renderers, for a
 // camera in the atmosphere: see camera_uses_sky_view) the view ray's terms
@@ -1526,7 +1552,10 @@ INLINE vec3 radiance_along_view_ray(IN(AtmosphereParams) atmosphere, IN(Spectral
   // stars (stars.glsl), or a moon in front of them; attenuated below like
   // the sun.
   vec3 beyond = star_field_radiance(atmosphere, stars, view_ray);
-  if (include_sun_disc) beyond += sun_disc_radiance(atmosphere, view_ray, sun_direction);
+  if (include_sun_disc) {
+    beyond += sun_disc_radiance(atmosphere, view_ray, sun_direction) +
+              sun_corona_radiance(atmosphere, view_ray, sun_direction);
+  }
   int moon;
   float moon_distance = view_ray_moon_distance(moons, camera, view_ray, moon);
   if (moon >= 0) {
