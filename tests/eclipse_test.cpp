@@ -168,32 +168,68 @@ TEST_F(EclipseGpu, TheMoonHidesTheSunDisc) {
   EXPECT_NEAR(double(disc_pixels(partial)) / disc_pixels(day), 1.0 - 0.391, 0.05);
 }
 
-// The further the moon from the sun, the brighter the ground, and a moon
-// clear of the sun (and of the sun as seen from the surroundings that feed
-// the diffuse light, up to 512 km away) changes nothing. (Any moon switches
-// the single scattering from the tables to the integration along the rays,
-// which differ by ~0.3 % here: the reference is a moon 5 degrees away.)
+// The further the moon from the sun, the brighter the ground. A moon clear
+// of the sun as seen from the surroundings that feed the diffuse light (up
+// to 512 km away) hides nothing: at 0.6° and 0.8° the ground is as bright
+// as without a moon, within the 0.3 % that separate the integrated single
+// scattering (any moon that may eclipse switches the sky to it) from the
+// tables'; a moon 5° off eclipses nothing at all (moons_may_eclipse) and
+// the image is the moonless one, bit for bit.
 TEST_F(EclipseGpu, PartialEclipsesBrightenAsTheMoonMovesOff) {
   atmos::Renderer renderer(*context_, *earth_, *tables_);
   Camera camera = all_sky(observer(), 5);
   camera.forward = {0.0, 0.0, -1.0};
   camera.projection = atmos::Projection::perspective;
   camera.fov_deg = 10.0;
-  renderer.set_moons({moon(40.0, 0.28, 5.0)});
   const double clear = luminance(renderer.render(camera, sun(40.0)), 2, 2);
   double previous = 0.0;
   for (double offset : {0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8}) {
     renderer.set_moons({moon(40.0, 0.28, offset)});
     const double l = luminance(renderer.render(camera, sun(40.0)), 2, 2);
-    std::printf("moon %.1f deg off the sun: ground %.4g of its radiance with the moon clear\n", offset, l / clear);
+    std::printf("moon %.1f deg off the sun: ground %.4g of its radiance without a moon\n", offset, l / clear);
     if (offset < 0.6) {
       EXPECT_GT(l, previous) << offset;
     } else {
-      EXPECT_GE(l, previous) << offset;
+      EXPECT_NEAR(l / clear, 1.0, 0.005) << offset;
     }
     previous = l;
   }
-  EXPECT_NEAR(previous / clear, 1.0, 1e-5);
+  renderer.set_moons({moon(40.0, 0.28, 5.0)});
+  EXPECT_EQ(luminance(renderer.render(camera, sun(40.0)), 2, 2), clear);
+}
+
+// A moon far from the sun eclipses nothing: the image is the moonless one,
+// bit for bit, except on the moon's own disc, where its sunlit side shows
+// (a gibbous moon 140° from the sun, brighter than the sky around it).
+TEST_F(EclipseGpu, AMoonAwayFromTheSunChangesOnlyItsDisc) {
+  atmos::Renderer renderer(*context_, *earth_, *tables_);
+  const glm::dvec3 sun = atmos::direction_from_azimuth_elevation(150.0, 10.0);
+  const glm::dvec3 towards_moon = atmos::direction_from_azimuth_elevation(330.0, 30.0);
+  Camera camera;
+  camera.position = observer();
+  camera.forward = towards_moon;
+  camera.up = {0.0, 0.0, 1.0};
+  camera.fov_deg = 4.0;
+  camera.width = camera.height = 64;
+  const Image without = renderer.render(camera, sun);
+  renderer.set_moons({atmos::moon_in_sky(observer(), towards_moon, 0.5 * M_PI / 180.0)});
+  const Image with = renderer.render(camera, sun);
+  const double pixel_deg = 4.0 / 64.0;
+  int changed = 0;
+  for (int y = 0; y < 64; ++y) {
+    for (int x = 0; x < 64; ++x) {
+      const double from_centre_deg = std::hypot(x + 0.5 - 32.0, y + 0.5 - 32.0) * pixel_deg;
+      const bool same = luminance(with, x, y) == luminance(without, x, y);
+      if (from_centre_deg > 0.5 + 2.0 * pixel_deg) {
+        EXPECT_TRUE(same) << x << "," << y;
+      }
+      changed += same ? 0 : 1;
+    }
+  }
+  std::printf("moon 140 deg from the sun: %d pixels changed (its disc: ~%.0f), centre %.4g cd/m2 over a sky of %.4g\n",
+              changed, M_PI * 0.25 / (pixel_deg * pixel_deg), luminance(with, 32, 32), luminance(without, 32, 32));
+  EXPECT_GT(changed, 150);
+  EXPECT_GT(luminance(with, 32, 32), 2.0 * luminance(without, 32, 32));
 }
 
 // Bad moons are errors that keep the renderer's previous moons.

@@ -194,6 +194,38 @@ TEST(Example, TheAtmosphereAddsSkyAndHaze) {
   EXPECT_GT(change / surfaces, 0.02);
 }
 
+// A total eclipse over the valley (--moon on the sun): the engine's own
+// lighting (lit colour, dimmed by its shader with the library's shared
+// functions) and the plugin's G-buffer lighting darken the scene alike, by
+// orders of magnitude, and neither goes black or NaN.
+TEST(Example, TotalEclipseDarkensTheValleyInBothSurfaceModes) {
+  const std::string sun = " --scene noon-valley --sun-elevation 40 --sun-azimuth 150";
+  const atmos::Image day = render("eclipse-day", sun);
+  const atmos::Image lit = render("eclipse-lit", sun + " --moon 150,40,0.28");
+  const atmos::Image gbuffer = render("eclipse-gbuffer", sun + " --moon 150,40,0.28 --surfaces gbuffer");
+  ASSERT_FALSE(day.rgb.empty());
+  ASSERT_FALSE(lit.rgb.empty());
+  ASSERT_FALSE(gbuffer.rgb.empty());
+  auto mean = [](const atmos::Image& image) {
+    double m = 0.0;
+    for (double v : luminances(image)) m += v;
+    return m / static_cast<double>(image.width * image.height);
+  };
+  for (float v : lit.rgb) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
+  for (float v : gbuffer.rgb) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
+  const std::vector<double> y_lit = luminances(lit), y_gbuffer = luminances(gbuffer);
+  double largest_ratio = 0.0;  // of the two modes, over the pixels
+  for (size_t i = 0; i < y_lit.size(); ++i)
+    largest_ratio = std::max(largest_ratio, std::abs(std::log((y_lit[i] + 1e-3) / (y_gbuffer[i] + 1e-3))));
+  std::printf("totality over the valley: mean %.4g cd/m2 (lit colour), %.4g (G-buffer), day %.4g; "
+              "largest |ln ratio| of the modes %.3f\n",
+              mean(lit), mean(gbuffer), mean(day), largest_ratio);
+  EXPECT_LT(mean(lit), 1e-2 * mean(day));
+  EXPECT_LT(mean(gbuffer), 1e-2 * mean(day));
+  EXPECT_GT(mean(lit), 0.0);
+  EXPECT_NEAR(mean(gbuffer) / mean(lit), 1.0, 0.01);
+}
+
 void expect_usage_error(const std::string& args, const std::string& needle) {
   const ExampleRun r = run_example(args);
   EXPECT_EQ(r.code, 2) << args << "\n" << r.err;

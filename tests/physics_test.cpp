@@ -365,6 +365,64 @@ TEST(Eclipse, OverlapAndVisibleLightOfTheLimbDarkenedSun) {
   EXPECT_EQ(previous, 1.0f);
 }
 
+// Moons in space (eclipse.glsl): from a point on the line from the sun
+// through a moon's centre the moon is centred on the sun, with the angular
+// radius of its distance; a moon behind the point or far off the sun hides
+// nothing; two moons over different parts of the sun multiply; a view ray
+// meets the nearest moon, whose lit side has the Lambertian radiance and
+// whose night side is black.
+TEST(Eclipse, MoonsInSpace) {
+  const float a = 4.65e-3f;
+  const vec3 sun = normalize(vec3(0.3f, -0.4f, 1.0f));
+  const vec3 point(0.0f, 0.0f, 6371e3f);
+  const float distance = 384400e3f, radius = 1900e3f;
+  Moons moons = no_moons();
+  moons.count = 1;
+  moons.sphere[0] = vec4(point + sun * distance, radius);
+  float b;
+  EXPECT_NEAR(moon_offset_from_sun(moons.sphere[0], point, sun, b), 0.0f, 1e-6f);
+  EXPECT_NEAR(b, std::asin(radius / distance), 1e-7f);
+  EXPECT_EQ(sunlight_visible_fraction(moons, a, point, sun), 0.0f);  // b > a: total
+  EXPECT_EQ(uniform_sunlight_visible_fraction(moons, a, point, sun), 0.0f);
+  // 100 km across the shadow's axis: still in the umbra, (b - a) D = 91 km?
+  const vec3 across = normalize(cross(sun, vec3(0.0f, 0.0f, 1.0f)));
+  const float umbra = (std::asin(radius / distance) - a) * distance;
+  EXPECT_EQ(sunlight_visible_fraction(moons, a, point + across * (0.9f * umbra), sun), 0.0f);
+  const float penumbra = sunlight_visible_fraction(moons, a, point + across * (2.0f * umbra), sun);
+  EXPECT_GT(penumbra, 0.0f);
+  EXPECT_LT(penumbra, 0.1f);
+  // Behind the point (the moon on the night side) or 1° off the sun: nothing hidden.
+  Moons behind = moons;
+  behind.sphere[0] = vec4(point - sun * distance, radius);
+  EXPECT_EQ(sunlight_visible_fraction(behind, a, point, sun), 1.0f);
+  Moons off = moons;
+  off.sphere[0] = vec4(point + normalize(sun + across * 0.0175f) * distance, radius);
+  EXPECT_EQ(sunlight_visible_fraction(off, a, point, sun), 1.0f);
+  // Two small moons on opposite sides of the sun, each hiding its own part.
+  Moons two = no_moons();
+  two.count = 2;
+  const float small = 0.5f * a * distance;
+  two.sphere[0] = vec4(point + normalize(sun + across * (0.6f * a)) * distance, small);
+  two.sphere[1] = vec4(point + normalize(sun - across * (0.6f * a)) * distance, small);
+  const float each = sun_visible_fraction_behind_moon(a, 0.5f * a, 0.6f * a);
+  EXPECT_NEAR(sunlight_visible_fraction(two, a, point, sun), each * each, 1e-4f);
+  // A view ray towards the moon meets it ~1900 km before its centre; one
+  // beside it misses it.
+  int which;
+  const float t = view_ray_moon_distance(moons, point, sun, which);
+  EXPECT_EQ(which, 0);
+  EXPECT_NEAR(t / (distance - radius), 1.0f, 1e-5f);
+  EXPECT_LT(view_ray_moon_distance(moons, point, normalize(sun + across * 0.01f), which), 0.0f);
+  EXPECT_EQ(which, -1);
+  // Seen from the sun's side, its lit centre is albedo / pi x E; from the
+  // point (night side, a new moon) it is black.
+  const vec3 e(1.0f, 2.0f, 3.0f);
+  const vec3 beyond = point + sun * (2.0f * distance);
+  const float t_back = view_ray_moon_distance(moons, beyond, -sun, which);
+  EXPECT_NEAR(moon_radiance(moons, which, beyond, -sun, t_back, sun, e).z, MOON_ALBEDO / PI * 3.0f, 1e-4f);
+  EXPECT_EQ(moon_radiance(moons, 0, point, sun, t, sun, e).z, 0.0f);
+}
+
 // The quadrature over the solar disc (sun_disc_node): its weights add up to
 // the visible fraction of the disc, and for a disc wholly in view it has the
 // moments of a uniform disc (mean elevation offset 0, variance alpha² / 4).

@@ -16,6 +16,8 @@
 // unwritable output), 2 usage error (unknown flag, bad value).
 #include <CLI/CLI.hpp>
 
+#include <glm/vec3.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -66,6 +68,8 @@ struct Options {
   double camera_altitude = 0.0, sun_elevation = 0.0, sun_azimuth = 0.0, fov = 0.0;
   std::string look;
   bool stars = false;
+  std::vector<std::string> moons;  // --moon AZ,EL,ANGULAR_RADIUS_DEG (parse_moon)
+  std::vector<glm::dvec3> moon_angles;  // parsed: azimuth, elevation, angular radius (degrees)
   // Camera-like PNG output by atmos::PostProcess on the composited texture
   // (any of these given); without, the PNG is write_png's exp tone map.
   std::string tonemap = "exp";
@@ -97,6 +101,21 @@ std::pair<double, double> parse_look(const std::string& text) {
   check_range(az, -360.0, 360.0, "--look azimuth");
   check_range(el, -90.0, 90.0, "--look elevation");
   return {az, el};
+}
+
+// "AZ,EL,R" -> (AZ, EL, R) in degrees: a moon R degrees in angular radius
+// in the direction (AZ, EL), see the moons in run().
+glm::dvec3 parse_moon(const std::string& text) {
+  std::istringstream in(text);
+  double az = 0.0, el = 0.0, radius = 0.0;
+  char comma_1 = 0, comma_2 = 0, extra = 0;
+  if (!(in >> az >> comma_1 >> el >> comma_2 >> radius) || comma_1 != ',' || comma_2 != ',' || (in >> extra))
+    throw UsageError("--moon expects AZ,EL,ANGULAR_RADIUS_DEG, e.g. 180,25,0.28, got \"" + text + "\"");
+  check_range(az, -360.0, 360.0, "--moon azimuth");
+  check_range(el, -90.0, 90.0, "--moon elevation");
+  if (!(finite(radius, "--moon angular radius") > 0.0) || radius > 10.0)
+    throw UsageError("--moon angular radius must be in (0, 10] degrees");
+  return {az, el, radius};
 }
 
 bool has_extension(const std::string& path, const std::string& extension) {
@@ -170,7 +189,16 @@ int run(const Options& o, const engine::SceneOverrides& overrides) {
   const auto terrain_start = std::chrono::steady_clock::now();
   const engine::Terrain terrain(world, {o.seed, o.terrain_cells}, planet_albedo);
   const double terrain_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - terrain_start).count();
-  const engine::Scene scene = engine::make_scene(o.scene, overrides, world, terrain);
+  engine::Scene scene = engine::make_scene(o.scene, overrides, world, terrain);
+  // The moons (--moon), in planet-centred metres as atmos wants them: seen
+  // from the camera in the direction (AZ, EL) of the patch centre's local
+  // frame — the frame of --sun-azimuth / --sun-elevation, so that the sun's
+  // own angles put the moon on the sun as seen from the camera — at the
+  // Moon's distance (the CLI's `atmos render --moon`).
+  const glm::dvec3 camera_planet_m = (scene.camera.position - world.planet_centre()) / engine::kUnitsPerMetre;
+  for (const glm::dvec3& moon : o.moon_angles)
+    scene.moons.push_back(atmos::moon_in_sky(camera_planet_m, world.local_frame({0.0, 0.0}).direction(moon.x, moon.y),
+                                             moon.z * M_PI / 180.0));
 
   // 4. The atmosphere pass, in the engine's current context. Its GLSL
   //    library goes into the engine's fragment shader, which lights the
@@ -185,6 +213,7 @@ int run(const Options& o, const engine::SceneOverrides& overrides) {
   settings.infinite_far = o.infinite_far;
   settings.surfaces = o.surfaces == "gbuffer" ? atmos::SurfaceMode::gbuffer : atmos::SurfaceMode::lit_colour;
   settings.shadow_map_size = o.shadow_size;
+  settings.eclipse = !scene.moons.empty();  // the engine's own shader dims its lighting (lit colour)
   engine::SceneRenderer renderer(settings, world, terrain, pass.glsl_library(engine::kAtmosphereFirstUnit));
   // The composited image goes into a texture the engine owns (RGBA32F: the
   // sun's disc, ~1e9 cd/m², would overflow half floats).
@@ -228,6 +257,7 @@ int run(const Options& o, const engine::SceneOverrides& overrides) {
     input.shadow_matrix = renderer.shadow_matrix();
     input.shadow_steps = o.shadow_steps;
     input.stars = o.stars;
+    input.moons = scene.moons;  // an eclipse (empty: none)
     input.output = composited.get();
     input.timed = true;  // measure the pass (waits for the GPU: a tool's choice, not a game's)
     pass.render(input);
@@ -340,6 +370,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--frames", o.frames, "Frames to render (timings: median after the first)")->capture_default_str();
   app.add_flag("--stars", o.stars, "Draw the star field behind the sky (FrameInput::stars)");
+  app.add_option("--moon", o.moons,
+                 "A moon AZ,EL,ANGULAR_RADIUS_DEG seen from the camera (patch-centre frame, e.g. the sun's angles and "
+                 "0.28 for a total eclipse), repeatable (FrameInput::moons)");
   auto* tonemap_opt = app.add_option("--tonemap", o.tonemap, "PNG through atmos::PostProcess: exp|reinhard|filmic|aces")
                           ->check(CLI::IsMember({"exp", "reinhard", "filmic", "aces"}));
   auto* bloom_opt = app.add_option("--bloom", o.bloom, "Bloom strength in [0, 1] (PNG through atmos::PostProcess)");
@@ -391,6 +424,7 @@ int main(int argc, char** argv) {
     check_range(o.shadow_steps, 1, 256, "--shadow-steps");
     check_range(o.frames, 1, 1000, "--frames");
     check_range(o.bloom, 0.0, 1.0, "--bloom");
+    for (const std::string& text : o.moons) o.moon_angles.push_back(parse_moon(text));
     o.post = tonemap_opt->count() > 0 || bloom_opt->count() > 0 || auto_exposure_opt->count() > 0;
     for (const std::string& path : o.outputs)
       if (!has_extension(path, ".png") && !has_extension(path, ".exr"))

@@ -90,7 +90,8 @@ SceneRenderer::SceneRenderer(const RenderSettings& settings, const World& world,
   const std::array scene_stages = {
       gl::ShaderStage{GL_VERTEX_SHADER, std::string(shaders::scene_vert)},
       gl::ShaderStage{GL_FRAGMENT_SHADER, std::string("#version 450 core\n#define LOG_DEPTH ") +
-                                              (log_depth ? "1" : "0") + "\n" + atmosphere_glsl + "\n" +
+                                              (log_depth ? "1" : "0") + "\n#define ECLIPSE " +
+                                              (settings.eclipse ? "1" : "0") + "\n" + atmosphere_glsl + "\n" +
                                               std::string(shaders::scene_frag)},
   };
   scene_program_ = gl::create_program("scene shader", scene_stages);
@@ -265,6 +266,21 @@ void SceneRenderer::render_scene(const Scene& scene, const atmos::AtmospherePass
   set_uniform(program, "u_units_per_nit", 1.0 / settings_.nits_per_unit);
   set_uniform(program, "u_log_depth_far", log_depth_far_);
   set_uniform(program, "u_shadows", shadow_map_.get() ? 1 : 0);
+  if (settings_.eclipse) {
+    // The moons in planet-centred metres, as the plugin gets them
+    // (FrameInput::moons); at most atmos::kMaxMoons (the plugin checks).
+    const int count = static_cast<int>(std::min<size_t>(scene.moons.size(), atmos::kMaxMoons));
+    std::array<float, 4 * atmos::kMaxMoons> spheres{};
+    for (int i = 0; i < count; ++i) {
+      const atmos::Moon& moon = scene.moons[static_cast<size_t>(i)];
+      spheres[4 * i + 0] = static_cast<float>(moon.centre_m.x);
+      spheres[4 * i + 1] = static_cast<float>(moon.centre_m.y);
+      spheres[4 * i + 2] = static_cast<float>(moon.centre_m.z);
+      spheres[4 * i + 3] = static_cast<float>(moon.radius_m);
+    }
+    set_uniform(program, "u_moon_count", count);
+    glProgramUniform4fv(program, gl::uniform(program, "u_moon_spheres"), atmos::kMaxMoons, spheres.data());
+  }
   if (shadow_map_.get()) {
     set_uniform(program, "u_shadow_from_patch", shadow_matrix_ * glm::translate(glm::dmat4(1.0), origin));
     // Look the shadow map up 1.5 texels off the surface along its normal:

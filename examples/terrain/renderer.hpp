@@ -25,6 +25,9 @@ struct RenderSettings {
   atmos::DepthEncoding depth = atmos::DepthEncoding::standard;
   bool infinite_far = false;   // standard depth: infinite far plane
   int shadow_map_size = 2048;  // texels per side; 0: no shadow map
+  // The scene shader dims its sun and sky light by the scene's moons (an
+  // eclipse; compiled in only then, so that other frames pay nothing).
+  bool eclipse = false;
   // cd/m² per unit of the colour buffer. Half floats stop at 65504: a
   // sunlit snowfield reaches ~35 000 cd/m², so the buffer is pre-exposed.
   double nits_per_unit = 16.0;

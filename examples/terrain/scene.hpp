@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <atmos/eclipse.hpp>
+
 #include "terrain.hpp"
 #include "world.hpp"
 
@@ -36,6 +38,9 @@ struct Scene {
   glm::dvec3 sun_direction{0.0, 1.0, 0.0};  // world frame, unit, towards the sun
   std::vector<SceneObject> objects;
   double exposure_ev = 13.0;  // default exposure of the PNG output
+  // Moons that may eclipse the sun (--moon), as atmos wants them: spheres in
+  // planet-centred metres (the world's axes), not engine units.
+  std::vector<atmos::Moon> moons;
 };
 
 // Command-line overrides of a scene's defaults (angles in degrees, in the

@@ -27,9 +27,10 @@
 // Threading and GL state. Construct, use and destroy the pass with the
 // engine's OpenGL 4.5 core context current (the pass never creates or
 // switches contexts). render() changes the bound program, vertex array,
-// framebuffer, viewport, texture units 0–11 and their sampler objects, and
-// disables blending, depth and stencil tests, scissor and sRGB conversion;
-// it restores none of them (engines typically set their state per pass).
+// framebuffer, viewport, texture units 0–15 and their sampler objects, image
+// units 0–3, the stencil state, and disables blending, depth and stencil
+// tests, scissor and sRGB conversion; it restores none of them (engines
+// typically set their state per pass; docs/plugin.md, OpenGL state).
 //
 // Precision. The CPU side works in double: the camera position, the view
 // and projection matrices are reduced to camera-relative floats before they
@@ -43,8 +44,10 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "atmos/atmosphere.hpp"
+#include "atmos/eclipse.hpp"
 #include "atmos/image.hpp"
 #include "atmos/tables.hpp"
 
@@ -115,6 +118,27 @@ struct FrameInput {
   // a pixel wide at the image centre). Off by default: turn it on at night,
   // or always (by day it is invisible but costs a little per sky pixel).
   bool stars = false;
+  // Moons that eclipse the sun (include/atmos/eclipse.hpp), at most
+  // kMaxMoons: spheres in PLANET-CENTRED METRES in the world's axes — the
+  // frame of sun_direction (the world's axes are the planet's: PlanetFrame
+  // has no rotation), not engine units. A moon at engine-world position p
+  // is at (p - PlanetFrame::centre) / units_per_metre; atmos::moon_in_sky
+  // places one in the sky of a planet-centred observer. Every point the
+  // pass lights gets the part of the limb-darkened sun they leave visible
+  // from there: the sky and the planet's sphere (sky-view table over the
+  // full azimuth, or per ray from space; a moon in front hides the sun disc
+  // and what else lies behind it — corona, stars — and shows its lit side),
+  // the aerial perspective (single scattering node by node; multiple
+  // scattering by the documented approximation,
+  // diffuse_light_visible_fraction) and, in SurfaceMode::gbuffer, the
+  // surfaces' sun and sky irradiance. Lit-colour surfaces are the engine's
+  // to dim (docs/plugin.md, Eclipses); light shafts keep their uneclipsed
+  // weights along the ray. Empty, or no moon near enough to the sun to hide
+  // any of it from the atmosphere (physics::moons_may_eclipse): no eclipse,
+  // no moon drawn (the engine draws its moons as objects) and no cost. Invalid moons
+  // (validate_moons: too many, non-finite, radius <= 0, reaching into the
+  // atmosphere) make render() throw, nothing drawn.
+  std::vector<Moon> moons;
 
   // Terrain shadows and light shafts (optional): a depth texture rendered
   // from the sun with an orthographic projection, and the matrix from the
@@ -164,8 +188,8 @@ class AtmospherePass {
   // pass's own). Throws atmos::Error, with nothing drawn, on invalid input:
   // missing or mismatched textures, non-finite or singular matrices, a
   // degenerate projection, a zero sun direction, a non-affine shadow
-  // matrix. A camera inside the planet is moved up to its surface
-  // (documented clamping, as everywhere in atmos).
+  // matrix, invalid moons. A camera inside the planet is moved up to its
+  // surface (documented clamping, as everywhere in atmos).
   std::uint32_t render(const FrameInput& input);
 
   const PassTimings& last_timings() const;

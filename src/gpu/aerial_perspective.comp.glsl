@@ -1,7 +1,9 @@
 // atmos — compute shader of the engine plugin's aerial-perspective volume
 // (GLSL only, appended by gpu/shader_source.cpp after the shared
 // definitions, functions.glsl, aerial_perspective.glsl, table_bindings.glsl and composite.glsl,
-// with VARIANT_LOW_SUN defined: whether the sun may be low in the volume). One invocation per direction:
+// with VARIANT_LOW_SUN defined: whether the sun may be low in the volume, and
+// VARIANT_ECLIPSE: 1 with the frame's moons, uniform_moons() of
+// table_bindings.glsl, 0 without). One invocation per direction:
 // the march of composite.glsl (aerial_perspective_march_begin / _slice), each
 // slice stored as it is reached.
 
@@ -29,6 +31,11 @@ void main() {
   frame.ap_t_min = ap_t_min;
   frame.sky_view = uniform_sky_view_frame();
   frame.low_sun = VARIANT_LOW_SUN;
+#if VARIANT_ECLIPSE
+  frame.moons = uniform_moons();
+#else
+  frame.moons = no_moons();
+#endif
   AerialPerspectiveMarch march = aerial_perspective_march_begin(
       ATMOSPHERE, SPECTRAL, spectral_transmittance_texture, multiple_scattering_texture, frame, column.x, column.y);
   for (int s = 0; s < AP_SLICES; ++s) {

@@ -110,9 +110,9 @@ struct AtmospherePass::Impl {
   std::unique_ptr<gpu::GpuTimer> timer;
   // The program variants (gpu::PassVariant::index), compiled on first use.
   GLuint programs[gpu::PassVariant::kCount] = {};
-  // The aerial-perspective volume: its compute programs (sun high, sun low)
-  // and textures (see composite.glsl).
-  GLuint volume_programs[2] = {0, 0};
+  // The aerial-perspective volume: its compute programs (sun high, sun low,
+  // eclipse) and textures (see composite.glsl).
+  GLuint volume_programs[3] = {0, 0, 0};
   GLuint volume[4] = {0, 0, 0, 0};
   std::unique_ptr<physics::AtmosphereParams> params;
   GLuint vertex_array = 0;
@@ -339,23 +339,28 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
 
   const bool low_sun = frame.low_sun;
-  // Pass 1: this frame's sky-view table, for cameras in the atmosphere.
+  // With moons (make_pass_frame: physics::make_moons, once per frame): the
+  // eclipse variants, which read them from the uniforms (set_moons_uniforms).
+  const bool eclipse = frame.moons.count > 0;
+  // Pass 1: this frame's sky-view table, for cameras in the atmosphere
+  // (eclipsed, over the full azimuth, with moons).
   PassTimings timings;
   const bool sky_view_camera = physics::camera_uses_sky_view(p.tables->params(), camera_f);
   if (sky_view_camera) {
-    const double ms =
-        p.tables->update_sky_view(camera_f, sun_f, frame.sky_view, input.timed ? p.timer.get() : nullptr);
+    const double ms = p.tables->update_sky_view(camera_f, sun_f, frame.sky_view,
+                                                input.timed ? p.timer.get() : nullptr, frame.moons);
     timings.sky_view_ms = ms;
   }
 
   // Pass 2: this frame's aerial-perspective volume, for cameras low in the
   // atmosphere.
   if (frame.volume) {
-    GLuint& volume_program = p.volume_programs[low_sun ? 1 : 0];
+    GLuint& volume_program = p.volume_programs[eclipse ? 2 : low_sun ? 1 : 0];
     if (volume_program == 0)
-      volume_program = gpu::link_compute_program(
-          gpu::aerial_perspective_compute_shader_source(p.tables->params(), p.tables->spectral(), low_sun));
+      volume_program = gpu::link_compute_program(gpu::aerial_perspective_compute_shader_source(
+          p.tables->params(), p.tables->spectral(), low_sun, eclipse));
     glUseProgram(volume_program);
+    if (eclipse) gpu::set_moons_uniforms(volume_program, frame.moons);
     glProgramUniform3f(volume_program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
     glProgramUniform3f(volume_program, 1, frame.sun_direction.x, frame.sun_direction.y, frame.sun_direction.z);
     glProgramUniform1f(volume_program, 24, frame.ap_t_far);
@@ -396,6 +401,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   variant.volume = frame.volume;
   variant.blend = frame.volume && frame.volume_weight < 1.0f;
   variant.stars = frame.stars.enabled;
+  variant.eclipse = eclipse;
   const auto program_of = [&](gpu::PassVariant::Pixels pixels) {
     // The mask does not depend on the rest of the variant: one program.
     gpu::PassVariant v = pixels == gpu::PassVariant::Pixels::classify ? gpu::PassVariant{} : variant;
@@ -433,6 +439,8 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     glProgramUniform1f(program, 32, frame.stars.sigma);
     gpu::set_sky_view_frame_uniforms(program, sky_view);
   }
+  if (eclipse)
+    for (GLuint program : {sky_program, surface_program}) gpu::set_moons_uniforms(program, frame.moons);
   p.tables->bind();
   for (GLuint unit = 0; unit < gpu::kTableUnitCount; ++unit) glBindSampler(unit, 0);
   glBindTextureUnit(kDepthUnit, input.depth);

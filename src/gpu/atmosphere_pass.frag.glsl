@@ -4,7 +4,9 @@
 // draws one full-screen triangle over the engine's image; the program
 // variant (gpu/shader_source.cpp) defines VARIANT_PIXELS and the constants
 // SKY_VIEW_CAMERA, VARIANT_SURFACE_MODE, VARIANT_LOW_SUN, VARIANT_SHADOWS,
-// VARIANT_VOLUME, VARIANT_BLEND and VARIANT_STARS.
+// VARIANT_VOLUME, VARIANT_BLEND, VARIANT_STARS and VARIANT_ECLIPSE (1: the
+// frame's moons from the uniforms of table_bindings.glsl, uniform_moons;
+// 0: no_moons(), whose code folds away).
 //
 // Why three programs. Software rasterisers run both sides of every branch,
 // so one program for every pixel would charge each pixel for the sky AND
@@ -55,7 +57,7 @@ layout(location = 29) uniform vec3 inverse_sun_srgb;
 layout(location = 30) uniform vec4 depth_column;
 layout(location = 31) uniform float depth_column_view_z;
 layout(location = 32) uniform float star_sigma;
-// The sky-view frame: locations 40-43 (table_bindings.glsl).
+// The sky-view frame: locations 40-44, the moons: 45-49 (table_bindings.glsl).
 
 // The pixel's PixelRay, interpolated from the vertex shader's corners
 // (atmosphere_pass.vert.glsl).
@@ -102,6 +104,11 @@ void main() {
   frame.shadow_steps = shadow_steps;
   frame.shadow_matrix = shadow_matrix;
   frame.shadow_depth_bias = shadow_depth_bias;
+#if VARIANT_ECLIPSE
+  frame.moons = uniform_moons();
+#else
+  frame.moons = no_moons();
+#endif
   PixelRay ray;
   ray.world = ray_world;
   ray.view_z = ray_view_z;

@@ -18,10 +18,13 @@ namespace atmos::gpu {
 // texture: non-finite or non-rigid view, singular or non-perspective
 // projection, bad depth-encoding parameters, zero sun, bad scales, a
 // non-affine shadow matrix (when a shadow map is given), bad step counts.
+// (Bad moons need the atmosphere: make_pass_frame.)
 void validate_frame_numbers(const FrameInput& input);
 
 // The PassFrame of a validated input: computed in double, rounded once.
 // `own_sun_lux`: the atmosphere's sun illuminance (see sun_illuminance_lux).
+// Throws atmos::Error for an absurd camera position and for invalid moons
+// (atmos::validate_moons). With moons: low_sun and sky_view.full_azimuth.
 physics::PassFrame make_pass_frame(const FrameInput& input, const PlanetFrame& planet,
                                    const physics::AtmosphereParams& params, const glm::mat3& radiance_to_srgb,
                                    double own_sun_lux);
@@ -76,7 +79,8 @@ void aerial_perspective_reach(const physics::AtmosphereParams& params, const glm
 
 // This frame's aerial-perspective volume on the CPU, as the compute pass
 // fills it (textures: single Rayleigh + multiple, single Rayleigh,
-// single aerosol, transmittance; all zero / one when !frame.volume).
+// single aerosol, transmittance; all zero / one when !frame.volume),
+// eclipsed by frame.moons.
 struct CpuVolume {
   std::vector<glm::vec3> textures[4];
   physics::sampler3D sampler(int i) const { return {AP_WIDTH, AP_HEIGHT, AP_SLICES, textures[i].data()}; }

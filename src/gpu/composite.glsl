@@ -21,10 +21,11 @@
 #define SURFACE_GBUFFER 1
 
 // The per-frame inputs of the pass. On the GPU, surface_mode, low_sun,
-// shadows and stars.enabled are constants of the program variant (software
-// rasterisers run both sides of every branch: a uniform would make every
-// pixel pay for the shadow march, the G-buffer lighting, the twilight
-// integration and the stars), the rest are uniforms.
+// shadows, stars.enabled and whether there are moons are constants of the
+// program variant (software rasterisers run both sides of every branch: a
+// uniform would make every pixel pay for the shadow march, the G-buffer
+// lighting, the twilight integration, the stars and the eclipse), the rest
+// are uniforms.
 struct PassFrame {
   vec3 camera;              // m, relative to the planet centre
   vec3 sun_direction;       // unit, towards the sun
@@ -50,6 +51,11 @@ struct PassFrame {
   int shadow_steps;
   mat4 shadow_matrix;       // camera-relative metres (world axes) -> the light's clip space
   float shadow_depth_bias;  // in the shadow map's depth units (see make_pass_frame)
+  // The frame's moons (eclipse.glsl), planet-centred like the camera. On the
+  // GPU no_moons() (a constant: the code of an eclipse folds away) or, in
+  // the eclipse variant, the uniforms of table_bindings.glsl (uniform_moons).
+  // With moons, low_sun is true and sky_view.full_azimuth too.
+  Moons moons;
 };
 
 // Whether the engine drew nothing at this pixel: the depth is the clear
@@ -131,6 +137,9 @@ INLINE vec3 srgb_transmittance(IN(AtmosphereParams) atmosphere, IN(PassFrame) fr
 #ifndef AP_SLICE_INTERVALS
 #define AP_SLICE_INTERVALS 2
 #endif
+// Slices per evaluation of the diffuse visibility under an eclipse
+// (aerial_perspective_march_slice); divides AP_SLICES.
+#define AP_DIFFUSE_GROUP 2
 
 INLINE float aerial_perspective_slice_distance(IN(PassFrame) frame, int slice) {
   float x = float(slice + 1) / float(AP_SLICES);
@@ -178,6 +187,10 @@ struct AerialPerspectiveMarch {
   bool ground;
   float d;
   float t;  // distance of the last node
+  // The ray in space (planet-centred start, unit direction): where the
+  // moons' shadows fall (eclipse.glsl; unused without moons).
+  vec3 origin;
+  vec3 view_ray;
   // Per wavelength triple, at the last node: optical depth from the camera,
   // extinction, and the single-scattering integrands (scattering
   // coefficient x transmittance to the sun x transmittance from the camera,
@@ -195,6 +208,18 @@ struct AerialPerspectiveMarch {
   vec3 depth_previous;
   vec3 multiple_d;
   vec3 extinct_d;
+  // Eclipses (see aerial_perspective_march_slice; unused without moons):
+  // the diffuse visibility at the start and the end of the current group of
+  // slices and their distances, the sums of the slices' diffuse visibility
+  // so far weighted by the light each sends towards the camera and of those
+  // weights, and the sum of the transmittance's channels at the last slice.
+  float diffuse_start;
+  float diffuse_end;
+  float diffuse_t_start;
+  float diffuse_t_end;
+  float diffuse_sum;
+  float diffuse_weight;
+  float transmittance_previous;
 };
 
 // The medium of one wavelength triple at distance t along the march's ray:
@@ -202,9 +227,11 @@ struct AerialPerspectiveMarch {
 // sun. With the sun high (frame.low_sun false: above 10° at every point the
 // volume reaches, see sun_may_be_low) the solar disc needs no averaging and
 // no point is in the planet's shadow: one lookup instead of
-// transmittance_to_sun's four (a constant in the shader).
+// transmittance_to_sun's four (a constant in the shader). `sunlight`: the
+// fraction of the sun the moons leave the node (sunlight_visible_fraction;
+// 1 without moons).
 INLINE void aerial_perspective_node(IN(AtmosphereParams) set, IN(sampler2D) spectral_transmittance_texture,
-                                    IN(PassFrame) frame, IN(AerialPerspectiveMarch) m, float t,
+                                    IN(PassFrame) frame, IN(AerialPerspectiveMarch) m, float t, float sunlight,
                                     OUT(vec3) extinction, OUT(vec3) rayleigh_sunlit, OUT(vec3) aerosol_sunlit) {
   float r_t = clamp_radius(set, radius_along_ray(m.r, m.mu, t));
   float mu_s_t = clamp_cosine(mu_s_along_ray(m.r, m.mu_s, m.nu, t, r_t));
@@ -214,6 +241,7 @@ INLINE void aerial_perspective_node(IN(AtmosphereParams) set, IN(sampler2D) spec
   vec3 to_sun = frame.low_sun ? transmittance_to_sun(set, spectral_transmittance_texture, r_t, mu_s_t)
                               : transmittance_to_top_atmosphere_boundary(set, spectral_transmittance_texture, r_t,
                                                                          mu_s_t);
+  to_sun *= sunlight;
   rayleigh_sunlit = beta_rayleigh * to_sun;
   aerosol_sunlit = beta_aerosol * to_sun;
 }
@@ -242,10 +270,15 @@ INLINE AerialPerspectiveMarch aerial_perspective_march_begin(IN(AtmosphereParams
   // Only the multiple scattering's table lookups stop at the ray's end.
   m.d = distance_to_nearest_atmosphere_boundary(atmosphere, m.r, m.mu, m.ground);
   m.t = 0.0f;
+  m.origin = camera;
+  m.view_ray = view_ray;
+  float sunlight = 1.0f;
+  if (frame.moons.count > 0)
+    sunlight = sunlight_visible_fraction(frame.moons, atmosphere.sun_angular_radius, camera, frame.sun_direction);
   for (int k = 0; k < SPECTRAL_COUNT(spectral); ++k) {
     m.optical_depth[k] = vec3(0.0f);
-    aerial_perspective_node(spectral.set[k], spectral_transmittance_texture, frame, m, 0.0f, m.extinction[k],
-                            m.rayleigh_integrand[k], m.aerosol_integrand[k]);
+    aerial_perspective_node(spectral.set[k], spectral_transmittance_texture, frame, m, 0.0f, sunlight,
+                            m.extinction[k], m.rayleigh_integrand[k], m.aerosol_integrand[k]);
   }
   m.single_rayleigh = vec3(0.0f);
   m.aerosol = vec3(0.0f);
@@ -254,6 +287,19 @@ INLINE AerialPerspectiveMarch aerial_perspective_march_begin(IN(AtmosphereParams
   m.depth_previous = vec3(0.0f);
   m.multiple_d = vec3(0.0f);
   m.extinct_d = vec3(0.0f);
+  m.diffuse_start = 1.0f;
+  m.diffuse_end = 1.0f;
+  m.diffuse_t_start = 0.0f;
+  m.diffuse_t_end = 0.0f;
+  // The medium of the first wavelength triple (the render parameters of the
+  // spectral mode have none: see make_render_params).
+  if (frame.moons.count > 0) {
+    m.diffuse_end = diffuse_light_visible_fraction(spectral.set[0], spectral_transmittance_texture, frame.moons,
+                                                   camera, frame.sun_direction);
+  }
+  m.diffuse_sum = 0.0f;
+  m.diffuse_weight = 0.0f;
+  m.transmittance_previous = 3.0f;
   return m;
 }
 
@@ -266,6 +312,21 @@ INLINE AerialPerspectiveMarch aerial_perspective_march_begin(IN(AtmosphereParams
 // with the distance, to kilometres, which a trapezoid or Simpson's rule
 // would need several nodes per slice to follow through the aerosol layer);
 // the smooth multiple scattering from the difference of two lookups.
+// Eclipses (frame.moons): each node gets the fraction of the sun the moons
+// leave it (sunlight_visible_fraction), and the multiple scattering up to
+// the slice is dimmed by the mean of diffuse_light_visible_fraction along
+// the ray so far, weighted by the light each slice sends towards the camera
+// (the drop of the transmittance over it), as ray_diffuse_visibility does
+// for whole rays — the documented approximation of functions.glsl. That
+// fraction changes over tens of kilometres (its rings start 8 km out) and
+// costs ~30 overlaps: it is evaluated at the camera and at the ends of
+// groups of AP_DIFFUSE_GROUP slices (17 points per ray, where
+// ray_diffuse_visibility has 2) and interpolated linearly in distance to
+// each slice's middle. Measured at 1920x1080 on llvmpipe (a camera 300 m up
+// in totality, G-buffer surfaces): the image within 0.9 % (mean 0.2 %) of
+// one evaluation per slice; the volume in 120 ms instead of 205 ms (26 ms
+// without moons); groups of 4: 3.8 % (0.5 %), 86 ms. The slices' distances
+// are the same in every direction, so the groups are too (no divergence).
 INLINE AerialPerspectiveSlice aerial_perspective_march_slice(IN(AtmosphereParams) atmosphere,
                                                              IN(SpectralSets) spectral,
                                                              IN(sampler2D) spectral_transmittance_texture,
@@ -273,6 +334,7 @@ INLINE AerialPerspectiveSlice aerial_perspective_march_slice(IN(AtmosphereParams
                                                              IN(PassFrame) frame, INOUT(AerialPerspectiveMarch) m,
                                                              int s) {
   float t_s = aerial_perspective_slice_distance(frame, s);
+  float t_start = m.t;
   float h = (t_s - m.t) / float(AP_SLICE_INTERVALS);
   AerialPerspectiveSlice slice;
   slice.transmittance = vec3(0.0f);
@@ -283,8 +345,13 @@ INLINE AerialPerspectiveSlice aerial_perspective_march_slice(IN(AtmosphereParams
       vec3 extinction;
       vec3 rayleigh_sunlit;
       vec3 aerosol_sunlit;
+      float sunlight = 1.0f;
+      if (frame.moons.count > 0) {
+        sunlight = sunlight_visible_fraction(frame.moons, atmosphere.sun_angular_radius,
+                                             m.origin + m.view_ray * (m.t + float(i) * h), frame.sun_direction);
+      }
       aerial_perspective_node(spectral.set[k], spectral_transmittance_texture, frame, m, m.t + float(i) * h,
-                              extinction, rayleigh_sunlit, aerosol_sunlit);
+                              sunlight, extinction, rayleigh_sunlit, aerosol_sunlit);
       m.optical_depth[k] += exponential_segment_integral(m.extinction[k], extinction, h);
       m.extinction[k] = extinction;
       vec3 transmittance = exp(-m.optical_depth[k]);
@@ -337,6 +404,23 @@ INLINE AerialPerspectiveSlice aerial_perspective_march_slice(IN(AtmosphereParams
                               : m.multiple_d[i];
   } else {
     slice.multiple = max(m.multiple_0 - slice.transmittance * multiple_t, vec3(0.0f));
+  }
+  if (frame.moons.count > 0) {
+    float transmittance_sum = slice.transmittance.x + slice.transmittance.y + slice.transmittance.z;
+    float sent = max(m.transmittance_previous - transmittance_sum, 0.0f);
+    m.transmittance_previous = transmittance_sum;
+    if (s % AP_DIFFUSE_GROUP == 0) {
+      m.diffuse_start = m.diffuse_end;
+      m.diffuse_t_start = m.diffuse_t_end;
+      m.diffuse_t_end = aerial_perspective_slice_distance(frame, s + AP_DIFFUSE_GROUP - 1);
+      m.diffuse_end = diffuse_light_visible_fraction(spectral.set[0], spectral_transmittance_texture, frame.moons,
+                                                     m.origin + m.view_ray * m.diffuse_t_end, frame.sun_direction);
+    }
+    float x = (0.5f * (t_start + t_s) - m.diffuse_t_start) / max(m.diffuse_t_end - m.diffuse_t_start, 1e-6f);
+    float visible = mix(m.diffuse_start, m.diffuse_end, clamp(x, 0.0f, 1.0f));
+    m.diffuse_sum += sent * visible;
+    m.diffuse_weight += sent;
+    slice.multiple *= m.diffuse_weight > 0.0f ? m.diffuse_sum / m.diffuse_weight : visible;
   }
   m.t_previous = t_s;
   m.depth_previous = depth;
@@ -555,10 +639,10 @@ INLINE PathScattering light_to_distance(IN(AtmosphereParams) atmosphere, IN(Spec
   }
   vec3 transmittance;
   float nu;
-  PathScattering exact = scattering_to_point(atmosphere, spectral, spectral_transmittance_texture, scattering_texture,
-                                             single_aerosol_texture, multiple_scattering_texture, frame.camera,
-                                             view_ray * t, frame.sun_direction, frame.low_sun, split, transmittance,
-                                             nu);
+  PathScattering exact = eclipsed_scattering_to_point(
+      atmosphere, spectral, spectral_transmittance_texture, scattering_texture, single_aerosol_texture,
+      multiple_scattering_texture, frame.camera, view_ray * t, frame.sun_direction, frame.low_sun, split, frame.moons,
+      transmittance, nu);
   if (!frame.volume) return exact;
   float w = frame.volume_weight;
   exact.single_rayleigh = mix(exact.single_rayleigh, volume.single_rayleigh, w);
@@ -606,9 +690,11 @@ INLINE float pixel_dither(vec2 pixel) {
 // Everything that reaches the camera through one pixel where the engine drew
 // nothing (depth at the clear value), in linear sRGB divided by
 // nits_per_unit (the engine's units): the sky, the planet's sphere below the
-// horizon, the sun disc and the stars (radiance_along_view_ray), minus the single
-// scattering the terrain shadows. `ray`: the pixel's (pixel_ray); `dither`
-// in [0, 1): the shaft samples' offset for this pixel.
+// horizon, the sun disc and the stars (radiance_along_view_ray; eclipsed by
+// frame.moons, whose discs hide what lies behind them), minus the single
+// scattering the terrain shadows (the shafts' weights along the ray ignore
+// the moons' shadows). `ray`: the pixel's (pixel_ray); `dither` in [0, 1):
+// the shaft samples' offset for this pixel.
 INLINE vec3 composite_sky_pixel(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
                                 IN(sampler2D) spectral_transmittance_texture, IN(sampler3D) scattering_texture,
                                 IN(sampler3D) single_aerosol_texture, IN(sampler3D) multiple_scattering_texture,
@@ -622,7 +708,7 @@ INLINE vec3 composite_sky_pixel(IN(AtmosphereParams) atmosphere, IN(SpectralSets
                                           single_aerosol_texture, multiple_scattering_texture, irradiance_texture,
                                           sky_view_rayleigh_texture, sky_view_aerosol_texture,
                                           sky_view_surface_texture, use_sky_view, frame.sky_view, frame.camera,
-                                          view_ray, frame.sun_direction, frame.sun_disc, frame.stars, no_moons());
+                                          view_ray, frame.sun_direction, frame.sun_disc, frame.stars, frame.moons);
   if (frame.shadows) {
     // Up to where the ray leaves the atmosphere or meets the ground.
     vec3 start = camera_above_ground(atmosphere, frame.camera);
@@ -644,7 +730,10 @@ INLINE vec3 composite_sky_pixel(IN(AtmosphereParams) atmosphere, IN(SpectralSets
 // a surface at window depth `depth`: its lit colour (or the surface lit here
 // from `albedo` and `normal`, with the shadow map's visibility) times the
 // transmittance to the camera, plus the in-scatter in between minus its
-// shadowed part; same units and arguments as composite_sky_pixel.
+// shadowed part; same units and arguments as composite_sky_pixel. With
+// moons the in-scatter is eclipsed (the volume, or
+// eclipsed_scattering_to_point) and so is the G-buffer lighting; lit colour
+// is the engine's.
 INLINE vec3 composite_surface_pixel(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
                                     IN(sampler2D) spectral_transmittance_texture, IN(sampler3D) scattering_texture,
                                     IN(sampler3D) single_aerosol_texture, IN(sampler3D) multiple_scattering_texture,
@@ -680,6 +769,15 @@ INLINE vec3 composite_surface_pixel(IN(AtmosphereParams) atmosphere, IN(Spectral
                                                     irradiance_texture, r, up, n, frame.sun_direction,
                                                     sky_irradiance);
     if (frame.shadows) sun_irradiance *= shadow_visibility(frame, shadow_map, offset);
+    if (frame.moons.count > 0) {
+      // Eclipses, as view_ray_terms lights the ground sphere: the part of the
+      // sun the moons leave the point, and the diffuse light's documented
+      // approximation (the medium of the first wavelength triple).
+      sun_irradiance *=
+          sunlight_visible_fraction(frame.moons, atmosphere.sun_angular_radius, point, frame.sun_direction);
+      sky_irradiance *= diffuse_light_visible_fraction(spectral.set[0], spectral_transmittance_texture, frame.moons,
+                                                       point, frame.sun_direction);
+    }
     surface = albedo * (1.0f / PI) * (frame.radiance_to_srgb * (sun_irradiance + sky_irradiance)) * frame.light_scale;
   }
   return surface * srgb_transmittance(atmosphere, frame, s.transmittance) +

@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 
+#include "physics/moons.hpp"
 #include "physics/parameters.hpp"
 
 namespace atmos::gpu {
@@ -138,6 +139,17 @@ physics::PassFrame make_pass_frame(const FrameInput& input, const PlanetFrame& p
   physics::PassFrame frame{};
   frame.camera = glm::vec3(camera_planet);
   frame.sun_direction = glm::vec3(glm::normalize(input.sun_direction));
+  // The moons (validated: atmos::validate_moons), planet-centred metres;
+  // none when no moon can hide the sun from the atmosphere this frame
+  // (moons_may_eclipse: a moon elsewhere in the sky costs nothing, and its
+  // disc is the engine's to draw).
+  try {
+    frame.moons = physics::make_moons(params, input.moons);
+  } catch (const Error& e) {
+    throw Error(std::string("plugin input: FrameInput::moons: ") + e.what());
+  }
+  if (!physics::moons_may_eclipse(params, frame.moons, frame.sun_direction)) frame.moons = physics::no_moons();
+  const bool eclipse = frame.moons.count > 0;
   const glm::dmat4 inverse_projection = glm::inverse(input.projection);
   const glm::dmat3 view_to_world = glm::dmat3(camera_to_world) / planet.units_per_metre;
   frame.inverse_projection = glm::mat4(inverse_projection);
@@ -154,6 +166,9 @@ physics::PassFrame make_pass_frame(const FrameInput& input, const PlanetFrame& p
   frame.inverse_sun_srgb = 1.0f / glm::max(radiance_to_srgb * params.solar_irradiance, glm::vec3(1e-30f));
   frame.sky_view = physics::sky_view_frame(params, physics::camera_above_ground(params, frame.camera),
                                            frame.sun_direction);
+  // An eclipse breaks the symmetry about the sun's vertical plane: the
+  // sky-view table and the volume span the full azimuth.
+  frame.sky_view.full_azimuth = eclipse;
   frame.light_scale =
       float((input.sun_illuminance_lux > 0.0 ? input.sun_illuminance_lux / own_sun_lux : 1.0) / input.nits_per_unit);
   frame.sun_disc = input.sun_disc;
@@ -165,7 +180,9 @@ physics::PassFrame make_pass_frame(const FrameInput& input, const PlanetFrame& p
   frame.volume_weight = aerial_perspective_volume_weight(params, camera_planet);
   frame.volume = frame.volume_weight > 0.0f;
   aerial_perspective_reach(params, camera_planet, frame.ap_t_min, frame.ap_t_far);
-  frame.low_sun = sun_may_be_low(params, camera_planet, frame.sun_direction);
+  // With moons the single scattering is integrated everywhere (as
+  // scattering_along_ray does), node by node in their shadows.
+  frame.low_sun = eclipse || sun_may_be_low(params, camera_planet, frame.sun_direction);
   frame.shadows = input.shadow_map != 0;
   frame.shadow_steps = input.shadow_steps;
   // Camera-relative metres -> the light's clip space: the engine's world
@@ -250,6 +267,7 @@ std::vector<AerialPerspectiveSample> aerial_perspective_cpu(const Atmosphere& at
   frame.volume = frame.volume_weight > 0.0f;
   aerial_perspective_reach(params, camera, frame.ap_t_min, frame.ap_t_far);
   frame.low_sun = sun_may_be_low(params, camera, frame.sun_direction);
+  frame.moons = physics::no_moons();
   const CpuVolume volume = compute_volume_cpu(params, *spectral, samplers, frame);
   std::vector<AerialPerspectiveSample> out(offsets.size());
   for (size_t i = 0; i < offsets.size(); ++i) {
@@ -281,7 +299,8 @@ std::vector<glm::vec3> composite_cpu(const Atmosphere& atmosphere, const Tables&
   const bool sky_view_camera = physics::camera_uses_sky_view(params, frame.camera);
   // Cameras above the atmosphere evaluate every ray; their table stays unread.
   CpuSkyView sky_view;
-  if (sky_view_camera) sky_view = compute_sky_view_cpu(params, *spectral, samplers, frame.camera, frame.sun_direction);
+  if (sky_view_camera)
+    sky_view = compute_sky_view_cpu(params, *spectral, samplers, frame.camera, frame.sun_direction, frame.moons);
   const CpuVolume volume = compute_volume_cpu(params, *spectral, samplers, frame);
   const physics::sampler2DShadow shadow_map{buffers.shadow_width, buffers.shadow_height,
                                            buffers.shadow_depth.data()};

@@ -218,10 +218,13 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   // sky_radiance); the test is the shared function's, on the same floats.
   double gpu_ms = 0.0;
   const bool sky_view_camera = physics::camera_uses_sky_view(tables_->params(), frame.position);
+  // The moons, all drawn; those that may hide the sun also eclipse.
   const physics::Moons moons = physics::make_moons(tables_->params(), moons_);
+  const physics::Moons eclipsing =
+      physics::moons_may_eclipse(tables_->params(), moons, sun) ? moons : physics::no_moons();
   physics::SkyViewFrame sky_view = tables_->sky_view_frame(frame.position, sun);
-  sky_view.full_azimuth = moons.count > 0;
-  if (sky_view_camera) gpu_ms += tables_->update_sky_view(frame.position, sun, sky_view, timer_.get(), moons);
+  sky_view.full_azimuth = eclipsing.count > 0;
+  if (sky_view_camera) gpu_ms += tables_->update_sky_view(frame.position, sun, sky_view, timer_.get(), eclipsing);
   last_sky_view_ms_ = gpu_ms;
 
   // Pass 2: the image, in tiles.
@@ -328,13 +331,14 @@ Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camer
 
   // The sky-view table, texel by texel as the sky-view pass computes it.
   const physics::Moons moons = physics::make_moons(params, moon_list);
+  const physics::Moons eclipsing = physics::moons_may_eclipse(params, moons, sun) ? moons : physics::no_moons();
   const bool sky_view_camera = physics::camera_uses_sky_view(params, frame.position);
   physics::SkyViewFrame sky_view_frame =
       physics::sky_view_frame(params, physics::camera_above_ground(params, frame.position), sun);
-  sky_view_frame.full_azimuth = moons.count > 0;
+  sky_view_frame.full_azimuth = eclipsing.count > 0;
   gpu::CpuSkyView sky_view;
   if (sky_view_camera)
-    sky_view = gpu::compute_sky_view_cpu(params, *spectral, samplers, frame.position, sun, moons);
+    sky_view = gpu::compute_sky_view_cpu(params, *spectral, samplers, frame.position, sun, eclipsing);
   const physics::StarField star_field{stars, float(star_image_sigma(camera))};
 
   Image image;

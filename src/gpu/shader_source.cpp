@@ -212,7 +212,8 @@ AssembledSource atmosphere_pass_fragment_shader_source(const physics::Atmosphere
                           "\n#define VARIANT_BLEND " + flag(variant.blend) +
                           "\n#define VARIANT_SURFACE_MODE " + (variant.gbuffer ? "1" : "0") +
                           "\n#define VARIANT_PIXELS " + std::to_string(int(variant.pixels)) +
-                          "\n#define VARIANT_STARS " + flag(variant.stars) + "\n");
+                          "\n#define VARIANT_STARS " + flag(variant.stars) +
+                          "\n#define VARIANT_ECLIPSE " + (variant.eclipse ? "1" : "0") + "\n");
   append_composite(s);
   s.append("atmosphere_pass.frag.glsl", embedded("src/gpu/atmosphere_pass.frag.glsl"));
   return s;
@@ -228,9 +229,11 @@ AssembledSource atmosphere_pass_vertex_shader_source() {
 }
 
 AssembledSource aerial_perspective_compute_shader_source(const physics::AtmosphereParams& params,
-                                                        const physics::SpectralSets& spectral, bool low_sun) {
+                                                        const physics::SpectralSets& spectral, bool low_sun,
+                                                        bool eclipse) {
   AssembledSource s = shared_fragment_shader_source(params, spectral);
-  s.append("variant", std::string("#define VARIANT_LOW_SUN ") + (low_sun ? "true" : "false") + "\n");
+  s.append("variant", std::string("#define VARIANT_LOW_SUN ") + (low_sun ? "true" : "false") +
+                          "\n#define VARIANT_ECLIPSE " + (eclipse ? "1" : "0") + "\n");
   append_composite(s);
   s.append("aerial_perspective.comp.glsl", embedded("src/gpu/aerial_perspective.comp.glsl"));
   return s;

@@ -70,10 +70,12 @@ struct PassVariant {
   bool volume = false;          // surfaces read the aerial-perspective volume
   bool blend = false;           // ... mixed with the exact evaluation (cameras in the blend band)
   bool stars = false;           // the star field behind the sky
-  static constexpr int kCount = 3 * 128;
+  bool eclipse = false;         // the frame has moons (needs low_sun): the uniforms of uniform_moons()
+  static constexpr int kCount = 3 * 256;
   int index() const {
-    return int(pixels) * 128 + ((sky_view_camera ? 1 : 0) | (low_sun ? 2 : 0) | (shadows ? 4 : 0) |
-                                (gbuffer ? 8 : 0) | (volume ? 16 : 0) | (blend ? 32 : 0) | (stars ? 64 : 0));
+    return int(pixels) * 256 + ((sky_view_camera ? 1 : 0) | (low_sun ? 2 : 0) | (shadows ? 4 : 0) |
+                                (gbuffer ? 8 : 0) | (volume ? 16 : 0) | (blend ? 32 : 0) | (stars ? 64 : 0) |
+                                (eclipse ? 128 : 0));
   }
 };
 
@@ -88,9 +90,13 @@ AssembledSource atmosphere_pass_fragment_shader_source(const physics::Atmosphere
 AssembledSource atmosphere_pass_vertex_shader_source();
 
 // The compute shader of the plugin's aerial-perspective volume: the shared
-// part, composite.glsl and aerial_perspective.comp.glsl.
+// part, composite.glsl and aerial_perspective.comp.glsl; `low_sun`: the
+// transmittance to the sun over the disc with the planet's shadow;
+// `eclipse`: with the moons' uniforms (table_bindings.glsl), which needs
+// `low_sun`.
 AssembledSource aerial_perspective_compute_shader_source(const physics::AtmosphereParams& params,
-                                                        const physics::SpectralSets& spectral, bool low_sun);
+                                                        const physics::SpectralSets& spectral, bool low_sun,
+                                                        bool eclipse);
 
 // The GLSL library for engines' own shaders (AtmospherePass::glsl_library):
 // the shared part without "#version", the colour matrix, then

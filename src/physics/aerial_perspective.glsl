@@ -121,26 +121,33 @@ INLINE PathScattering horizon_safe_scattering_to_distance(IN(AtmosphereParams) a
 // percent there) single scattering integrated along the segment itself for
 // every wavelength triple, the smooth multiple scattering still from the
 // tables; blended in between. `low_sun_path` false drops the integration
-// (for shaders: a constant, see scattering_to_point).
+// (for shaders: a constant, see scattering_to_point). Eclipses, as
+// scattering_along_ray: with moons (eclipse.glsl; `origin`, `view_ray`: the
+// segment in space, |origin| = r; low_sun_path must then be true) single
+// scattering is always integrated, node by node in the moons' shadows, and
+// the table's multiple scattering is dimmed by the segment's diffuse
+// visibility (ray_diffuse_visibility: a documented approximation).
 INLINE PathScattering scattering_to_distance(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
                                              IN(sampler2D) spectral_transmittance_texture,
                                              IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
                                              IN(sampler3D) multiple_scattering_texture, float r, float mu, float mu_s,
-                                             float nu, float t, bool low_sun_path, bool split) {
+                                             float nu, float t, bool low_sun_path, bool split, IN(Moons) moons,
+                                             vec3 origin, vec3 view_ray, vec3 sun_direction) {
   // The integration replaces single scattering only: it needs the split.
   PathScattering s = horizon_safe_scattering_to_distance(
       atmosphere, spectral, spectral_transmittance_texture, scattering_texture, single_aerosol_texture,
       multiple_scattering_texture, r, mu, mu_s, nu, t, split || low_sun_path);
-  float low_sun = low_sun_weight(mu_s, mu_s_at_ray_end(r, mu, mu_s, nu, t));
+  float low_sun = moons.count > 0 ? 1.0f : low_sun_weight(mu_s, mu_s_at_ray_end(r, mu, mu_s, nu, t));
   if (low_sun_path && low_sun > 0.0f) {
     vec3 single_rayleigh;
     vec3 single_aerosol;
-    float diffuse_visibility;  // 1: no moons here
-    spectral_single_scattering(atmosphere, spectral, spectral_transmittance_texture, r, mu, mu_s, nu, t, no_moons(),
-                               vec3(0.0f), vec3(0.0f), vec3(0.0f), single_rayleigh, single_aerosol,
+    float diffuse_visibility;  // 1 without moons
+    spectral_single_scattering(atmosphere, spectral, spectral_transmittance_texture, r, mu, mu_s, nu, t, moons,
+                               origin, view_ray, sun_direction, single_rayleigh, single_aerosol,
                                diffuse_visibility);
     s.single_rayleigh = mix(s.single_rayleigh, single_rayleigh, low_sun);
     s.aerosol = mix(s.aerosol, single_aerosol, low_sun);
+    if (moons.count > 0) s.multiple *= diffuse_visibility;
   }
   return s;
 }
@@ -164,12 +171,16 @@ INLINE vec3 path_radiance(IN(AtmosphereParams) atmosphere, IN(PathScattering) s,
 // the integration would cost every pixel at noon too. `split`: whether
 // single_rayleigh must exclude the multiple scattering (else it holds both,
 // and `multiple` is 0 — two lookups fewer); always split with low_sun_path.
-INLINE PathScattering scattering_to_point(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
-                                          IN(sampler2D) spectral_transmittance_texture,
-                                          IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
-                                          IN(sampler3D) multiple_scattering_texture, vec3 camera, vec3 offset,
-                                          vec3 sun_direction, bool low_sun_path, bool split,
-                                          OUT(vec3) transmittance, OUT(float) nu) {
+// With moons (eclipse.glsl; low_sun_path must then be true) the segment's
+// light is eclipsed as scattering_to_distance says; with no_moons() (a
+// constant in shaders) the cost is that of scattering_to_point.
+INLINE PathScattering eclipsed_scattering_to_point(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                                   IN(sampler2D) spectral_transmittance_texture,
+                                                   IN(sampler3D) scattering_texture,
+                                                   IN(sampler3D) single_aerosol_texture,
+                                                   IN(sampler3D) multiple_scattering_texture, vec3 camera,
+                                                   vec3 offset, vec3 sun_direction, bool low_sun_path, bool split,
+                                                   IN(Moons) moons, OUT(vec3) transmittance, OUT(float) nu) {
   PathScattering s;
   s.single_rayleigh = vec3(0.0f);
   s.multiple = vec3(0.0f);
@@ -196,7 +207,19 @@ INLINE PathScattering scattering_to_point(IN(AtmosphereParams) atmosphere, IN(Sp
   // the table values, see table_scattering_to_distance.)
   s = scattering_to_distance(atmosphere, spectral, spectral_transmittance_texture, scattering_texture,
                              single_aerosol_texture, multiple_scattering_texture, r, mu, mu_s, nu, min(t, d),
-                             low_sun_path, split);
+                             low_sun_path, split, moons, start, view_ray, sun_direction);
   transmittance = s.transmittance;
   return s;
+}
+
+// The same without moons.
+INLINE PathScattering scattering_to_point(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                          IN(sampler2D) spectral_transmittance_texture,
+                                          IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
+                                          IN(sampler3D) multiple_scattering_texture, vec3 camera, vec3 offset,
+                                          vec3 sun_direction, bool low_sun_path, bool split,
+                                          OUT(vec3) transmittance, OUT(float) nu) {
+  return eclipsed_scattering_to_point(atmosphere, spectral, spectral_transmittance_texture, scattering_texture,
+                                      single_aerosol_texture, multiple_scattering_texture, camera, offset,
+                                      sun_direction, low_sun_path, split, no_moons(), transmittance, nu);
 }

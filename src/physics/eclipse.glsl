@@ -192,10 +192,11 @@ INLINE float view_ray_moon_distance(IN(Moons) moons, vec3 origin, vec3 view_ray,
 // Radiance of the moon seen along `view_ray` from `origin` at distance t
 // (view_ray_moon_distance): its Lambertian surface (MOON_ALBEDO) lit by the
 // sun above any atmosphere. Its night side is black (no earthshine), so a
-// moon in front of the sun is a black disc.
+// moon in front of the sun is a black disc. (`which` is clamped: shaders
+// may evaluate this on lanes that met no moon, which = -1.)
 INLINE vec3 moon_radiance(IN(Moons) moons, int which, vec3 origin, vec3 view_ray, float t, vec3 sun_direction,
                           vec3 solar_irradiance) {
-  vec4 sphere = moons.sphere[which];
+  vec4 sphere = moons.sphere[clamp(which, 0, MOON_CAPACITY - 1)];
   vec3 normal = (origin + view_ray * t - vec3(sphere)) / sphere.w;
   return solar_irradiance * (MOON_ALBEDO / PI * max(dot(normal, sun_direction), 0.0f));
 }

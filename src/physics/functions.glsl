@@ -796,6 +796,9 @@ INLINE void single_scattering_over_nodes(IN(AtmosphereParams) atmosphere, IN(sam
                                          OUT(vec3) rayleigh, OUT(vec3) aerosol) {
   rayleigh = vec3(0.0f);
   aerosol = vec3(0.0f);
+  // Read once (C++: the outputs could alias the moons as far as the
+  // compiler knows, which would reload the count at every node).
+  bool eclipse = moons.count > 0;
   for (int i = 0; i < nodes.count; ++i) {
     float r_t = clamp_radius(atmosphere, radius_along_ray(r, mu, nodes.t[i]));
     float mu_s_t = clamp_cosine(mu_s_along_ray(r, mu_s, nu, nodes.t[i], r_t));
@@ -804,7 +807,7 @@ INLINE void single_scattering_over_nodes(IN(AtmosphereParams) atmosphere, IN(sam
     vec3 extinction;
     medium_at(atmosphere, r_t, beta_rayleigh, beta_aerosol, extinction);
     vec3 light = nodes.weight[i] * transmittance_to_sun(atmosphere, transmittance_texture, r_t, mu_s_t);
-    if (moons.count > 0) {
+    if (eclipse) {
       light *= sunlight_visible_fraction(moons, atmosphere.sun_angular_radius, origin + view_ray * nodes.t[i],
                                          sun_direction);
     }

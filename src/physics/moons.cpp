@@ -2,6 +2,7 @@
 // the Moons of the shared functions (src/physics/eclipse.glsl).
 #include "physics/moons.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -50,6 +51,26 @@ Moons make_moons(const AtmosphereParams& params, const std::vector<Moon>& moons)
   for (size_t i = 0; i < moons.size(); ++i)
     result.sphere[i] = vec4(vec3(moons[i].centre_m), float(moons[i].radius_m));
   return result;
+}
+
+bool moons_may_eclipse(const AtmosphereParams& params, const Moons& moons, const vec3& sun) {
+  const double reach = double(params.top_radius) + 1000e3;  // the farthest point that matters
+  const glm::dvec3 s = glm::normalize(glm::dvec3(sun));
+  const double sun_radius = params.sun_angular_radius;
+  for (int i = 0; i < moons.count; ++i) {
+    const glm::dvec3 centre(glm::vec3(moons.sphere[i]));
+    const double distance = glm::length(centre), radius = moons.sphere[i].w;
+    if (distance <= reach + radius) return true;  // close enough to be anywhere in the sky of some point
+    // Seen from a point within `reach` of the planet's centre, the moon's
+    // centre moves by at most asin(reach / distance) from its direction
+    // seen from the centre, and looks at most asin(radius / (distance -
+    // reach)) wide.
+    const double angle = std::atan2(glm::length(glm::cross(centre, s)), glm::dot(centre, s));
+    const double parallax = std::asin(reach / distance);
+    const double moon_radius = std::asin(std::min(radius / (distance - reach), 1.0));
+    if (angle - parallax < sun_radius + moon_radius + 1e-4) return true;
+  }
+  return false;
 }
 
 }  // namespace physics

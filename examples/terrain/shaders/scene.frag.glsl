@@ -1,5 +1,5 @@
 // The engine's fragment shader (main pass). The engine prepends
-// "#version 450 core", "#define LOG_DEPTH 0|1" and atmos's GLSL library
+// "#version 450 core", "#define LOG_DEPTH 0|1", "#define ECLIPSE 0|1" and atmos's GLSL library
 // (AtmospherePass::glsl_library), which declares the atmosphere's textures
 // and the atmos_* functions used below.
 //
@@ -31,6 +31,27 @@ layout(location = 1) out vec4 out_albedo;
 layout(location = 2) out vec4 out_normal;
 
 uniform float u_detail;               // strength of the albedo detail (terrain 1, objects 0)
+
+#if ECLIPSE
+// The moons (FrameInput::moons): xyz the centre in planet-centred metres, w
+// the radius.
+uniform int u_moon_count;
+uniform vec4 u_moon_spheres[4];
+
+// An eclipse dims the sun and the sky light at `point` exactly as the
+// plugin dims the light of the surfaces it lights itself (G-buffer mode):
+// the library's shared physics (src/physics/eclipse.glsl, functions.glsl)
+// gives the part of the limb-darkened sun the moons leave the point, and
+// the documented approximation for the diffuse light.
+void eclipse(vec3 point, inout vec3 sun_irradiance, inout vec3 sky_irradiance) {
+  Moons moons = no_moons();
+  moons.count = min(u_moon_count, MOON_CAPACITY);
+  for (int i = 0; i < MOON_CAPACITY; ++i) moons.sphere[i] = u_moon_spheres[i];
+  sun_irradiance *= sunlight_visible_fraction(moons, ATMOSPHERE.sun_angular_radius, point, u_sun_direction);
+  sky_irradiance *= diffuse_light_visible_fraction(SPECTRAL.set[0], atmos_optical_depth_texture, moons, point,
+                                                   u_sun_direction);
+}
+#endif
 
 const float ENGINE_PI = 3.14159265;
 
@@ -106,6 +127,9 @@ void main() {
   // this point (lux-scaled sRGB), so the result is in cd/m².
   vec3 sky_irradiance;
   vec3 sun_irradiance = atmos_sun_and_sky_irradiance(point, normal, u_sun_direction, sky_irradiance);
+#if ECLIPSE
+  eclipse(point, sun_irradiance, sky_irradiance);
+#endif
   float visibility = sun_visibility(fs_in.patch_position, normal);
   vec3 radiance = albedo / ENGINE_PI * (sun_irradiance * visibility + sky_irradiance);
 
