@@ -57,6 +57,15 @@ Camera all_sky(const glm::dvec3& position, int size) {
   return camera;
 }
 
+// A 10° view straight down at the ground.
+Camera straight_down(const glm::dvec3& position, int size) {
+  Camera camera = all_sky(position, size);
+  camera.forward = {0.0, 0.0, -1.0};
+  camera.projection = atmos::Projection::perspective;
+  camera.fov_deg = 10.0;
+  return camera;
+}
+
 // Totality seen from the centre of the shadow: the zenith goes down to the
 // order of 1e-3..1e-4 of its daylight value (the range observed, e.g. Sharp,
 // Silverman & Lloyd 1971, Appl. Opt. 10, 1207; Shaw 1975, Appl. Opt. 14, 388:
@@ -116,10 +125,7 @@ TEST_F(EclipseGpu, TotalityDarkensTheSkyAndLeavesAHorizonRing) {
 // share of the irradiance (SkyModel), is the sky-light level.
 TEST_F(EclipseGpu, TheGroundInTotalityGetsLessThanTheSkyLight) {
   atmos::Renderer renderer(*context_, *earth_, *tables_);
-  Camera camera = all_sky(observer(), 9);
-  camera.forward = {0.0, 0.0, -1.0};
-  camera.projection = atmos::Projection::perspective;
-  camera.fov_deg = 10.0;
+  const Camera camera = straight_down(observer(), 9);
   const Image day = renderer.render(camera, sun(40.0));
   renderer.set_moons({moon(40.0, 0.28)});
   const Image eclipse = renderer.render(camera, sun(40.0));
@@ -177,10 +183,7 @@ TEST_F(EclipseGpu, TheMoonHidesTheSunDisc) {
 // the image is the moonless one, bit for bit.
 TEST_F(EclipseGpu, PartialEclipsesBrightenAsTheMoonMovesOff) {
   atmos::Renderer renderer(*context_, *earth_, *tables_);
-  Camera camera = all_sky(observer(), 5);
-  camera.forward = {0.0, 0.0, -1.0};
-  camera.projection = atmos::Projection::perspective;
-  camera.fov_deg = 10.0;
+  const Camera camera = straight_down(observer(), 5);
   const double clear = luminance(renderer.render(camera, sun(40.0)), 2, 2);
   double previous = 0.0;
   for (double offset : {0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8}) {

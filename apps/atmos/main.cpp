@@ -643,8 +643,13 @@ void bench_plugin(const atmos::Atmosphere& atmosphere, const atmos::Tables& tabl
   input.depth = textures[0];
   input.colour = textures[1];
   atmos::AtmospherePass pass(atmosphere, tables, atmos::PlanetFrame{});
-  for (const auto& [name, elevation] : {std::pair<const char*, double>{"plugin", 35.0}, {"plugin.sunset", 4.0}}) {
+  // The last line: a total eclipse (a moon 0.28° wide on the sun, 35° up).
+  for (const auto& [name, elevation] : {std::pair<const char*, double>{"plugin", 35.0}, {"plugin.sunset", 4.0},
+                                        {"plugin.eclipse", 35.0}}) {
     input.sun_direction = atmos::direction_from_azimuth_elevation(20.0, elevation);
+    input.moons.clear();
+    if (std::string(name) == "plugin.eclipse")
+      input.moons = {atmos::moon_in_sky(camera, input.sun_direction, 0.28 * M_PI / 180.0)};
     pass.render(input);  // warm-up: compiles this variant
     std::vector<double> total, sky_view, volume, composite;
     for (int i = 0; i < 5; ++i) {
