@@ -71,3 +71,23 @@ vec3 atmos_transmittance_to_sun(vec3 point, vec3 sun) {
   return clamp(ATMOS_RADIANCE_TO_SRGB * (ATMOSPHERE.solar_irradiance * t) / max(s, vec3(1e-30)), vec3(0.0),
                vec3(1.0));
 }
+
+// Eclipses (FrameInput::moons): the factors by which the moons dim, at
+// `point`, the sun's irradiance (the part of the limb-darkened sun they
+// leave visible: eclipse.glsl, sunlight_visible_fraction) and the sky's
+// (the documented approximation for diffuse light: functions.glsl,
+// diffuse_light_visible_fraction) — what the pass applies to the surfaces
+// it lights itself (SurfaceMode::gbuffer); an engine that lights its own
+// surfaces multiplies atmos_sun_and_sky_irradiance's two results by them.
+// `moon_spheres[i]`: xyz the centre (planet-centred metres, the frame of
+// FrameInput::moons), w the radius; `moon_count`: how many, at most
+// MOON_CAPACITY (4). Costs ~60 disc overlaps per call with a moon, nothing
+// without (moon_count 0).
+void atmos_eclipse(vec3 point, vec3 sun, int moon_count, vec4 moon_spheres[MOON_CAPACITY], out float sun_factor,
+                   out float sky_factor) {
+  Moons moons = no_moons();
+  moons.count = clamp(moon_count, 0, MOON_CAPACITY);
+  for (int i = 0; i < MOON_CAPACITY; ++i) moons.sphere[i] = moon_spheres[i];
+  sun_factor = sunlight_visible_fraction(moons, ATMOSPHERE.sun_angular_radius, point, sun);
+  sky_factor = diffuse_light_visible_fraction(SPECTRAL.set[0], atmos_optical_depth_texture, moons, point, sun);
+}

@@ -40,16 +40,13 @@ uniform vec4 u_moon_spheres[4];
 
 // An eclipse dims the sun and the sky light at `point` exactly as the
 // plugin dims the light of the surfaces it lights itself (G-buffer mode):
-// the library's shared physics (src/physics/eclipse.glsl, functions.glsl)
-// gives the part of the limb-darkened sun the moons leave the point, and
-// the documented approximation for the diffuse light.
+// atmos_eclipse of the GLSL library.
 void eclipse(vec3 point, inout vec3 sun_irradiance, inout vec3 sky_irradiance) {
-  Moons moons = no_moons();
-  moons.count = min(u_moon_count, MOON_CAPACITY);
-  for (int i = 0; i < MOON_CAPACITY; ++i) moons.sphere[i] = u_moon_spheres[i];
-  sun_irradiance *= sunlight_visible_fraction(moons, ATMOSPHERE.sun_angular_radius, point, u_sun_direction);
-  sky_irradiance *= diffuse_light_visible_fraction(SPECTRAL.set[0], atmos_optical_depth_texture, moons, point,
-                                                   u_sun_direction);
+  float sun_factor;
+  float sky_factor;
+  atmos_eclipse(point, u_sun_direction, u_moon_count, u_moon_spheres, sun_factor, sky_factor);
+  sun_irradiance *= sun_factor;
+  sky_irradiance *= sky_factor;
 }
 #endif
 
