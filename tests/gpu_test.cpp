@@ -263,6 +263,26 @@ TEST_F(Gpu, SpectralTablesMatchCpu) {
   expect_gpu_matches_cpu(renderer, spectral, tables, "spectral full vs cpu");
 }
 
+// A double Henyey-Greenstein aerosol whose lobes change with wavelength, in
+// spectral mode: the per-channel phase parameters baked into the shaders and
+// the phase ratio of the low-sun integration (spectral_single_scattering);
+// same tolerances.
+TEST_F(Gpu, WavelengthDependentAerosolPhaseMatchesCpu) {
+  atmos::Atmosphere spectral = *earth_;
+  spectral.wavelengths_nm = atmos::spectral_wavelengths(7);
+  const atmos::PhaseFunction dhg(atmos::PhaseFunction::Kind::double_henyey_greenstein,
+                                 atmos::Spectrum({400.0, 700.0}, {0.93, 0.87}),
+                                 atmos::Spectrum({400.0, 700.0}, {-0.25, -0.35}),
+                                 atmos::Spectrum({400.0, 700.0}, {0.85, 0.74}));
+  for (atmos::Constituent& c : spectral.constituents)
+    if (c.phase.kind != atmos::PhaseFunction::Kind::rayleigh) c.phase = dhg;
+  atmos::PrecomputeOptions options;
+  options.sizes = atmos_test::small_gpu_sizes();
+  const atmos::Tables tables = atmos::precompute_tables(spectral, options);
+  atmos::Renderer renderer(*context_, spectral, tables, TexturePrecision::full);
+  expect_gpu_matches_cpu(renderer, spectral, tables, "DHG spectral vs cpu");
+}
+
 TEST_F(Gpu, HalfPrecisionMatchesCpu) {
   atmos::Renderer renderer(*context_, *earth_, *tables_, TexturePrecision::half);
   const atmos::Tables half_tables = round_to_half(*tables_);

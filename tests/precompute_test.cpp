@@ -288,7 +288,7 @@ TEST_F(Cache, ComputesThenHits) {
 TEST_F(Cache, KeyChangesWithEveryInput) {
   const std::string key = atmos::tables_cache_key(earth, options);
   auto other = earth;
-  other.constituents[1].phase.g = 0.7;
+  other.constituents[1].phase.g = atmos::Spectrum::constant(0.7);
   EXPECT_NE(atmos::tables_cache_key(other, options), key);
   other = earth;
   other.top_radius_m += 1.0;

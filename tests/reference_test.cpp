@@ -123,7 +123,7 @@ void check_slab_single_scattering(const PhaseFunction& phase) {
     const ReferenceResult r = atmos::reference_radiance(a, dvec3(0.0, 0.0, a.bottom_radius_m), v, sun, o);
     for (size_t l = 0; l < 3; ++l) {
       const double tau0 = (bs[l] + ba[l]) * z, w0 = bs[l] / (bs[l] + ba[l]);
-      const double expected = single_up(w0, sun_irradiance(a, l), detail::phase_function(phase, glm::dot(v, sun)),
+      const double expected = single_up(w0, sun_irradiance(a, l), detail::phase_function(phase, a.wavelengths_nm[l], glm::dot(v, sun)),
                                         mu_s, v.z, tau0);
       expect_close(r.radiance[l], expected, r.standard_error[l], 4.0, 2e-4,
                    "up, view zenith " + std::to_string(view_zenith) + ", wavelength " + std::to_string(l));
@@ -136,7 +136,7 @@ void check_slab_single_scattering(const PhaseFunction& phase) {
     const ReferenceResult r = atmos::reference_radiance(a, dvec3(0.0, 0.0, a.top_radius_m + 500.0), v, sun, o);
     for (size_t l = 0; l < 3; ++l) {
       const double tau0 = (bs[l] + ba[l]) * z, w0 = bs[l] / (bs[l] + ba[l]);
-      const double expected = single_down(w0, sun_irradiance(a, l), detail::phase_function(phase, glm::dot(v, sun)),
+      const double expected = single_down(w0, sun_irradiance(a, l), detail::phase_function(phase, a.wavelengths_nm[l], glm::dot(v, sun)),
                                           mu_s, -v.z, tau0, albedo);
       expect_close(r.radiance[l], expected, r.standard_error[l], 4.0, 2e-4,
                    "down, view zenith " + std::to_string(view_zenith) + ", wavelength " + std::to_string(l));
@@ -293,19 +293,19 @@ TEST(Reference, PhaseFunctionsAreNormalised) {
     for (int i = 0; i <= n; ++i) {
       const double mu = -1.0 + 2.0 * i / n;
       const double w = (i == 0 || i == n ? 1.0 : (i % 2 ? 4.0 : 2.0)) * (2.0 / n) / 3.0 * 2.0 * kPi;
-      norm += w * detail::phase_function(p, mu);
-      mean += w * mu * detail::phase_function(p, mu);
+      norm += w * detail::phase_function(p, 550.0, mu);
+      mean += w * mu * detail::phase_function(p, 550.0, mu);
     }
-    EXPECT_NEAR(norm, 1.0, 1e-8) << int(p.kind) << " g " << p.g;
-    const double g = p.g;
+    EXPECT_NEAR(norm, 1.0, 1e-8) << int(p.kind) << " g " << p.g.at(550.0);
+    const double g = p.g.at(550.0);
     const double expected_mean = p.kind == PhaseFunction::Kind::rayleigh            ? 0.0
                                  : p.kind == PhaseFunction::Kind::henyey_greenstein ? g
                                                                                     : 3.0 * g * (4.0 + g * g) / (5.0 * (2.0 + g * g));
-    EXPECT_NEAR(mean, expected_mean, 1e-8) << int(p.kind) << " g " << p.g;
+    EXPECT_NEAR(mean, expected_mean, 1e-8) << int(p.kind) << " g " << p.g.at(550.0);
   }
   // Spot values: Rayleigh 3/(16π)(1 + μ²), HG forward peak (1 + g)/(4π(1 - g)²).
-  EXPECT_NEAR(detail::phase_function({PhaseFunction::Kind::rayleigh, 0.0}, 1.0), 3.0 / (8.0 * kPi), 1e-15);
-  EXPECT_NEAR(detail::phase_function({PhaseFunction::Kind::henyey_greenstein, 0.5}, 1.0), 1.5 / (4.0 * kPi * 0.25),
+  EXPECT_NEAR(detail::phase_function({PhaseFunction::Kind::rayleigh, 0.0}, 550.0, 1.0), 3.0 / (8.0 * kPi), 1e-15);
+  EXPECT_NEAR(detail::phase_function({PhaseFunction::Kind::henyey_greenstein, 0.5}, 550.0, 1.0), 1.5 / (4.0 * kPi * 0.25),
               1e-12);
 }
 
@@ -325,7 +325,7 @@ TEST(Reference, PhaseFunctionSamplingMatchesDensity) {
     std::vector<double> count(bins, 0.0);
     double sum = 0.0, sum2 = 0.0;
     for (int i = 0; i < n; ++i) {
-      const double mu = detail::sample_phase_cosine(p, random);
+      const double mu = detail::sample_phase_cosine(p, 550.0, random);
       ASSERT_GE(mu, -1.0);
       ASSERT_LE(mu, 1.0);
       count[size_t(std::min(bins - 1, int((mu + 1.0) / 2.0 * bins)))] += 1.0;
@@ -339,17 +339,17 @@ TEST(Reference, PhaseFunctionSamplingMatchesDensity) {
       for (int j = 0; j <= m; ++j) {
         const double mu = -1.0 + (b + double(j) / m) * 2.0 / bins;
         const double w = (j == 0 || j == m ? 1.0 : (j % 2 ? 4.0 : 2.0)) * (2.0 / bins / m) / 3.0 * 2.0 * kPi;
-        prob += w * detail::phase_function(p, mu);
-        mean_exact += w * mu * detail::phase_function(p, mu);
+        prob += w * detail::phase_function(p, 550.0, mu);
+        mean_exact += w * mu * detail::phase_function(p, 550.0, mu);
       }
       const double expected = prob * n;
       chi2 += (count[size_t(b)] - expected) * (count[size_t(b)] - expected) / expected;
     }
-    EXPECT_LT(chi2, 49.0) << int(p.kind) << " g " << p.g;
+    EXPECT_LT(chi2, 49.0) << int(p.kind) << " g " << p.g.at(550.0);
     const double mean = sum / n, se = std::sqrt((sum2 / n - mean * mean) / n);
-    EXPECT_NEAR(mean, mean_exact, 5.0 * se) << int(p.kind) << " g " << p.g;
+    EXPECT_NEAR(mean, mean_exact, 5.0 * se) << int(p.kind) << " g " << p.g.at(550.0);
     if (p.kind == PhaseFunction::Kind::henyey_greenstein) {
-      EXPECT_NEAR(mean, p.g, 5.0 * se) << p.g;
+      EXPECT_NEAR(mean, p.g.at(550.0), 5.0 * se) << p.g.at(550.0);
     }
   }
 }
@@ -531,7 +531,7 @@ TEST(Reference, TwilightSingleScatteringMatchesQuadrature) {
         const double h = std::sqrt(r2) - a.bottom_radius_m;
         double j = 0.0;
         for (const auto& c : a.constituents)
-          j += c.scattering.at(w) * c.density.at(h) * detail::phase_function(c.phase, glm::dot(v, sun));
+          j += c.scattering.at(w) * c.density.at(h) * detail::phase_function(c.phase, w, glm::dot(v, sun));
         sum += (k == 0 || k == n ? 0.5 : 1.0) * std::exp(-tau_view) * j * sun_irradiance(a, l) * t_sun;
       }
       const double expected = sum * length / n;
@@ -624,7 +624,7 @@ TEST(Reference, ToPointSlabSingleScattering) {
     for (size_t l = 0; l < 3; ++l) {
       const double sigma = bs[l] + ba[l], w0 = bs[l] / sigma;
       const double k = 1.0 / v.z - 1.0 / mu_s;
-      const double expected = w0 * sun_irradiance(a, l) * detail::phase_function(phase, glm::dot(v, sun)) *
+      const double expected = w0 * sun_irradiance(a, l) * detail::phase_function(phase, a.wavelengths_nm[l], glm::dot(v, sun)) *
                               std::exp(-sigma * z / mu_s) * mu_s * -std::expm1(-sigma * height * k) / (mu_s - v.z);
       expect_close(r.radiance[l], expected, r.standard_error[l], 4.0, 2e-4, "up, wavelength " + std::to_string(l));
     }
@@ -637,7 +637,7 @@ TEST(Reference, ToPointSlabSingleScattering) {
     const ReferenceResult r = atmos::reference_radiance_to_point(a, above, point, sun, o);
     for (size_t l = 0; l < 3; ++l) {
       const double sigma = bs[l] + ba[l], w0 = bs[l] / sigma;
-      const double expected = w0 * sun_irradiance(a, l) * detail::phase_function(phase, glm::dot(v, sun)) * mu_s *
+      const double expected = w0 * sun_irradiance(a, l) * detail::phase_function(phase, a.wavelengths_nm[l], glm::dot(v, sun)) * mu_s *
                               -std::expm1(-sigma * depth * (1.0 / mu_v + 1.0 / mu_s)) / (mu_s + mu_v);
       expect_close(r.radiance[l], expected, r.standard_error[l], 4.0, 2e-4, "down, wavelength " + std::to_string(l));
     }

@@ -37,6 +37,8 @@ class Spectrum {
   bool empty() const { return values_.empty(); }
   const std::vector<double>& wavelengths_nm() const { return wavelengths_nm_; }
   const std::vector<double>& values() const { return values_; }
+  // Same samples (a constant 0.7 and {400 nm: 0.7, 700 nm: 0.7} differ).
+  bool operator==(const Spectrum&) const = default;
 
  private:
   std::vector<double> wavelengths_nm_;
@@ -54,14 +56,29 @@ struct DensityProfile {
   double at(double altitude_m) const;
 };
 
-// Phase function of a constituent's scattering.
-//  - rayleigh: 3/(16π)(1 + ν²), seed 000 eq. 3.2.
-//  - henyey_greenstein: (1 - g²) / (4π (1 + g² - 2gν)^{3/2}).
+// Phase function of a constituent's scattering. Every parameter is a
+// spectrum: the phase may change with wavelength (dust scatters blue light
+// into a narrower forward lobe than red, which makes the Martian blue
+// aureole). A constant is Spectrum::constant.
+//  - rayleigh: 3/(16π)(1 + ν²), seed 000 eq. 3.2 (no parameters).
+//  - henyey_greenstein: HG(g) = (1 - g²) / (4π (1 + g² - 2gν)^{3/2}).
 //  - cornette_shanks: seed 000 eq. 3.5 (Cornette & Shanks 1992).
+//  - double_henyey_greenstein: w HG(g) + (1 - w) HG(g_back) (Kattawar 1975),
+//    w = forward_weight; a forward lobe (g > 0) and a backward one (g_back < 0).
 struct PhaseFunction {
-  enum class Kind { rayleigh, henyey_greenstein, cornette_shanks };
+  enum class Kind { rayleigh, henyey_greenstein, cornette_shanks, double_henyey_greenstein };
   Kind kind = Kind::rayleigh;
-  double g = 0.0;  // asymmetry parameter, |g| < 1 (unused for rayleigh)
+  Spectrum g;               // asymmetry parameter (of the forward lobe for DHG), |g| < 0.999; empty for rayleigh
+  Spectrum g_back;          // DHG only: asymmetry parameter of the second lobe, |g_back| < 0.999
+  Spectrum forward_weight;  // DHG only: weight w of the first lobe, in [0, 1]
+
+  PhaseFunction() = default;
+  // `g` constant over wavelength (ignored for rayleigh).
+  PhaseFunction(Kind kind, double g);
+  PhaseFunction(Kind kind, Spectrum g, Spectrum g_back = {}, Spectrum forward_weight = {});
+  // p(ν) at one wavelength, in sr^-1 (∫ p dω = 1); ν is the cosine of the
+  // scattering angle.
+  double at(double wavelength_nm, double nu) const;
 
   bool operator==(const PhaseFunction&) const = default;
 };
@@ -87,7 +104,8 @@ struct Atmosphere {
   double sun_angular_radius_rad = 0.0;
 
   // Throws Error naming the first impossible parameter (inverted radii, NaN,
-  // negative coefficients, |g| >= 1, an unsupported mixture of phase functions…).
+  // negative coefficients, |g| >= 0.999, a phase weight outside [0, 1], an
+  // unsupported mixture of phase functions…).
   void validate() const;
 
   // The phase function shared by all non-Rayleigh constituents (the tables keep

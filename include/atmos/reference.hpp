@@ -157,9 +157,10 @@ namespace reference_detail {
 double optical_depth(const Atmosphere& atmosphere, double wavelength_nm, const glm::dvec3& from,
                      const glm::dvec3& to);
 
-// Phase function value p(cos θ) in sr^-1, normalised so that ∫ p dω = 1; θ is
-// the angle between the incident and the scattered propagation directions.
-double phase_function(const PhaseFunction& phase, double cos_theta);
+// Phase function value p(cos θ) in sr^-1 at one wavelength, normalised so
+// that ∫ p dω = 1; θ is the angle between the incident and the scattered
+// propagation directions.
+double phase_function(const PhaseFunction& phase, double wavelength_nm, double cos_theta);
 
 // SplitMix64 (Steele, Lea & Flood 2014): a 64-bit counter advanced by the
 // golden-ratio increment and passed through a bijective mixer.
@@ -182,8 +183,9 @@ class Random {
 // Draws cos θ with density p(cos θ)·2π (the phase function as a density over
 // directions, azimuth uniform), exactly: Rayleigh by inverting its cubic CDF,
 // Henyey–Greenstein by its analytic inverse CDF, Cornette–Shanks by rejection
-// from Henyey–Greenstein.
-double sample_phase_cosine(const PhaseFunction& phase, Random& random);
+// from Henyey–Greenstein, double Henyey–Greenstein by picking a lobe by its
+// weight and sampling it; the parameters at `wavelength_nm`.
+double sample_phase_cosine(const PhaseFunction& phase, double wavelength_nm, Random& random);
 
 }  // namespace reference_detail
 

@@ -364,12 +364,15 @@ INLINE AerialPerspectiveSlice aerial_perspective_march_slice(IN(AtmosphereParams
     }
     vec3 sun = spectral.set[k].solar_irradiance;
     m.single_rayleigh += spectral.to_channels[k] * (sun * rayleigh);
-    m.aerosol += spectral.to_channels[k] * (sun * aerosol);
+    // Weighted by the triple's aerosol phase function and divided by the
+    // channels' below, as spectral_single_scattering (exact when the phase
+    // function changes with wavelength inside a channel).
+    m.aerosol += spectral.to_channels[k] * (sun * aerosol * aerosol_phase_function(spectral.set[k], m.nu));
     slice.transmittance += spectral.to_channels[k] * (sun * exp(-m.optical_depth[k]));
   }
   m.t = t_s;
   slice.single_rayleigh = m.single_rayleigh;
-  slice.aerosol = m.aerosol;
+  slice.aerosol = m.aerosol / aerosol_phase_function(atmosphere, m.nu);
   // Sunlight-weighted, as channel_transmittance.
   slice.transmittance = max(slice.transmittance / max(atmosphere.solar_irradiance, vec3(1e-30f)), vec3(0.0f));
 

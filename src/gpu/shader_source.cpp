@@ -19,7 +19,7 @@ namespace {
 static_assert(sizeof(physics::DensityProfile) == 4 * (2 + 2 * MAX_DENSITY_KNOTS),
               "DensityProfile changed: update atmosphere_params_glsl()");
 static_assert(sizeof(physics::AtmosphereParams) ==
-                  4 * (3 + 2 + 2 * 3 + 2 + 8 + 2) + MAX_CONSTITUENTS * (sizeof(physics::DensityProfile) + 4 * (3 + 3 + 1)),
+                  4 * (3 + 1 + 3 * 3 + 2 * 3 + 2 + 8 + 2) + MAX_CONSTITUENTS * (sizeof(physics::DensityProfile) + 4 * (3 + 3 + 1)),
               "AtmosphereParams changed: update atmosphere_params_glsl()");
 
 std::string glsl_int(int value) { return std::to_string(value); }
@@ -76,7 +76,8 @@ std::string atmosphere_params_expression(const physics::AtmosphereParams& p) {
   s += "    " + glsl_array("vec3", n, [&](int i) { return glsl_vec3(p.scattering[i]); }) + ",\n";
   s += "    " + glsl_array("vec3", n, [&](int i) { return glsl_vec3(p.absorption[i]); }) + ",\n";
   s += "    " + glsl_array("int", n, [&](int i) { return glsl_int(p.is_aerosol[i]); }) + ",\n";
-  s += "    " + glsl_int(p.aerosol_phase_kind) + ", " + glsl_float(p.aerosol_g) + ",\n";
+  s += "    " + glsl_int(p.aerosol_phase_kind) + ", " + glsl_vec3(p.aerosol_g) + ", " + glsl_vec3(p.aerosol_g_back) +
+       ", " + glsl_vec3(p.aerosol_forward_weight) + ",\n";
   s += "    " + glsl_vec3(p.ground_albedo) + ", " + glsl_vec3(p.solar_irradiance) + ",\n";
   s += "    " + glsl_float(p.sun_angular_radius) + ", " + glsl_float(p.mu_s_min) + ",\n";
   s += "    " + glsl_int(p.transmittance_mu_size) + ", " + glsl_int(p.transmittance_r_size) + ", " +

@@ -260,21 +260,47 @@ DensityProfile parse_density(const json& q, const std::string& origin, const std
   return d;
 }
 
-PhaseFunction parse_phase(const json& q, const std::string& origin, const std::string& path) {
+// A phase function parameter: a number (the same at every wavelength) or a
+// dimensionless spectrum in the form of the coefficients,
+// {"wavelengths_nm": [...], "values": [...]} ("unit" optional, "1").
+Spectrum parse_phase_parameter(const json& parent, const std::string& key, const std::vector<double>& wavelengths,
+                               const std::string& origin, const std::string& path) {
+  const std::string p = path + "." + key;
+  const json& q = require(parent, key, origin, path);
+  if (q.is_number()) return Spectrum::constant(finite_or_fail(q, origin, p));
+  if (!q.is_object()) fail(origin, p + " must be a number or {\"wavelengths_nm\": [...], \"values\": [...]}");
+  check_keys(q, {"unit", "value", "values", "wavelengths_nm"}, origin, p);
+  json with_unit = q;
+  if (!with_unit.contains("unit")) with_unit["unit"] = "1";
+  return parse_spectrum(with_unit, "dimensionless", wavelengths, origin, p);
+}
+
+PhaseFunction parse_phase(const json& q, const std::vector<double>& wavelengths, const std::string& origin,
+                          const std::string& path) {
   if (!q.is_object() || !q.contains("type") || !q.at("type").is_string())
     fail(origin, path + " needs a \"type\"");
   const std::string type = q.at("type").get<std::string>();
   PhaseFunction p;
   if (type == "rayleigh") {
-    check_keys(q, {"type"}, origin, path);
+    for (const auto& item : q.items())
+      if (item.key() != "type")
+        fail(origin, path + ": a rayleigh phase function takes no parameters (got \"" + item.key() + "\")");
     p.kind = PhaseFunction::Kind::rayleigh;
+    return p;
+  }
+  if (type == "double_henyey_greenstein") {
+    check_keys(q, {"type", "g", "g_back", "forward_weight"}, origin, path);
+    p.kind = PhaseFunction::Kind::double_henyey_greenstein;
+    p.g = parse_phase_parameter(q, "g", wavelengths, origin, path);
+    p.g_back = parse_phase_parameter(q, "g_back", wavelengths, origin, path);
+    p.forward_weight = parse_phase_parameter(q, "forward_weight", wavelengths, origin, path);
     return p;
   }
   if (type == "henyey_greenstein") p.kind = PhaseFunction::Kind::henyey_greenstein;
   else if (type == "cornette_shanks") p.kind = PhaseFunction::Kind::cornette_shanks;
-  else fail(origin, path + ".type must be rayleigh, henyey_greenstein or cornette_shanks");
+  else fail(origin, path + ".type must be rayleigh, henyey_greenstein, cornette_shanks or double_henyey_greenstein");
   check_keys(q, {"type", "g"}, origin, path);
-  p.g = finite_or_fail(require(q, "g", origin, path), origin, path + ".g");
+  p.g = parse_phase_parameter(q, "g", wavelengths, origin, path);
   return p;
 }
 
@@ -315,6 +341,34 @@ double DensityProfile::at(double altitude_m) const {
     if (altitude_m <= knots[i].first) {
       const double t = (altitude_m - knots[i - 1].first) / (knots[i].first - knots[i - 1].first);
       return knots[i - 1].second + t * (knots[i].second - knots[i - 1].second);
+    }
+  }
+  return 0.0;
+}
+
+PhaseFunction::PhaseFunction(Kind kind_, double g_) : kind(kind_) {
+  if (kind != Kind::rayleigh) g = Spectrum::constant(g_);
+}
+
+PhaseFunction::PhaseFunction(Kind kind_, Spectrum g_, Spectrum g_back_, Spectrum forward_weight_)
+    : kind(kind_), g(std::move(g_)), g_back(std::move(g_back_)), forward_weight(std::move(forward_weight_)) {}
+
+double PhaseFunction::at(double wavelength_nm, double nu) const {
+  auto hg = [nu](double a) {
+    const double k = 1.0 + a * a - 2.0 * a * nu;
+    return (1.0 - a * a) / (4.0 * M_PI * k * std::sqrt(k));
+  };
+  switch (kind) {
+    case Kind::rayleigh: return 3.0 / (16.0 * M_PI) * (1.0 + nu * nu);
+    case Kind::henyey_greenstein: return hg(g.at(wavelength_nm));
+    case Kind::cornette_shanks: {
+      const double s = g.at(wavelength_nm);
+      const double k = 1.0 + s * s - 2.0 * s * nu;
+      return 3.0 / (8.0 * M_PI) * (1.0 - s * s) * (1.0 + nu * nu) / ((2.0 + s * s) * k * std::sqrt(k));
+    }
+    case Kind::double_henyey_greenstein: {
+      const double w = forward_weight.at(wavelength_nm);
+      return w * hg(g.at(wavelength_nm)) + (1.0 - w) * hg(g_back.at(wavelength_nm));
     }
   }
   return 0.0;
@@ -379,8 +433,34 @@ void Atmosphere::validate() const {
           bad(n + " density altitudes must increase");
       }
     }
-    if (c.phase.kind != PhaseFunction::Kind::rayleigh) {
-      if (!(std::abs(c.phase.g) < 0.999)) bad(n + " phase function g must be in (-0.999, 0.999)");
+    if (c.phase.kind == PhaseFunction::Kind::rayleigh) {
+      if (!c.phase.g.empty() || !c.phase.g_back.empty() || !c.phase.forward_weight.empty())
+        bad(n + " phase_function: a rayleigh phase function takes no parameters");
+    } else {
+      // Every sample (the interpolation between them stays inside the bounds).
+      auto check_parameter = [&](const Spectrum& s, const std::string& field, double lo, double hi, bool open) {
+        if (s.empty()) bad(n + " phase_function." + field + " is missing");
+        for (size_t i = 0; i < s.values().size(); ++i) {
+          const double v = s.values()[i];
+          if (!(open ? (v > lo && v < hi) : (v >= lo && v <= hi))) {
+            auto num = [](double x) {
+              std::ostringstream o;
+              o << x;
+              return o.str();
+            };
+            const std::string where = s.values().size() == 1 ? "" : " at " + num(s.wavelengths_nm()[i]) + " nm";
+            bad(n + " phase_function." + field + where + " must be in " + (open ? "(" : "[") + num(lo) + ", " +
+                num(hi) + (open ? ")" : "]") + ", got " + num(v));
+          }
+        }
+      };
+      check_parameter(c.phase.g, "g", -0.999, 0.999, true);
+      if (c.phase.kind == PhaseFunction::Kind::double_henyey_greenstein) {
+        check_parameter(c.phase.g_back, "g_back", -0.999, 0.999, true);
+        check_parameter(c.phase.forward_weight, "forward_weight", 0.0, 1.0, false);
+      } else if (!c.phase.g_back.empty() || !c.phase.forward_weight.empty()) {
+        bad(n + " phase_function: g_back and forward_weight are only for double_henyey_greenstein");
+      }
       if (aerosol_seen && !(c.phase == aerosol))
         bad(n + " has a different aerosol phase function than an earlier constituent; all non-Rayleigh "
                 "constituents of a planet must share one phase function");
@@ -447,7 +527,8 @@ Atmosphere parse_atmosphere(const std::string& json_text, const std::string& ori
                                   path + ".scattering");
     k.absorption = parse_spectrum(require(c, "absorption", origin, path), "inverse_length", a.wavelengths_nm, origin,
                                   path + ".absorption");
-    k.phase = parse_phase(require(c, "phase_function", origin, path), origin, path + ".phase_function");
+    k.phase = parse_phase(require(c, "phase_function", origin, path), a.wavelengths_nm, origin,
+                          path + ".phase_function");
     a.constituents.push_back(std::move(k));
   }
   a.validate();

@@ -28,6 +28,7 @@
 
 #define PHASE_HENYEY_GREENSTEIN 0
 #define PHASE_CORNETTE_SHANKS 1
+#define PHASE_DOUBLE_HENYEY_GREENSTEIN 2
 
 const float PI = 3.14159265358979f;
 
@@ -52,8 +53,14 @@ struct AtmosphereParams {
   vec3 scattering[MAX_CONSTITUENTS];            // m^-1 at reference density
   vec3 absorption[MAX_CONSTITUENTS];            // m^-1 at reference density
   int is_aerosol[MAX_CONSTITUENTS];             // 0: Rayleigh phase function, 1: the aerosol phase function
-  int aerosol_phase_kind;                       // PHASE_HENYEY_GREENSTEIN or PHASE_CORNETTE_SHANKS
-  float aerosol_g;                              // asymmetry parameter
+  // The aerosol phase function, one set of parameters per channel: for a
+  // wavelength triple its three wavelengths; for the render parameters of the
+  // spectral mode the representative wavelengths of the sRGB channels (see
+  // make_render_params).
+  int aerosol_phase_kind;                       // PHASE_HENYEY_GREENSTEIN, _CORNETTE_SHANKS or _DOUBLE_HENYEY_GREENSTEIN
+  vec3 aerosol_g;                               // asymmetry parameter (of the forward lobe)
+  vec3 aerosol_g_back;                          // double HG: asymmetry parameter of the second lobe (else 0)
+  vec3 aerosol_forward_weight;                  // double HG: weight of the first lobe (else 1)
   vec3 ground_albedo;
   vec3 solar_irradiance;                        // W m^-2 nm^-1 at the top of the atmosphere
   float sun_angular_radius;                     // rad

@@ -153,10 +153,27 @@ INLINE float cornette_shanks_phase_function(float g, float nu) {
   return 3.0f / (8.0f * PI) * (1.0f - g * g) * (1.0f + nu * nu) / ((2.0f + g * g) * k * sqrt(k));
 }
 
-INLINE float aerosol_phase_function(IN(AtmosphereParams) atmosphere, float nu) {
-  if (atmosphere.aerosol_phase_kind == PHASE_CORNETTE_SHANKS)
-    return cornette_shanks_phase_function(atmosphere.aerosol_g, nu);
-  return henyey_greenstein_phase_function(atmosphere.aerosol_g, nu);
+// Two-term Henyey-Greenstein (Kattawar 1975): w HG(g) + (1 - w) HG(g_back).
+INLINE float double_henyey_greenstein_phase_function(float g, float g_back, float w, float nu) {
+  return w * henyey_greenstein_phase_function(g, nu) + (1.0f - w) * henyey_greenstein_phase_function(g_back, nu);
+}
+
+// The aerosol phase function per channel (its parameters may differ between
+// the channels' wavelengths, see AtmosphereParams).
+INLINE vec3 aerosol_phase_function(IN(AtmosphereParams) atmosphere, float nu) {
+  vec3 p;
+  for (int c = 0; c < 3; ++c) {
+    float g = atmosphere.aerosol_g[c];
+    if (atmosphere.aerosol_phase_kind == PHASE_CORNETTE_SHANKS) {
+      p[c] = cornette_shanks_phase_function(g, nu);
+    } else if (atmosphere.aerosol_phase_kind == PHASE_DOUBLE_HENYEY_GREENSTEIN) {
+      p[c] = double_henyey_greenstein_phase_function(g, atmosphere.aerosol_g_back[c],
+                                                     atmosphere.aerosol_forward_weight[c], nu);
+    } else {
+      p[c] = henyey_greenstein_phase_function(g, nu);
+    }
+  }
+  return p;
 }
 
 // ===========================================================================
@@ -905,7 +922,11 @@ INLINE vec3 compute_multiple_scattering(IN(AtmosphereParams) atmosphere, IN(samp
 }
 
 // Radiance of single scattering from the tables' values without phase
-// functions (single Rayleigh, or Rayleigh + multiple / P_R, and single aerosol).
+// functions (single Rayleigh, or Rayleigh + multiple / P_R, and single aerosol),
+// channel by channel. In the spectral mode the aerosol value is not quite
+// phase-free: it holds the ratio of the sum over wavelengths to this phase
+// function (see spectral_single_scattering and precompute.cpp), so that this
+// product restores each wavelength's own phase function.
 INLINE vec3 phase_weighted_scattering(IN(AtmosphereParams) atmosphere, vec3 rayleigh, vec3 aerosol, float nu) {
   return rayleigh * rayleigh_phase_function(nu) + aerosol * aerosol_phase_function(atmosphere, nu);
 }
@@ -1103,6 +1124,14 @@ INLINE bool ray_in_planet_shadow(IN(AtmosphereParams) atmosphere, float mu_s, fl
 // to integrate on the night side (ray_in_planet_shadow). With moons
 // (eclipse.glsl), as integrate_single_scattering; `diffuse_visibility` is
 // then the mean of the triples' (1 without moons, and on the night side).
+// The aerosol phase function may change with wavelength inside a channel:
+// `aerosol` is, per channel c, the phase-weighted sum over the wavelengths
+// divided by the channel's phase function (that of `atmosphere`, the render
+// parameters),
+//   aerosol_c = Σ_λ M_cλ S_λ P_λ(nu) / P_c(nu),
+// so that phase_weighted_scattering() gives Σ_λ M_cλ S_λ P_λ(nu) exactly (the
+// form of the single aerosol table, precompute.cpp). In the three-wavelength
+// mode P_λ = P_c and this is S itself.
 INLINE void spectral_single_scattering(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
                                        IN(sampler2D) spectral_transmittance_texture, float r, float mu, float mu_s,
                                        float nu, float d, IN(Moons) moons, vec3 origin, vec3 view_ray,
@@ -1121,9 +1150,10 @@ INLINE void spectral_single_scattering(IN(AtmosphereParams) atmosphere, IN(Spect
                                 RUNTIME_SINGLE_SCATTERING_INTERVALS, RUNTIME_RAY_MAP_CELLS, moons, origin, view_ray,
                                 sun_direction, set_rayleigh, set_aerosol, set_visibility);
     rayleigh += spectral.to_channels[k] * set_rayleigh;
-    aerosol += spectral.to_channels[k] * set_aerosol;
+    aerosol += spectral.to_channels[k] * (set_aerosol * aerosol_phase_function(spectral.set[k], nu));
     visibility_sum += set_visibility;
   }
+  aerosol /= aerosol_phase_function(atmosphere, nu);
   diffuse_visibility = visibility_sum / float(SPECTRAL_COUNT(spectral));
 }
 

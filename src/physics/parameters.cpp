@@ -38,6 +38,25 @@ glm::mat3 channels_to_srgb_matrix(const std::vector<double>& wavelengths_nm) {
   return radiance_to_srgb_matrix({wavelengths_nm[0], wavelengths_nm[1], wavelengths_nm[2]});
 }
 
+namespace {
+
+// The aerosol phase function's parameters at one wavelength per channel.
+void set_aerosol_phase(AtmosphereParams& p, const PhaseFunction& aerosol, const std::array<double, 3>& w) {
+  auto spectrum = [&](const Spectrum& s) {
+    return vec3(float(s.at(w[0])), float(s.at(w[1])), float(s.at(w[2])));
+  };
+  p.aerosol_phase_kind = aerosol.kind == PhaseFunction::Kind::cornette_shanks ? PHASE_CORNETTE_SHANKS
+                         : aerosol.kind == PhaseFunction::Kind::double_henyey_greenstein
+                             ? PHASE_DOUBLE_HENYEY_GREENSTEIN
+                             : PHASE_HENYEY_GREENSTEIN;
+  p.aerosol_g = spectrum(aerosol.g);
+  const bool two_lobes = aerosol.kind == PhaseFunction::Kind::double_henyey_greenstein;
+  p.aerosol_g_back = two_lobes ? spectrum(aerosol.g_back) : vec3(0.0f);
+  p.aerosol_forward_weight = two_lobes ? spectrum(aerosol.forward_weight) : vec3(1.0f);
+}
+
+}  // namespace
+
 AtmosphereParams make_atmosphere_params(const Atmosphere& atmosphere, const TableSizes& sizes, int set,
                                         int transmittance_tile, int transmittance_tiles) {
   AtmosphereParams p{};
@@ -48,10 +67,7 @@ AtmosphereParams make_atmosphere_params(const Atmosphere& atmosphere, const Tabl
   p.bottom_radius = float(atmosphere.bottom_radius_m);
   p.top_radius = float(atmosphere.top_radius_m);
   p.constituent_count = int(atmosphere.constituents.size());
-  const PhaseFunction aerosol = atmosphere.aerosol_phase();
-  p.aerosol_phase_kind =
-      aerosol.kind == PhaseFunction::Kind::cornette_shanks ? PHASE_CORNETTE_SHANKS : PHASE_HENYEY_GREENSTEIN;
-  p.aerosol_g = float(aerosol.g);
+  set_aerosol_phase(p, atmosphere.aerosol_phase(), w);
   for (int i = 0; i < p.constituent_count; ++i) {
     const Constituent& c = atmosphere.constituents[size_t(i)];
     DensityProfile& d = p.density[i];
@@ -102,6 +118,16 @@ AtmosphereParams make_render_params(const Atmosphere& atmosphere, const TableSiz
   // clamped to [0, 1] all the same, as a reflectance must be.
   p.ground_albedo = clamp(vec3(reflected / sun), 0.0f, 1.0f);
   for (int i = 0; i < MAX_CONSTITUENTS; ++i) p.scattering[i] = p.absorption[i] = vec3(0.0f);
+  // The run time applies the aerosol phase function per pixel in the
+  // channels (linear sRGB): each channel gets the parameters at a wavelength
+  // representative of it, those of the three-wavelength mode (red 680, green
+  // 550, blue 440 nm, near the peaks of the sRGB colour matching functions).
+  // The single aerosol table and the spectral integration store the ratio of
+  // the exact per-wavelength sum to this phase function (precompute.cpp,
+  // spectral_single_scattering), so the choice does not bias the result; a
+  // phase function close to the channel's effective one keeps that ratio
+  // smooth in nu, which the tables interpolate.
+  set_aerosol_phase(p, atmosphere.aerosol_phase(), kRenderPhaseWavelengths);
   return p;
 }
 

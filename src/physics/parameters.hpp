@@ -13,6 +13,10 @@
 
 namespace atmos::physics {
 
+// The wavelengths (nm) whose aerosol phase function the R, G, B channels of
+// sRGB render tables use.
+inline constexpr std::array<double, 3> kRenderPhaseWavelengths = {680.0, 550.0, 440.0};
+
 // Lowest sun zenith cosine stored in the scattering tables: the sun is below
 // the horizon of every point of the atmosphere (the horizon dip seen from the
 // top, acos(R_bottom / R_top)) plus a margin of 2° for the light scattered by
@@ -49,7 +53,8 @@ AtmosphereParams make_atmosphere_params(const Atmosphere& atmosphere, const Tabl
 // (for sRGB channels: the sRGB of the solar spectrum / 683, and the albedo
 // that reflects it, sRGB(albedo x sun) / sRGB(sun)). The medium's
 // coefficients are zero for sRGB channels: everything spectral goes through
-// the SpectralSets.
+// the SpectralSets. The aerosol phase function of sRGB channel c is that of
+// wavelength kRenderPhaseWavelengths[c] (see the .cpp).
 AtmosphereParams make_render_params(const Atmosphere& atmosphere, const TableSizes& sizes);
 
 // Every triple, each reading its tile of the spectral transmittance texture

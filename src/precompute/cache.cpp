@@ -112,8 +112,17 @@ std::string tables_cache_key(const Atmosphere& a, const PrecomputeOptions& optio
       h.value(altitude);
       h.value(density);
     }
+    // Every sample of the phase function's spectra (not their values at the
+    // working wavelengths only: the render parameters sample them at 680,
+    // 550 and 440 nm too).
     h.value(int(c.phase.kind));
-    h.value(c.phase.g);
+    for (const Spectrum* s : {&c.phase.g, &c.phase.g_back, &c.phase.forward_weight}) {
+      h.value(s->values().size());
+      for (size_t i = 0; i < s->values().size(); ++i) {
+        h.value(s->wavelengths_nm()[i]);
+        h.value(s->values()[i]);
+      }
+    }
   }
   return hex(h.h);
 }

@@ -77,10 +77,10 @@ double luminance_sum(const physics::AtmosphereParams& a, const precompute::Table
           for (int y = 0; y < table.height; ++y)
             for (int x = 0; x < table.width; ++x) {
               const float nu = physics::scattering_texel_tile_nu(a, physics::vec3(float(x), float(y), float(z)));
-              const float p = phase == 0   ? 1.0f
-                              : phase == 1 ? physics::rayleigh_phase_function(nu)
-                                           : physics::aerosol_phase_function(a, nu);
-              sum += double(glm::dot(luminance, table.at(x, y, z))) * double(p);
+              const glm::vec3 p = phase == 0   ? glm::vec3(1.0f)
+                                  : phase == 1 ? glm::vec3(physics::rayleigh_phase_function(nu))
+                                               : physics::aerosol_phase_function(a, nu);
+              sum += double(glm::dot(luminance, table.at(x, y, z) * p));
             }
         return sum;
       },
@@ -165,6 +165,24 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
     tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size()), [&](const tbb::blocked_range<size_t>& range) {
       for (size_t i = range.begin(); i != range.end(); ++i) sum[i] += m * texels[i];
     });
+  };
+
+  // The single aerosol table of sRGB channels. The run time multiplies its
+  // value by the channel's aerosol phase function P_c (the render params',
+  // make_render_params), but the phase function may change with wavelength
+  // inside a channel (dust's forward lobe narrows towards the blue). So each
+  // texel holds, for channel c,
+  //   Σ_λ M_cλ S_λ P_λ(nu) / P_c(nu),
+  // S_λ the phase-free single aerosol scattering at wavelength λ, M the
+  // conversion to the channels, P_λ that wavelength's phase function: the
+  // product at run time is then exact at the table's nu samples and
+  // interpolated between them. nu is the texel's tile nu, as for the division
+  // by the Rayleigh phase function in add_to_multiple (the run-time
+  // interpolation between tiles weights them by their tile nu). With three
+  // wavelengths P_λ = P_c and the table stays phase-free (untouched).
+  const AtmosphereParams render = physics::make_render_params(atmosphere, options.sizes);
+  auto aerosol_phase_nu = [&](int x, int y, int z) {
+    return physics::scattering_texel_tile_nu(render, physics::vec3(float(x), float(y), float(z)));
   };
 
   for (int set = 0; set < set_count; ++set) {
@@ -292,6 +310,16 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
     accumulate(out.direct_irradiance, direct_irradiance.texels, to_channels);
     accumulate(out.indirect_irradiance, indirect_irradiance.texels, to_channels);
     accumulate(out.scattering, scattering.texels, to_channels);
+    if (srgb) {
+      // The phase ratio (see below): this set's phase function, per
+      // wavelength, before the conversion to the channels. The set's own
+      // table stays phase-free (its orders are done).
+      tbb::parallel_for(0, single_aerosol.depth, [&](int z) {
+        for (int y = 0; y < single_aerosol.height; ++y)
+          for (int x = 0; x < single_aerosol.width; ++x)
+            single_aerosol.at(x, y, z) *= physics::aerosol_phase_function(a, aerosol_phase_nu(x, y, z));
+      });
+    }
     accumulate(out.single_aerosol, single_aerosol.texels, to_channels);
     accumulate(out.multiple_scattering, multiple.texels, to_channels);
     // Triple `set` is tile `set` of the spectral optical depth (rows of
@@ -303,6 +331,16 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
       for (int x = 0; x < w; ++x)
         tables.spectral_optical_depth[size_t(y) * size_t(w) * size_t(set_count) + size_t(set) * size_t(w) +
                                       size_t(x)] = transmittance.at(x, y);
+  }
+  if (srgb) {
+    const int width = options.sizes.scattering_nu * options.sizes.scattering_mu_s;
+    const int height = options.sizes.scattering_mu, depth = options.sizes.scattering_r;
+    tbb::parallel_for(0, depth, [&](int z) {
+      for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x)
+          out.single_aerosol[(size_t(z) * size_t(height) + size_t(y)) * size_t(width) + size_t(x)] /=
+              physics::aerosol_phase_function(render, aerosol_phase_nu(x, y, z));
+    });
   }
   // Order n over all sets; a set that stopped earlier (auto orders) adds
   // nothing more but its light still counts in the total.

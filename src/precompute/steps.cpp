@@ -643,8 +643,11 @@ DensityGeometry make_density_geometry(const AtmosphereParams& a) {
   const int mu_vectors = (mu_size + 3) / 4;
   const std::vector<double> rayleigh_moments =
       legendre_moments([](double x) { return double(rayleigh_phase_function(float(x))); }, L);
-  const std::vector<double> aerosol_moments =
-      legendre_moments([&](double x) { return double(aerosol_phase_function(a, float(x))); }, L);
+  // Per channel: the phase function may differ between the set's wavelengths.
+  std::array<std::vector<double>, 3> aerosol_moments;
+  for (int c = 0; c < 3; ++c)
+    aerosol_moments[size_t(c)] =
+        legendre_moments([&](double x) { return double(aerosol_phase_function(a, float(x))[c]); }, L);
   for (int l = 0; l <= kPhiIntervals; ++l) g.cos_phi[size_t(l)] = float(std::cos(M_PI * l / kPhiIntervals));
   for (int l = 0; l < kDensityPhiPairs; ++l)
     for (int m = 0; m <= L; ++m) {
@@ -699,7 +702,7 @@ DensityGeometry make_density_geometry(const AtmosphereParams& a) {
       for (int m = 0; m <= L; ++m)
         for (int l = m; l <= L; ++l)
           slice.moment_scale[size_t(c)][size_t(layout.offset[size_t(m)] + l - m)] =
-              beta_rayleigh[c] * float(rayleigh_moments[size_t(l)]) + beta_aerosol[c] * float(aerosol_moments[size_t(l)]);
+              beta_rayleigh[c] * float(rayleigh_moments[size_t(l)]) + beta_aerosol[c] * float(aerosol_moments[size_t(c)][size_t(l)]);
     }
   });
   return g;

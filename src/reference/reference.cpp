@@ -111,6 +111,55 @@ double sample_rayleigh(double xi) {
   return std::clamp(u - 1.0 / u, -1.0, 1.0);
 }
 
+// A phase function at one wavelength: its parameters sampled there.
+struct PhaseAt {
+  PhaseFunction::Kind kind = PhaseFunction::Kind::rayleigh;
+  double g = 0.0, g_back = 0.0, forward_weight = 1.0;
+};
+
+PhaseAt phase_at(const PhaseFunction& phase, double wavelength_nm) {
+  PhaseAt p;
+  p.kind = phase.kind;
+  if (phase.kind == PhaseFunction::Kind::rayleigh) return p;
+  p.g = phase.g.at(wavelength_nm);
+  if (phase.kind == PhaseFunction::Kind::double_henyey_greenstein) {
+    p.g_back = phase.g_back.at(wavelength_nm);
+    p.forward_weight = phase.forward_weight.at(wavelength_nm);
+  }
+  return p;
+}
+
+double evaluate_phase(const PhaseAt& p, double mu) {
+  switch (p.kind) {
+    case PhaseFunction::Kind::rayleigh: return rayleigh_phase(mu);
+    case PhaseFunction::Kind::henyey_greenstein: return henyey_greenstein_phase(p.g, mu);
+    case PhaseFunction::Kind::cornette_shanks: return cornette_shanks_phase(p.g, mu);
+    case PhaseFunction::Kind::double_henyey_greenstein:
+      return p.forward_weight * henyey_greenstein_phase(p.g, mu) +
+             (1.0 - p.forward_weight) * henyey_greenstein_phase(p.g_back, mu);
+  }
+  return 0.0;
+}
+
+template <typename Random>
+double sample_phase(const PhaseAt& p, Random& random) {
+  switch (p.kind) {
+    case PhaseFunction::Kind::rayleigh: return sample_rayleigh(random.uniform());
+    case PhaseFunction::Kind::henyey_greenstein: return sample_henyey_greenstein(p.g, random.uniform());
+    case PhaseFunction::Kind::cornette_shanks:
+      // p_CS / p_HG = 3(1 + μ²) / (2(2 + g²)) <= 3/(2 + g²): accept an HG
+      // sample with probability (1 + μ²)/2 (acceptance >= 1/2).
+      for (;;) {
+        const double mu = sample_henyey_greenstein(p.g, random.uniform());
+        if (random.uniform() * 2.0 < 1.0 + mu * mu) return mu;
+      }
+    case PhaseFunction::Kind::double_henyey_greenstein:
+      // A mixture: pick the lobe by its weight, then sample that HG exactly.
+      return sample_henyey_greenstein(random.uniform() < p.forward_weight ? p.g : p.g_back, random.uniform());
+  }
+  return 1.0;
+}
+
 // ---------------------------------------------------------------------------
 // Geometry.
 
@@ -157,7 +206,10 @@ struct Model {
   int n = 0;                       // number of working wavelengths
   double rb = 0.0, rt = 0.0;       // radii of ground and top, m
   std::vector<DensityProfile> density;
-  std::vector<PhaseFunction> phase;
+  // Per constituent, the phase function at each working wavelength, and
+  // whether it is the same at all of them (then index 0 serves them all).
+  std::vector<std::array<PhaseAt, kMaxWavelengths>> phase;
+  std::vector<bool> phase_varies;
   std::vector<Spec> beta_s;        // per constituent, per wavelength, m^-1 at reference density
   std::vector<Spec> beta_ext;      // β_s + β_a
   Spec albedo{};                   // a(λ)
@@ -288,6 +340,16 @@ Spec optical_depth_spec(const Model& m, const struct Ray& ray, double t0, double
 // ground-grazing ray transmits more.
 double effective_shadow_radius(const Model& m);
 
+// p_i(λ, μ) of constituent i at every working wavelength (evaluated once
+// when it is the same at all of them).
+void phase_values(const Model& m, size_t i, double mu, Spec& out) {
+  if (!m.phase_varies[i]) {
+    out.fill(evaluate_phase(m.phase[i][0], mu));
+    return;
+  }
+  for (int l = 0; l < m.n; ++l) out[size_t(l)] = evaluate_phase(m.phase[i][size_t(l)], mu);
+}
+
 // `steering`: also compute the effective shadow radius (not needed for
 // optical depths alone).
 Model make_model(const Atmosphere& a, bool steering) {
@@ -307,7 +369,16 @@ Model make_model(const Atmosphere& a, bool steering) {
       e[size_t(l)] = c.scattering.at(w) + c.absorption.at(w);
     }
     m.density.push_back(c.density);
-    m.phase.push_back(c.phase);
+    std::array<PhaseAt, kMaxWavelengths> phase{};
+    bool varies = false;
+    for (int l = 0; l < m.n; ++l) {
+      phase[size_t(l)] = phase_at(c.phase, a.wavelengths_nm[size_t(l)]);
+      const PhaseAt& p0 = phase[0];
+      const PhaseAt& pl = phase[size_t(l)];
+      varies = varies || pl.g != p0.g || pl.g_back != p0.g_back || pl.forward_weight != p0.forward_weight;
+    }
+    m.phase.push_back(phase);
+    m.phase_varies.push_back(varies);
     m.beta_s.push_back(s);
     m.beta_ext.push_back(e);
   }
@@ -879,16 +950,23 @@ void follow_path(const Context& ctx, Vertex v, Spec beta, int order, reference_d
       if (sw > 0.0) {
         const Spec t = sun_transmittance(m, v.p, w);
         const double mu = glm::dot(w, v.d_in);
-        std::array<double, 4> p{};
-        for (size_t i = 0; i < nc; ++i) p[i] = reference_detail::phase_function(m.phase[i], mu);
+        // Each wavelength with its own phase function (dust's forward lobe
+        // narrows towards the blue).
+        std::array<Spec, 4> p{};
+        for (size_t i = 0; i < nc; ++i) phase_values(m, i, mu, p[i]);
         for (int l = 0; l < m.n; ++l) {
           double j = 0.0;
-          for (size_t i = 0; i < nc; ++i) j += sigma_s[i][size_t(l)] * p[i];
+          for (size_t i = 0; i < nc; ++i) j += sigma_s[i][size_t(l)] * p[i][size_t(l)];
           out[size_t(l)] += beta[size_t(l)] * m.sun_nee[size_t(l)] * sw * t[size_t(l)] * j;
         }
       }
       if (order >= ctx.max_order) return;
       // Continue: pick constituent i with probability c_i / Σc, then cos θ from p_i.
+      // A phase function that changes with wavelength: pick (i, λ) with
+      // probability σ_s,i(λ) / Σc (the rest of the same uniform number),
+      // then cos θ from p_i,λ. The density of the direction is the mixture
+      // q = Σ_i,λ σ_s,i(λ) p_i,λ / Σc (one-sample balance heuristic over the
+      // wavelengths the path carries), the same for every wavelength.
       double pick = rnd.uniform() * c_total;
       size_t chosen = 0;
       for (size_t i = 0; i < nc; ++i) {
@@ -897,19 +975,32 @@ void follow_path(const Context& ctx, Vertex v, Spec beta, int order, reference_d
         if (pick < c[i]) break;
         pick -= c[i];
       }
-      const double mu_s = reference_detail::sample_phase_cosine(m.phase[chosen], rnd);
+      size_t chosen_l = 0;
+      if (m.phase_varies[chosen]) {
+        for (int l = 0; l < m.n; ++l) {
+          if (sigma_s[chosen][size_t(l)] <= 0.0) continue;
+          chosen_l = size_t(l);
+          if (pick < sigma_s[chosen][size_t(l)]) break;
+          pick -= sigma_s[chosen][size_t(l)];
+        }
+      }
+      const double mu_s = sample_phase(m.phase[chosen][chosen_l], rnd);
       next_dir = direction_around(v.d_in, mu_s, 2.0 * kPi * rnd.uniform());
       const double mu = glm::dot(next_dir, v.d_in);
-      std::array<double, 4> p{};
+      std::array<Spec, 4> p{};
       double q = 0.0;
       for (size_t i = 0; i < nc; ++i) {
-        p[i] = reference_detail::phase_function(m.phase[i], mu);
-        q += c[i] / c_total * p[i];
+        phase_values(m, i, mu, p[i]);
+        if (!m.phase_varies[i]) {
+          q += c[i] / c_total * p[i][0];
+        } else {
+          for (int l = 0; l < m.n; ++l) q += sigma_s[i][size_t(l)] / c_total * p[i][size_t(l)];
+        }
       }
       if (!(q > 0.0)) return;
       for (int l = 0; l < m.n; ++l) {
         double f = 0.0;
-        for (size_t i = 0; i < nc; ++i) f += sigma_s[i][size_t(l)] * p[i];
+        for (size_t i = 0; i < nc; ++i) f += sigma_s[i][size_t(l)] * p[i][size_t(l)];
         beta[size_t(l)] *= f / q;
       }
     }
@@ -1089,28 +1180,12 @@ Spec segment_optical_depth(const Model& m, const dvec3& from, const dvec3& to) {
 
 namespace reference_detail {
 
-double phase_function(const PhaseFunction& phase, double cos_theta) {
-  switch (phase.kind) {
-    case PhaseFunction::Kind::rayleigh: return rayleigh_phase(cos_theta);
-    case PhaseFunction::Kind::henyey_greenstein: return henyey_greenstein_phase(phase.g, cos_theta);
-    case PhaseFunction::Kind::cornette_shanks: return cornette_shanks_phase(phase.g, cos_theta);
-  }
-  return 0.0;
+double phase_function(const PhaseFunction& phase, double wavelength_nm, double cos_theta) {
+  return evaluate_phase(phase_at(phase, wavelength_nm), cos_theta);
 }
 
-double sample_phase_cosine(const PhaseFunction& phase, Random& random) {
-  switch (phase.kind) {
-    case PhaseFunction::Kind::rayleigh: return sample_rayleigh(random.uniform());
-    case PhaseFunction::Kind::henyey_greenstein: return sample_henyey_greenstein(phase.g, random.uniform());
-    case PhaseFunction::Kind::cornette_shanks:
-      // p_CS / p_HG = 3(1 + μ²) / (2(2 + g²)) <= 3/(2 + g²): accept an HG
-      // sample with probability (1 + μ²)/2 (acceptance >= 1/2).
-      for (;;) {
-        const double mu = sample_henyey_greenstein(phase.g, random.uniform());
-        if (random.uniform() * 2.0 < 1.0 + mu * mu) return mu;
-      }
-  }
-  return 1.0;
+double sample_phase_cosine(const PhaseFunction& phase, double wavelength_nm, Random& random) {
+  return sample_phase(phase_at(phase, wavelength_nm), random);
 }
 
 double optical_depth(const Atmosphere& atmosphere, double wavelength_nm, const glm::dvec3& from,
