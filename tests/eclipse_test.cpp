@@ -71,7 +71,7 @@ Camera straight_down(const glm::dvec3& position, int size) {
 // Silverman & Lloyd 1971, Appl. Opt. 10, 1207; Shaw 1975, Appl. Opt. 14, 388:
 // the eclipsed sky is a few 1e-4 of the uneclipsed one overhead), and the
 // horizon, where the view rays reach the sunlit air beyond the umbra, stays
-// many times brighter than the zenith: the horizon ring. The GPU image
+// several times brighter than the zenith: the horizon ring. The GPU image
 // matches the CPU's.
 TEST_F(EclipseGpu, TotalityDarkensTheSkyAndLeavesAHorizonRing) {
   atmos::Renderer renderer(*context_, *earth_, *tables_);
@@ -113,7 +113,10 @@ TEST_F(EclipseGpu, TotalityDarkensTheSkyAndLeavesAHorizonRing) {
               max_difference);
   EXPECT_GT(zenith_ratio, 1e-5);
   EXPECT_LT(zenith_ratio, 2e-3);
-  EXPECT_GT(ring, 10.0 * luminance(eclipse, c, c));
+  // The sunlit air beyond the umbra seen through the haze: 5.7x the zenith
+  // with Earth's continental aerosol (its slant optical depth at 4° is ~2),
+  // 26x with an aerosol 30 times thinner.
+  EXPECT_GT(ring, 3.0 * luminance(eclipse, c, c));
   EXPECT_LT(max_difference, 0.01);
 }
 

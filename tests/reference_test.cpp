@@ -237,7 +237,7 @@ TEST(Reference, VerticalOpticalDepthOfExponentialLayer) {
 }
 
 TEST(Reference, SlantOpticalDepthMatchesFineIntegration) {
-  const Atmosphere a = earth();  // air, aerosol (H = 1.2 km), piecewise-linear ozone
+  const Atmosphere a = earth();  // air, aerosol (H = 2 km), piecewise-linear ozone
   struct Case {
     double altitude, elevation_deg;
   };
@@ -250,7 +250,12 @@ TEST(Reference, SlantOpticalDepthMatchesFineIntegration) {
     const dvec3 q = ray_end(a, p, dvec3(std::cos(e), 0.0, std::sin(e)));
     for (double wavelength : {440.0, 680.0}) {
       const double expected = brute_force_optical_depth(a, wavelength, p, q);
-      EXPECT_NEAR(detail::optical_depth(a, wavelength, p, q), expected, 2e-6 * expected)
+      // 1e-5, the bound altitude_grid (src/reference/reference.cpp) states
+      // for steps of up to 3 scale heights: its grid follows the smallest
+      // scale height, the aerosol's 2 km, and reaches steps of 3 H of the air
+      // at 50 km (measured 8.9e-6 on the path grazing at 51 km, 2.3e-6 on
+      // the horizontal one from the ground).
+      EXPECT_NEAR(detail::optical_depth(a, wavelength, p, q), expected, 1e-5 * expected)
           << "altitude " << c.altitude << " elevation " << c.elevation_deg << " wavelength " << wavelength;
     }
   }
@@ -546,14 +551,17 @@ TEST(Reference, TwilightSingleScatteringMatchesQuadrature) {
 //
 // Bounds at 550 nm: single Rayleigh scattering alone (scattering angle
 // Θ = 30° between sun and zenith), optically thin, gives
-// E p_R(cos Θ) τ_R T = 1.86 · 0.1045 · 0.097 · e^{-0.13 (1 + 1/0.866)}
-// ≈ 0.014 W m^-2 sr^-1 nm^-1 (E from the 5778 K blackbody scaled to
-// 1361 W m^-2, τ 0.13 = air + aerosol + ozone), a lower bound; the
-// aerosol (τ 0.005), multiple scattering (+10-30 %) and ground (albedo 0.1)
-// add to it. With the clear-sky spectrum the luminance is ≈ 65 000 × L(550 nm)
+// E p_R(cos Θ) τ_R T = 1.86 · 0.1045 · 0.097 · e^{-0.28 (1 + 1/0.866)}
+// ≈ 0.010 W m^-2 sr^-1 nm^-1 (E from the 5778 K blackbody scaled to
+// 1361 W m^-2, τ 0.28 = air + aerosol + ozone), a lower bound; the
+// aerosol (τ 0.151, its phase function 0.31 sr^-1 at 30°, three times
+// Rayleigh's), multiple scattering (+10-30 %) and ground (albedo 0.1) add to
+// it. With the clear-sky spectrum the luminance is ≈ 65 000 × L(550 nm)
 // cd/m² (683 lm/W × ~95 nm effective width), and a clear-sky zenith at this
 // sun elevation is 1 000–6 000 cd/m²: plausible range 0.015 – 0.1. The blue
-// sky: λ^-4 with the solar spectrum makes L(440)/L(680) ≈ 7; accept 4–12.
+// sky: Rayleigh alone (λ^-4 with the solar spectrum) makes L(440)/L(680)
+// ≈ 7, the aerosol alone (Ångström 1.1-1.4) ≈ 2; single scattering by both
+// gives ≈ 2.7. Accept 1.8–7.
 TEST(Reference, EarthZenithRadianceIsPlausible) {
   const Atmosphere a = earth();
   ASSERT_EQ(a.wavelengths_nm.size(), 3u);
@@ -564,8 +572,8 @@ TEST(Reference, EarthZenithRadianceIsPlausible) {
   EXPECT_GT(r.radiance[1], 0.015);
   EXPECT_LT(r.radiance[1], 0.1);
   const double blue_red = r.radiance[2] / r.radiance[0];
-  EXPECT_GT(blue_red, 4.0);
-  EXPECT_LT(blue_red, 12.0);
+  EXPECT_GT(blue_red, 1.8);
+  EXPECT_LT(blue_red, 7.0);
   for (size_t l = 0; l < 3; ++l) EXPECT_LT(r.standard_error[l], 0.01 * r.radiance[l]) << l;
   std::printf("Earth zenith, sun 60 deg: %.5g %.5g %.5g W m^-2 sr^-1 nm^-1 at 680/550/440 nm (+- %.2f %% %.2f %% %.2f %%)\n",
               r.radiance[0], r.radiance[1], r.radiance[2], 100.0 * r.standard_error[0] / r.radiance[0],
@@ -695,8 +703,9 @@ TEST(Reference, ToPointAtRayEndIsRadiance) {
   const ReferenceResult black_to_ground = atmos::reference_radiance_to_point(a, x, ground, sun, o);
   for (size_t l = 0; l < 3; ++l) {
     EXPECT_NEAR(black_to_ground.radiance[l], black.radiance[l], 1e-6 * black.radiance[l]) << l;
-    // The ground term is several times the in-scatter of 2 km.
-    EXPECT_GT(lit.radiance[l], 1.5 * lit_to_ground.radiance[l]) << l;
+    // The ground term adds visibly to the in-scatter of 2 km of hazy air
+    // (measured: +47 % at 550 nm, +36 % at 440 nm, with the continental aerosol).
+    EXPECT_GT(lit.radiance[l], 1.2 * lit_to_ground.radiance[l]) << l;
   }
 }
 
