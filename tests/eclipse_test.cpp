@@ -238,6 +238,37 @@ TEST_F(EclipseGpu, AMoonAwayFromTheSunChangesOnlyItsDisc) {
   EXPECT_GT(luminance(with, 32, 32), 2.0 * luminance(without, 32, 32));
 }
 
+// The same from space, where every pixel evaluates its own view ray (no
+// sky-view table): a moon that cannot hide the sun (behind the camera, 120°
+// from the sun) leaves the planet's image as without it, the rays keeping
+// the tables' single scattering instead of integrating an eclipse that
+// cannot happen (the program is the eclipse variant, compiled apart: equal
+// to float rounding, not bit for bit).
+TEST_F(EclipseGpu, FromSpaceAMoonAwayFromTheSunChangesNothing) {
+  atmos::Renderer renderer(*context_, *earth_, *tables_);
+  const glm::dvec3 up(0.0, 0.0, 1.0);
+  const glm::dvec3 sun = glm::normalize(glm::dvec3(1.0, 0.0, 0.3));
+  Camera camera;
+  camera.position = glm::dvec3(0.0, 0.0, earth_->bottom_radius_m + 4.0e6);
+  camera.forward = -up;
+  camera.up = {0.0, 1.0, 0.0};
+  camera.fov_deg = 90.0;
+  camera.width = camera.height = 48;
+  const Image without = renderer.render(camera, sun);
+  const glm::dvec3 behind = glm::normalize(glm::dvec3(-0.5, 0.0, 1.0));  // up and away from the sun
+  renderer.set_moons({atmos::moon_in_sky(camera.position, behind, 0.28 * M_PI / 180.0)});
+  const Image with = renderer.render(camera, sun);
+  ASSERT_EQ(with.rgb.size(), without.rgb.size());
+  double lit = 0.0;
+  for (float v : without.rgb) lit = std::max(lit, double(v));
+  EXPECT_GT(lit, 0.0);  // the planet's lit side is in view
+  double worst = 0.0;
+  for (size_t i = 0; i < with.rgb.size(); ++i)
+    worst = std::max(worst, std::abs(double(with.rgb[i]) - double(without.rgb[i])) / (double(without.rgb[i]) + 1e-3 * lit));
+  std::printf("from space, a moon away from the sun: largest change %.2e\n", worst);
+  EXPECT_LT(worst, 1e-5);
+}
+
 // Bad moons are errors that keep the renderer's previous moons.
 TEST_F(EclipseGpu, RejectsBadMoons) {
   atmos::Renderer renderer(*context_, *earth_, *tables_);

@@ -711,7 +711,8 @@ INLINE vec3 composite_sky_pixel(IN(AtmosphereParams) atmosphere, IN(SpectralSets
                                           single_aerosol_texture, multiple_scattering_texture, irradiance_texture,
                                           sky_view_rayleigh_texture, sky_view_aerosol_texture,
                                           sky_view_surface_texture, use_sky_view, frame.sky_view, frame.camera,
-                                          view_ray, frame.sun_direction, frame.sun_disc, frame.stars, frame.moons);
+                                          view_ray, frame.sun_direction, frame.sun_disc, frame.stars, frame.moons,
+                                          true);  // frame.moons: only moons that may eclipse (make_pass_frame)
   if (frame.shadows) {
     // Up to where the ray leaves the atmosphere or meets the ground.
     vec3 start = camera_above_ground(atmosphere, frame.camera);

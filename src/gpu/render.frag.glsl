@@ -26,7 +26,10 @@ layout(location = 9) uniform mat3 radiance_to_srgb;
 layout(location = 12) uniform bool stars_enabled;
 layout(location = 13) uniform float star_sigma;
 // The moons (eclipse.glsl): uniform_moons() of table_bindings.glsl in the
-// variant RENDER_ECLIPSE 1 (with moons), none in RENDER_ECLIPSE 0.
+// variant RENDER_ECLIPSE 1 (with moons), none in RENDER_ECLIPSE 0; and
+// whether they may hide the sun from the atmosphere this frame
+// (moons_may_eclipse: if not, they are drawn and eclipse nothing).
+layout(location = 50) uniform bool moons_eclipse;
 
 layout(location = 0) out vec4 frag_color;
 
@@ -52,6 +55,6 @@ void main() {
                                           sky_view_rayleigh_texture, sky_view_aerosol_texture,
                                           sky_view_surface_texture, SKY_VIEW_CAMERA, uniform_sky_view_frame(), camera,
                                           view_ray, sun_direction, true, StarField(stars_enabled, star_sigma),
-                                          moons);
+                                          moons, moons_eclipse);
   frag_color = vec4(radiance_to_srgb * radiance, 1.0);
 }

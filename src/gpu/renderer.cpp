@@ -38,6 +38,8 @@ constexpr int kMaxImageSize = 16384;
 // stays small (64 MiB) for any image size, and no single draw runs long
 // enough to trip a desktop driver's watchdog.
 constexpr int kTileSize = 2048;
+// render.frag.glsl: `moons_eclipse`, after the moons (gpu::kMoonsLocation, 45..49).
+constexpr GLint kMoonsEclipseLocation = 50;
 
 bool is_finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
@@ -245,6 +247,7 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   glProgramUniform1i(program, 12, stars_ ? 1 : 0);
   glProgramUniform1f(program, 13, float(star_image_sigma(camera)));
   gpu::set_moons_uniforms(program, moons);
+  glProgramUniform1i(program, kMoonsEclipseLocation, eclipsing.count > 0 ? 1 : 0);
   tables_->bind();
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
@@ -360,7 +363,7 @@ Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camer
               params, *spectral, samplers.spectral_optical_depth, samplers.scattering, samplers.single_aerosol,
               samplers.multiple_scattering, samplers.indirect_irradiance, sky_view.sampler(0),
               sky_view.sampler(1), sky_view.sampler(2), sky_view_camera, sky_view_frame, frame.position, view_ray,
-              sun, true, star_field, moons);
+              sun, true, star_field, moons, eclipsing.count > 0);
           rgb = matrix * radiance;
         }
         dst[3 * x + 0] = rgb.x;

@@ -1593,10 +1593,11 @@ INLINE vec3 sky_radiance(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spect
 // (the CPU sky model; cameras in space, from where the lit atmosphere near
 // the terminator spans a few degrees that the table would blur). Shaders
 // pass a constant, so that the compiler drops the path not taken: software
-// rasterisers run both sides of a branch. With moons (eclipse.glsl) the
-// view ray's terms are eclipsed (view_ray_terms; a sky-view table must be
-// computed with the same moons), and a moon in front hides the sun disc and
-// the stars behind it and shows its own lit side (moon_radiance).
+// rasterisers run both sides of a branch. With moons (eclipse.glsl) a moon
+// in front hides the sun disc and the stars behind it and shows its own lit
+// side (moon_radiance); with `moons_eclipse` (moons_may_eclipse) they also
+// eclipse the view ray's terms (view_ray_terms; a sky-view table must be
+// computed with the same moons).
 INLINE vec3 radiance_along_view_ray(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
                                     IN(sampler2D) spectral_transmittance_texture, IN(sampler3D) scattering_texture,
                                     IN(sampler3D) single_aerosol_texture, IN(sampler3D) multiple_scattering_texture,
@@ -1604,7 +1605,7 @@ INLINE vec3 radiance_along_view_ray(IN(AtmosphereParams) atmosphere, IN(Spectral
                                     IN(sampler2D) sky_view_aerosol_texture, IN(sampler2D) sky_view_surface_texture,
                                     bool use_sky_view, IN(SkyViewFrame) sky_view, vec3 camera, vec3 view_ray,
                                     vec3 sun_direction, bool include_sun_disc, IN(StarField) stars,
-                                    IN(Moons) moons) {
+                                    IN(Moons) moons, bool moons_eclipse) {
   camera = camera_above_ground(atmosphere, camera);
   float nu = clamp_cosine(dot(view_ray, sun_direction));
   // The light from beyond the atmosphere along the ray: the sun disc and the
@@ -1634,9 +1635,14 @@ INLINE vec3 radiance_along_view_ray(IN(AtmosphereParams) atmosphere, IN(Spectral
     aerosol = vec3(texture(sky_view_aerosol_texture, uv));
     surface = vec3(texture(sky_view_surface_texture, uv));
   } else {
+    // Moons that cannot hide the sun from any point of the atmosphere
+    // (moons_may_eclipse, decided per frame) are drawn but shadow nothing:
+    // with none, view_ray_terms keeps the tables' single scattering.
+    Moons shadowing = no_moons();
+    if (moons_eclipse) shadowing = moons;
     view_ray_terms(atmosphere, spectral, spectral_transmittance_texture, scattering_texture, single_aerosol_texture,
                    multiple_scattering_texture, irradiance_texture, start, view_ray, sun_direction, ground, true,
-                   moons, rayleigh, aerosol, surface);
+                   shadowing, rayleigh, aerosol, surface);
   }
   vec3 radiance = phase_weighted_scattering(atmosphere, rayleigh, aerosol, nu);
   if (ground) return radiance + surface;

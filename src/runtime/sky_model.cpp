@@ -34,11 +34,12 @@ glm::dvec3 SkyModel::radiance(const glm::dvec3& observer, const glm::dvec3& view
   // tests measure).
   const physics::sampler2D no_sky_view{};
   const physics::SkyViewFrame no_frame{};
+  const physics::Moons physics_moons = physics::make_moons(impl_->params, moons);
   return glm::dvec3(physics::radiance_along_view_ray(
       impl_->params, *impl_->spectral, s.spectral_optical_depth, s.scattering, s.single_aerosol,
       s.multiple_scattering, s.indirect_irradiance, no_sky_view, no_sky_view, no_sky_view, false, no_frame,
       glm::vec3(observer), glm::vec3(view), glm::vec3(sun), include_sun_disc, physics::StarField{false, 0.0f},
-      physics::make_moons(impl_->params, moons)));
+      physics_moons, physics::moons_may_eclipse(impl_->params, physics_moons, glm::vec3(sun))));
 }
 
 void SkyModel::horizontal_irradiance(const glm::dvec3& point, const glm::dvec3& sun, glm::dvec3& sun_irradiance,
