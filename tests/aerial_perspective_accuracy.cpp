@@ -9,8 +9,8 @@
 // aerial_perspective_lookup) and the exact difference of two 4D table
 // lookups (scattering_to_point, Bruneton's method).
 //
-// Configurations: Earth preset (3 wavelengths, default table sizes, 4
-// orders; the reference counts the same K = 4 interactions), cameras at 2 m,
+// Configurations: the clear-sky Earth of clear_sky_earth.hpp (3
+// wavelengths, default table sizes, 4 orders; the reference counts the same K = 4 interactions), cameras at 2 m,
 // 300 m, 3 km and 12 km, the sun at 60°, 20°, 5°, 0° and -3°; view rays at
 // elevations -30°, -10°, -3°, -1°, 0°, 1°, 3° and 10°, each towards the sun's
 // azimuth, 90° from it and away from it; points at 100 m, 1 km, 5 km, 20 km
@@ -52,6 +52,7 @@
 #include "atmos/reference.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "clear_sky_earth.hpp"
 #include "gpu/atmosphere_pass.hpp"
 
 namespace {
@@ -116,7 +117,7 @@ struct CaseResult {
 class AerialPerspective : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    earth_ = new atmos::Atmosphere(atmos::load_atmosphere("earth"));
+    earth_ = new atmos::Atmosphere(clear_sky_earth());
     const atmos::PrecomputeOptions options;  // default sizes, 4 orders
     const char* cache = std::getenv("ATMOS_CACHE_DIR");
     tables_ = new atmos::Tables(cache ? atmos::load_or_precompute_tables(*earth_, options, cache).tables
@@ -339,6 +340,33 @@ TEST_F(AerialPerspective, VolumeMatchesReference) {
   std::printf("all      | volume RMS %5.2f %% max %6.2f %% dT %.4f | exact RMS %6.2f %% max %7.2f %% dT %.4f\n",
               100.0 * volume_all.rms(), 100.0 * volume_all.worst, volume_all.worst_transmittance,
               100.0 * exact_all.rms(), 100.0 * exact_all.worst, exact_all.worst_transmittance);
+}
+
+// The preset's continental haze, two cameras by day: the volume inherits the
+// tables' shortfall of multiple scattering towards the sun's azimuth near
+// the horizon (see HazyAccuracy in reference_accuracy.cpp; single
+// scattering alone, ATMOS_AP_SINGLE=1, is within 1.5 % RMS from 2 m with the
+// sun at 60°). Measured (session 7, before the exponential cells of the ray
+// maps): volume RMS 4.6-5.6 %, beyond 3 sigma 10-16 %, |dT| <= 0.0095.
+// Bounds: RMS 7 %, beyond 3 sigma 25 %, |dT| 0.012.
+TEST_F(AerialPerspective, ContinentalHazeByDay) {
+  atmos::Atmosphere* clear = earth_;
+  atmos::Tables* clear_tables = tables_;
+  atmos::Atmosphere hazy = atmos::load_atmosphere("earth");
+  const atmos::PrecomputeOptions options;
+  const char* cache = std::getenv("ATMOS_CACHE_DIR");
+  atmos::Tables hazy_tables = cache ? atmos::load_or_precompute_tables(hazy, options, cache).tables
+                                    : atmos::precompute_tables(hazy, options);
+  earth_ = &hazy;
+  tables_ = &hazy_tables;
+  for (const auto& [camera, sun] : {std::pair{kCameras[0], 60.0}, std::pair{kCameras[1], 20.0}}) {
+    const CaseResult r = measure(camera, sun);
+    EXPECT_LE(r.volume.rms(), 0.07) << camera.name << ", sun " << sun;
+    EXPECT_LE(r.volume.worst_excess, 0.25) << camera.name << ", sun " << sun;
+    EXPECT_LE(r.volume.worst_transmittance, 0.012) << camera.name << ", sun " << sun;
+  }
+  earth_ = clear;
+  tables_ = clear_tables;
 }
 
 }  // namespace

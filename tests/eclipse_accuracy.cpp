@@ -35,6 +35,7 @@
 #include "atmos/reference.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "clear_sky_earth.hpp"
 
 namespace {
 
@@ -51,22 +52,8 @@ int paths_from_environment() {
   return v ? std::max(100, std::atoi(v)) : 6000;
 }
 
-// The Earth preset, or (`clear`) the same with the thin aerosol of Bruneton
-// & Neyret 2008 instead of the continental one: scattering 4e-6 m^-1 at the
-// ground, albedo 0.9, scale height 1.2 km, Cornette-Shanks g 0.8 (optical
-// depth 0.005), the preset before session 7.
-atmos::Atmosphere earth(bool clear) {
-  atmos::Atmosphere atmosphere = atmos::load_atmosphere("earth");
-  if (clear) {
-    atmos::Constituent& aerosol = atmosphere.constituents.at(1);
-    EXPECT_EQ(aerosol.name, "aerosol");
-    aerosol.density.scale_height_m = 1200.0;
-    aerosol.scattering = atmos::Spectrum::constant(4.0e-6);
-    aerosol.absorption = atmos::Spectrum::constant(4.44e-7);
-    aerosol.phase = atmos::PhaseFunction{atmos::PhaseFunction::Kind::cornette_shanks, 0.8};
-  }
-  return atmosphere;
-}
+// The Earth preset, or (`clear`) the clear-sky Earth of clear_sky_earth.hpp.
+atmos::Atmosphere earth(bool clear) { return clear ? clear_sky_earth() : atmos::load_atmosphere("earth"); }
 
 // The sky of an observer on the ground with the sun at (200°, 40°) and a
 // moon of angular radius 0.28° (the Sun's: 0.2664°) whose centre is

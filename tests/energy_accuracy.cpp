@@ -24,11 +24,12 @@
 #include "atmos/reference.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "clear_sky_earth.hpp"
 
 namespace {
 
 TEST(Energy, WhiteGroundNonAbsorbingAtmosphereConservesEnergy) {
-  atmos::Atmosphere a = atmos::load_atmosphere("earth");
+  atmos::Atmosphere a = clear_sky_earth();
   ASSERT_EQ(a.constituents.back().name, "ozone");
   a.constituents.pop_back();
   ASSERT_EQ(a.constituents[1].name, "aerosol");

@@ -23,6 +23,7 @@
 #include "atmos/reference.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "clear_sky_earth.hpp"
 
 namespace {
 
@@ -137,7 +138,7 @@ struct Measurement {
 
 class Accuracy : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() { setup_ = new Measurement(atmos::load_atmosphere("earth")); }
+  static void SetUpTestSuite() { setup_ = new Measurement(clear_sky_earth()); }
   static void TearDownTestSuite() { delete setup_; }
   static double rms_error(const Observer& observer, double sun_elevation) {
     return setup_->rms_error(observer, sun_elevation);
@@ -187,6 +188,22 @@ TEST_F(Accuracy, TwilightSunBelowHorizonWithinFivePercent) {
     for (double sun : {-5.0, -2.5}) EXPECT_LE(rms_error(observer, sun), 0.05) << observer.name << " " << sun;
 }
 
+// The preset's continental haze (optical depth 0.15, Cornette-Shanks
+// g 0.64): the tables are less accurate than on the clear sky above. Their
+// multiple scattering towards the sun's azimuth near the horizon is low
+// (view 0.5° up towards a sun 60° high: order 2 17-19 % low, the total
+// -7 %): the linear nu axis of the 4D tables puts only 3 of its 8 samples in
+// the range a grazing view can have, with the view towards the sun's azimuth
+// at its edge. A parametrization by the view's azimuth (Yusov 2013) fixes
+// that (-1.7 %) but was not merged (branch azimuth-nu: precomputation 1.8x
+// slower, twilight and space cases worse). Measured (session 7): 0 m sun
+// 5/15/35/60° RMS 1.5/1.2/1.4/2.3 %, space sun 5/15° 2.5/2.0 %. Bound 3 %.
+TEST(HazyAccuracy, ContinentalHazeDaylightWithinThreePercent) {
+  const Measurement m(atmos::load_atmosphere("earth"));
+  for (double sun : {15.0, 60.0}) EXPECT_LE(m.rms_error(kObservers[0], sun), 0.03) << "0 m " << sun;
+  for (double sun : {5.0, 15.0}) EXPECT_LE(m.rms_error(kObservers[3], sun), 0.03) << "space " << sun;
+}
+
 // The same tolerances in spectral mode (issue 3): 15 wavelengths over
 // 360-830 nm, the tables converted to sRGB, the reference computed at all 15
 // wavelengths and converted with the same CIE weights. A spread of the
@@ -194,7 +211,7 @@ TEST_F(Accuracy, TwilightSunBelowHorizonWithinFivePercent) {
 class SpectralAccuracy : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    atmos::Atmosphere earth = atmos::load_atmosphere("earth");
+    atmos::Atmosphere earth = clear_sky_earth();
     earth.wavelengths_nm = atmos::spectral_wavelengths(15);
     setup_ = new Measurement(earth);
   }
@@ -223,7 +240,7 @@ TEST_F(SpectralAccuracy, TwilightWithinFivePercent) {
 // printout; individual directions near the horizon are lowest, where the
 // tables underestimate by a few per cent).
 TEST(DenseAccuracy, TenTimesEarthWithinFivePercent) {
-  atmos::Atmosphere dense = atmos::load_atmosphere("earth");
+  atmos::Atmosphere dense = clear_sky_earth();
   atmos::scale_density(dense, 10.0);
   atmos::PrecomputeOptions options;
   options.auto_orders = true;
