@@ -580,9 +580,25 @@ void compute_single_scattering_tables(const AtmosphereParams& a, const Table2D& 
 // moments p_l turns this into
 //   ∫ P(v.w) L(w) dw = Σ_lm p_l L_lm Y_lm(v)
 // (Funk-Hecke). The Rayleigh phase function has only p_0 and p_2, so its part
-// is exact; the aerosol part is truncated at degree kDensityMaxDegree, where
-// p_l = g^l for Henyey-Greenstein (0.8^28 ≈ 2e-3). The cost is one set of
-// radiance samples per (r, mu_s) instead of one sphere per 4D texel.
+// is exact; the aerosol part is truncated at degree L = kDensityMaxDegree,
+// where p_l = g^l for Henyey-Greenstein (0.8^28 ≈ 2e-3). The cost is one set
+// of radiance samples per (r, mu_s) instead of one sphere per 4D texel.
+//
+// A peaked forward lobe (g ≳ 0.85: 0.93^28 = 0.13) does not fit in degree L.
+// The aerosol part therefore uses the delta-M method (Wiscombe 1977, J. Atmos.
+// Sci. 34, 1408): P = f δ(1 - v.w) / 2π + (1 - f) P*, where P* has
+// the moments p*_l = (p_l - f) / (1 - f), l <= L, and f = p_{L+1}, i.e. the
+// moments above L (a lobe's slowly decaying g^l) are replaced by the constant
+// f. The δ part scatters without changing direction, so
+//   ∫ P(v.w) L(w) dw = f L(v) + Σ_{l<=L} (p_l - f) L_lm Y_lm(v),
+// with L(v) the incident radiance in the texel's own direction v, evaluated
+// like every other radiance sample (incident_radiance()), not from the
+// truncated expansion. The medium is not scaled (the usual delta-M extinction
+// β_ext - f β_s): the f L(v) term keeps the forward-scattered light explicit,
+// so the transmittance and single scattering tables are unchanged. f is per
+// channel (the phase function may change with wavelength). Only the aerosol
+// part has a δ: the Rayleigh moments vanish above degree 2 (f would be 0);
+// without aerosol (beta_A = 0) the density is bit for bit the plain expansion.
 //
 // The sums over (l, m) are the bulk of the arithmetic; they run on 4-float
 // vectors (SSE): for each m the coefficients of l = m..L are contiguous
@@ -618,7 +634,8 @@ struct DensitySlice {
   std::vector<v4f> node_harmonics;    // [j * sh_size / 4 + ...]: node j in ShLayout
   std::vector<float> output_mu;
   std::vector<v4f> output_harmonics;  // [(ShLayout index) * mu_vectors + y / 4][y % 4]
-  std::array<std::vector<float>, 3> moment_scale;  // per channel, in ShLayout: beta_R p_R,l + beta_A p_A,l
+  std::array<std::vector<float>, 3> moment_scale;  // per channel, in ShLayout: beta_R p_R,l + beta_A (p_A,l - f)
+  vec3 forward_scale{0.0f};  // beta_A f per channel: the delta-M forward peak's share of the density
 };
 
 struct DensityGeometry {
@@ -645,9 +662,16 @@ DensityGeometry make_density_geometry(const AtmosphereParams& a) {
       legendre_moments([](double x) { return double(rayleigh_phase_function(float(x))); }, L);
   // Per channel: the phase function may differ between the set's wavelengths.
   std::array<std::vector<double>, 3> aerosol_moments;
-  for (int c = 0; c < 3; ++c)
+  // The delta-M forward fraction f = p_{L+1} per channel: Wiscombe's f is the
+  // first moment left out of the expansion. A negative p_{L+1} (a lobe peaked
+  // backwards, g < 0, whose moments alternate in sign) is not a forward peak:
+  // f = 0 there leaves the plain truncation.
+  vec3 forward_fraction(0.0f);
+  for (int c = 0; c < 3; ++c) {
     aerosol_moments[size_t(c)] =
-        legendre_moments([&](double x) { return double(aerosol_phase_function(a, float(x))[c]); }, L);
+        legendre_moments([&](double x) { return double(aerosol_phase_function(a, float(x))[c]); }, L + 1);
+    forward_fraction[c] = float(std::max(0.0, aerosol_moments[size_t(c)][size_t(L + 1)]));
+  }
   for (int l = 0; l <= kPhiIntervals; ++l) g.cos_phi[size_t(l)] = float(std::cos(M_PI * l / kPhiIntervals));
   for (int l = 0; l < kDensityPhiPairs; ++l)
     for (int m = 0; m <= L; ++m) {
@@ -702,8 +726,10 @@ DensityGeometry make_density_geometry(const AtmosphereParams& a) {
       for (int m = 0; m <= L; ++m)
         for (int l = m; l <= L; ++l)
           slice.moment_scale[size_t(c)][size_t(layout.offset[size_t(m)] + l - m)] =
-              beta_rayleigh[c] * float(rayleigh_moments[size_t(l)]) + beta_aerosol[c] * float(aerosol_moments[size_t(c)][size_t(l)]);
+              beta_rayleigh[c] * float(rayleigh_moments[size_t(l)]) +
+              beta_aerosol[c] * float(aerosol_moments[size_t(c)][size_t(l)] - double(forward_fraction[c]));
     }
+    slice.forward_scale = beta_aerosol * forward_fraction;
   });
   return g;
 }
@@ -766,6 +792,16 @@ void compute_scattering_density_table(const AtmosphereParams& a, const OrderGeom
   std::unique_ptr<GroundIrradiance> sky_at_ground;
   if (order > 1) sky_at_ground = std::make_unique<GroundIrradiance>(a, irradiance.sampler());
 
+  struct NodeRows {
+    std::vector<v4f> first, second;  // order 1: single Rayleigh, single aerosol; else: multiple scattering
+    bool ground = false;
+    float ground_distance = 0.0f;
+    vec3 ground_transmittance{0.0f};
+  };
+  // The rows of the output mu for the delta-M forward peak, their memory
+  // reused from slice to slice (1 MB per slice at the default sizes).
+  std::vector<NodeRows> output_rows(static_cast<size_t>(mu_size));
+
   for (int z = 0; z < a.scattering_r_size; ++z) {
     const DensitySlice& slice = g.slices[size_t(z)];
     const float r = slice.r;
@@ -779,17 +815,8 @@ void compute_scattering_density_table(const AtmosphereParams& a, const OrderGeom
     // incident_radiance() for all directions of node j shares the (mu, r)
     // part of its table lookups and the transmittance to the ground: do the
     // (mu, r) interpolation once, leaving rows of (nu, mu_s) texels whose
-    // mu_s columns are exactly those of this step's output.
-    struct NodeRows {
-      std::vector<v4f> first, second;  // order 1: single Rayleigh, single aerosol; else: multiple scattering
-      bool ground = false;
-      float ground_distance = 0.0f;
-      vec3 ground_transmittance{0.0f};
-    };
-    std::vector<NodeRows> node_rows(nodes.size());
-    tbb::parallel_for(size_t(0), nodes.size(), [&](size_t j) {
-      NodeRows& n = node_rows[j];
-      const float mu_w = float(nodes[j]);
+    // mu_s columns are exactly those of this step's output (NodeRows).
+    auto make_rows = [&](float mu_w, NodeRows& n) {
       n.ground = ray_intersects_ground(a, r, mu_w);
       const float u_mu = scattering_u_mu(a, r, mu_w, n.ground), u_r = scattering_u_r(a, r);
       if (order == 1) {
@@ -802,7 +829,36 @@ void compute_scattering_density_table(const AtmosphereParams& a, const OrderGeom
         n.ground_distance = distance_to_bottom_atmosphere_boundary(a, r, mu_w);
         n.ground_transmittance = transmittance_to_ground(a, t, r, mu_w);
       }
-    });
+    };
+    // incident_radiance(a, t, sr, sa, ms, e, r, mu_w, mu_s, nu_w, order) for
+    // the mu_w of `n` and the mu_s of column mu_s_index, with the lookups hoisted.
+    auto radiance_from_rows = [&](const NodeRows& n, int mu_s_index, float mu_s, float nu_w) {
+      float tile, f;
+      scattering_nu_tiles(a, nu_w, tile, f);
+      const size_t x0 = size_t(int(tile) * a.scattering_mu_s_size + mu_s_index);
+      const size_t x1 = size_t(std::min(int(tile) + 1, a.scattering_nu_size - 1) * a.scattering_mu_s_size + mu_s_index);
+      vec3 value = to_vec3(n.first[x0] * splat(1.0f - f) + n.first[x1] * splat(f));
+      if (order == 1)
+        value = phase_weighted_scattering(a, value, to_vec3(n.second[x0] * splat(1.0f - f) + n.second[x1] * splat(f)),
+                                          nu_w);
+      if (n.ground) {
+        const float mu_s_ground = mu_s_at_ground(a, r, mu_s, nu_w, n.ground_distance);
+        // compute_direct_irradiance() or irradiance_lookup() at the ground.
+        const vec3 ground_irradiance = order == 1 ? a.solar_irradiance * sun_at_ground(mu_s_ground) *
+                                                        std::max(mu_s_ground, 0.0f)
+                                                  : (*sky_at_ground)(mu_s_ground);
+        value += n.ground_transmittance * ground_radiance(a, ground_irradiance);
+      }
+      return value;
+    };
+    std::vector<NodeRows> node_rows(nodes.size());
+    tbb::parallel_for(size_t(0), nodes.size(), [&](size_t j) { make_rows(float(nodes[j]), node_rows[j]); });
+    // The delta-M forward peak (see above) needs L(v) in each output texel's
+    // own direction: the same rows, for the output mu of this slice.
+    const vec3 forward_scale = slice.forward_scale;
+    const bool forward_peak = forward_scale.x > 0.0f || forward_scale.y > 0.0f || forward_scale.z > 0.0f;
+    if (forward_peak)
+      tbb::parallel_for(size_t(0), output_rows.size(), [&](size_t y) { make_rows(output_mu[y], output_rows[y]); });
 
     tbb::parallel_for(0, a.scattering_mu_s_size, [&](int mu_s_index) {
       float r_unused, mu_s, mu_unused2, nu_unused2;
@@ -820,24 +876,8 @@ void compute_scattering_density_table(const AtmosphereParams& a, const OrderGeom
         const float sin_w = std::sqrt(std::max(0.0f, 1.0f - mu_w * mu_w));
         const NodeRows& n = node_rows[j];
         for (int l = 0; l <= kPhiIntervals; ++l) {
-          // incident_radiance(a, t, sr, sa, ms, e, r, mu_w, mu_s, nu_w, order), with the lookups hoisted.
           const float nu_w = clamp_cosine(sin_w * cos_phi[size_t(l)] * sun.x + mu_w * sun.z);
-          float tile, f;
-          scattering_nu_tiles(a, nu_w, tile, f);
-          const size_t x0 = size_t(int(tile) * a.scattering_mu_s_size + mu_s_index);
-          const size_t x1 = size_t(std::min(int(tile) + 1, a.scattering_nu_size - 1) * a.scattering_mu_s_size + mu_s_index);
-          vec3 value = to_vec3(n.first[x0] * splat(1.0f - f) + n.first[x1] * splat(f));
-          if (order == 1)
-            value = phase_weighted_scattering(a, value, to_vec3(n.second[x0] * splat(1.0f - f) + n.second[x1] * splat(f)),
-                                              nu_w);
-          if (n.ground) {
-            const float mu_s_ground = mu_s_at_ground(a, r, mu_s, nu_w, n.ground_distance);
-            // compute_direct_irradiance() or irradiance_lookup() at the ground.
-            const vec3 ground_irradiance = order == 1 ? a.solar_irradiance * sun_at_ground(mu_s_ground) *
-                                                            std::max(mu_s_ground, 0.0f)
-                                                      : (*sky_at_ground)(mu_s_ground);
-            value += n.ground_transmittance * ground_radiance(a, ground_irradiance);
-          }
+          const vec3 value = radiance_from_rows(n, mu_s_index, mu_s, nu_w);
           for (int c = 0; c < 3; ++c) radiance[size_t(c)][size_t(l)] = value[c];
         }
         // ∫_0^{2π} L cos(m phi) dphi (trapezoidal rule on the symmetric
@@ -866,7 +906,7 @@ void compute_scattering_density_table(const AtmosphereParams& a, const OrderGeom
         }
       }
 
-      // Scale by beta_s p_l of both phase functions, and broadcast each
+      // Scale by beta_R p_R,l + beta_A (p_A,l - f) (delta-M), and broadcast each
       // coefficient for the sums over the output directions.
       std::array<std::vector<v4f>, 3> scaled;
       for (int c = 0; c < 3; ++c) {
@@ -896,10 +936,12 @@ void compute_scattering_density_table(const AtmosphereParams& a, const OrderGeom
       // the Chebyshev recurrence for cos(m phi), phi the azimuth of the
       // texel's view from the sun's vertical plane.
       std::vector<v4f> cos_azimuth(static_cast<size_t>(mu_vectors), splat(1.0f));
+      std::vector<float> texel_nu(static_cast<size_t>(mu_size));  // for the delta-M forward peak
       for (int nu_index = 0; nu_index < a.scattering_nu_size; ++nu_index) {
         for (int y = 0; y < mu_size; ++y) {
           const float mu = output_mu[size_t(y)];
           const float nu = clamp_nu(mu, mu_s, tile_nu[size_t(nu_index)]);
+          texel_nu[size_t(y)] = nu;
           const float spread = std::sqrt(std::max(0.0f, (1.0f - mu * mu) * (1.0f - mu_s * mu_s)));
           cos_azimuth[size_t(y / 4)][y % 4] = spread < 1e-6f ? 1.0f : clamp_cosine((nu - mu * mu_s) / spread);
         }
@@ -920,12 +962,16 @@ void compute_scattering_density_table(const AtmosphereParams& a, const OrderGeom
             c_prev = c_m;
             c_m = c_next;
           }
-          for (int lane = 0; lane < 4 && yv * 4 + lane < mu_size; ++lane)
+          for (int lane = 0; lane < 4 && yv * 4 + lane < mu_size; ++lane) {
+            const int y = yv * 4 + lane;
+            vec3 value(value0[lane], value1[lane], value2[lane]);
+            // The delta-M forward peak: beta_A f L(v), v the texel's direction.
+            if (forward_peak)
+              value += forward_scale * radiance_from_rows(output_rows[size_t(y)], mu_s_index, mu_s, texel_nu[size_t(y)]);
             // A truncated expansion can ring slightly below zero next to sharp
             // features (not clamped for the signed fields of the tail solver).
-            density.at(x, yv * 4 + lane, z) = clamp_ringing
-                                                  ? max(vec3(value0[lane], value1[lane], value2[lane]), vec3(0.0f))
-                                                  : vec3(value0[lane], value1[lane], value2[lane]);
+            density.at(x, y, z) = clamp_ringing ? max(value, vec3(0.0f)) : value;
+          }
         }
       }
     });
