@@ -30,7 +30,9 @@ constexpr char kMagic[8] = {'A', 'T', 'M', 'O', 'S', 'T', 'B', 'L'};
 // Bump when the meaning of the tables changes in code that is not one of the
 // hashed sources (src/precompute/*.cpp).
 // 5: the convergence entries hold the tail solver's entry (32 bytes each).
-constexpr std::uint32_t kFormatVersion = 5;
+// 6: delta-M in the scattering density (steps.cpp), the phase ratio of the
+//    spectral single aerosol table (precompute.cpp).
+constexpr std::uint32_t kFormatVersion = 6;
 constexpr std::size_t kConvergenceEntryBytes = 4 + 4 + 3 * 8;
 
 struct Fnv1a {
