@@ -166,8 +166,8 @@ TEST(PhaseSpectrum, IntegratesToOneAtEveryWavelength) {
       for (int i = 0; i <= n; ++i) {
         const double mu = -1.0 + 2.0 * i / n;
         const double weight = (i == 0 || i == n ? 1.0 : (i % 2 ? 4.0 : 2.0)) * (2.0 / n) / 3.0 * 2.0 * M_PI;
-        norm += weight * p.at(w, mu);
-        mean += weight * mu * p.at(w, mu);
+        norm += weight * atmos::reference_detail::phase_function(p, w, mu);
+        mean += weight * mu * atmos::reference_detail::phase_function(p, w, mu);
       }
       EXPECT_NEAR(norm, 1.0, 1e-9) << int(p.kind) << " at " << w << " nm";
       const double expected_mean =
@@ -175,8 +175,6 @@ TEST(PhaseSpectrum, IntegratesToOneAtEveryWavelength) {
               ? p.g.at(w)
               : p.forward_weight.at(w) * p.g.at(w) + (1.0 - p.forward_weight.at(w)) * p.g_back.at(w);
       EXPECT_NEAR(mean, expected_mean, 1e-8) << int(p.kind) << " at " << w << " nm";
-      // The reference evaluates the same function.
-      EXPECT_DOUBLE_EQ(atmos::reference_detail::phase_function(p, w, 0.3), p.at(w, 0.3));
     }
     // The shared (float) functions, channel by channel of a spectral triple.
     atmos::Atmosphere spectral = *a;
@@ -214,7 +212,7 @@ TEST(PhaseSpectrum, ReferenceSamplesTheDoubleHenyeyGreenstein) {
     EXPECT_NEAR(mean, expected, 5.0 * se) << w;
     // The share within 8° of the forward direction: 2π ∫_{0.99}^{1} p dμ.
     double exact = 0.0;
-    for (int i = 0; i < 10000; ++i) exact += 2.0 * M_PI * p.at(w, 0.99 + 0.01 * (i + 0.5) / 10000) * 0.01 / 10000;
+    for (int i = 0; i < 10000; ++i) exact += 2.0 * M_PI * atmos::reference_detail::phase_function(p, w, 0.99 + 0.01 * (i + 0.5) / 10000) * 0.01 / 10000;
     const double share = forward / n;
     EXPECT_NEAR(share, exact, 5.0 * std::sqrt(exact * (1.0 - exact) / n)) << w;
     std::printf("DHG at %.0f nm: mean cosine %.4f (expected %.4f), within 8 deg %.4f (expected %.4f)\n", w, mean,

@@ -76,9 +76,6 @@ struct PhaseFunction {
   // `g` constant over wavelength (ignored for rayleigh).
   PhaseFunction(Kind kind, double g);
   PhaseFunction(Kind kind, Spectrum g, Spectrum g_back = {}, Spectrum forward_weight = {});
-  // p(ν) at one wavelength, in sr^-1 (∫ p dω = 1); ν is the cosine of the
-  // scattering angle.
-  double at(double wavelength_nm, double nu) const;
 
   bool operator==(const PhaseFunction&) const = default;
 };

@@ -146,23 +146,6 @@ INLINE float aerial_perspective_slice_distance(IN(PassFrame) frame, int slice) {
   return frame.ap_t_min + (frame.ap_t_far - frame.ap_t_min) * x * x;
 }
 
-// The integral over [0, h] of the exponential through (0, a) and (h, b),
-// per component: h (b - a) / ln(b / a). Exact for the integrands of the
-// volume along a steep ray, where the density of each constituent — and so
-// its extinction and its single-scattering integrand — falls exponentially
-// with the distance; for grazing rays the exponent bends with the ray's
-// curvature (relative error ~h² / (8 R H) in the exponent: 0.5 % over 18 km
-// for the aerosol's 1.2 km scale height). Where a and b are nearly equal
-// (the limit, without 0 / 0) or one is zero (the edge of the planet's
-// shadow: no exponential passes through a zero), the trapezoid.
-INLINE vec3 exponential_segment_integral(vec3 a, vec3 b, float h) {
-  vec3 trapezoid = 0.5f * h * (a + b);
-  vec3 q = log(max(b, vec3(1e-30f)) / max(a, vec3(1e-30f)));
-  vec3 exponential = h * (b - a) / max(abs(q), vec3(1e-3f)) * sign(q);
-  vec3 use = vec3(greaterThan(abs(q), vec3(1e-3f))) * vec3(greaterThan(min(a, b), vec3(1e-30f)));
-  return mix(trapezoid, exponential, use);
-}
-
 // The light between the camera and a slice of one direction of the volume
 // (phase-free, tables' channels).
 struct AerialPerspectiveSlice {

@@ -353,27 +353,6 @@ PhaseFunction::PhaseFunction(Kind kind_, double g_) : kind(kind_) {
 PhaseFunction::PhaseFunction(Kind kind_, Spectrum g_, Spectrum g_back_, Spectrum forward_weight_)
     : kind(kind_), g(std::move(g_)), g_back(std::move(g_back_)), forward_weight(std::move(forward_weight_)) {}
 
-double PhaseFunction::at(double wavelength_nm, double nu) const {
-  auto hg = [nu](double a) {
-    const double k = 1.0 + a * a - 2.0 * a * nu;
-    return (1.0 - a * a) / (4.0 * M_PI * k * std::sqrt(k));
-  };
-  switch (kind) {
-    case Kind::rayleigh: return 3.0 / (16.0 * M_PI) * (1.0 + nu * nu);
-    case Kind::henyey_greenstein: return hg(g.at(wavelength_nm));
-    case Kind::cornette_shanks: {
-      const double s = g.at(wavelength_nm);
-      const double k = 1.0 + s * s - 2.0 * s * nu;
-      return 3.0 / (8.0 * M_PI) * (1.0 - s * s) * (1.0 + nu * nu) / ((2.0 + s * s) * k * std::sqrt(k));
-    }
-    case Kind::double_henyey_greenstein: {
-      const double w = forward_weight.at(wavelength_nm);
-      return w * hg(g.at(wavelength_nm)) + (1.0 - w) * hg(g_back.at(wavelength_nm));
-    }
-  }
-  return 0.0;
-}
-
 PhaseFunction Atmosphere::aerosol_phase() const {
   for (const auto& c : constituents) {
     if (c.phase.kind == PhaseFunction::Kind::rayleigh) continue;

@@ -180,9 +180,16 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
   // by the Rayleigh phase function in add_to_multiple (the run-time
   // interpolation between tiles weights them by their tile nu). With three
   // wavelengths P_λ = P_c and the table stays phase-free (untouched).
+  // The tile nu depends on the texel's nu index only (x / mu_s size): the
+  // phase functions are evaluated once per tile.
   const AtmosphereParams render = physics::make_render_params(atmosphere, options.sizes);
-  auto aerosol_phase_nu = [&](int x, int y, int z) {
-    return physics::scattering_texel_tile_nu(render, physics::vec3(float(x), float(y), float(z)));
+  auto tile_phases = [&](const AtmosphereParams& params) {
+    std::vector<glm::vec3> phases;
+    for (int i = 0; i < options.sizes.scattering_nu; ++i)
+      phases.push_back(physics::aerosol_phase_function(
+          params, physics::scattering_texel_tile_nu(params, physics::vec3(float(i * options.sizes.scattering_mu_s), 0.0f,
+                                                                           0.0f))));
+    return phases;
   };
 
   for (int set = 0; set < set_count; ++set) {
@@ -314,10 +321,11 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
       // The phase ratio (see below): this set's phase function, per
       // wavelength, before the conversion to the channels. The set's own
       // table stays phase-free (its orders are done).
+      const std::vector<glm::vec3> phases = tile_phases(a);
       tbb::parallel_for(0, single_aerosol.depth, [&](int z) {
         for (int y = 0; y < single_aerosol.height; ++y)
           for (int x = 0; x < single_aerosol.width; ++x)
-            single_aerosol.at(x, y, z) *= physics::aerosol_phase_function(a, aerosol_phase_nu(x, y, z));
+            single_aerosol.at(x, y, z) *= phases[size_t(x / a.scattering_mu_s_size)];
       });
     }
     accumulate(out.single_aerosol, single_aerosol.texels, to_channels);
@@ -335,11 +343,12 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
   if (srgb) {
     const int width = options.sizes.scattering_nu * options.sizes.scattering_mu_s;
     const int height = options.sizes.scattering_mu, depth = options.sizes.scattering_r;
+    const std::vector<glm::vec3> phases = tile_phases(render);
     tbb::parallel_for(0, depth, [&](int z) {
       for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x)
           out.single_aerosol[(size_t(z) * size_t(height) + size_t(y)) * size_t(width) + size_t(x)] /=
-              physics::aerosol_phase_function(render, aerosol_phase_nu(x, y, z));
+              phases[size_t(x / options.sizes.scattering_mu_s)];
     });
   }
   // Order n over all sets; a set that stopped earlier (auto orders) adds
