@@ -2,7 +2,7 @@
 //
 // docs/preset-sources.md 1.2.3 gives 1.5-2.6 % of the sunlight on the ground
 // (Venera 8, Pioneer Venus, Titov et al. 2007). The reference itself, on the
-// preset as it is, gives more: 6.2 % at 550 nm with the sun 40° up (K = 2000
+// preset as it is, gives more: 6.3 % at 550 nm with the sun 40° up (K = 2000
 // interactions, converged: 5.8 % at K = 1000, 6.3 % at K = 4000; ± 12 % with
 // 2000 paths), so reaching the measured band is a question for the preset
 // (its cloud single-scattering albedo of 0.9995 above 500 nm is a
