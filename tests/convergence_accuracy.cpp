@@ -4,12 +4,13 @@
 //
 // Venus is where the solver matters: in its cloud deck (optical depth 30,
 // single-scattering albedo 0.9995) over 17 (550 nm) to 42 (440 nm) optical
-// depths of CO2, each order adds 0.978 (550 nm) to 0.995 (440 nm) of the
-// light of the order before, and the light that reaches the ground has been
-// scattered hundreds of times. After 600 orders the red and green channels
-// have converged (0.978^600 = 2e-6); the blue has not (0.995^600 = 0.04):
-// what its remaining orders add is extrapolated geometrically from the last
-// orders, where the ratio of successive orders has settled.
+// depths of CO2, each order adds 0.984 (680 nm), 0.989 (550 nm) and 0.996
+// (440 nm) of the light of the order before, and the light that reaches the
+// ground has been scattered hundreds of times. After 600 orders the red and
+// green channels have nearly converged (what is left is 2e-4 and 5e-3 of
+// the ground's sky light); the blue has not (0.996^600 = 0.08): what the
+// remaining orders add is extrapolated geometrically from the last orders,
+// where the ratio of successive orders has settled.
 //
 // Compared: the sky irradiance on the ground (the row of the indirect
 // irradiance table at the ground, every sun elevation) and the light of the
@@ -96,16 +97,18 @@ TEST(ConvergenceAccuracy, VenusTailEqualsSixHundredOrders) {
   for (int x = 0; x < sizes.irradiance_mu_s; ++x) solved_ground += glm::dvec3(t.set.indirect_irradiance[size_t(x)]);
   for (const glm::vec3& v : t.set.multiple_scattering) solved_light += glm::dvec3(v);
 
-  // Measured: red and green within 3e-6 (ground) and 4e-7 (light); the blue
-  // ground within 0.25 % of the sum with the extrapolated remainder (which is
-  // 14 % of it), its light within 4e-5 (remainder 0.3 %). 59 solver steps.
+  // Measured: red and green within 5e-6 (ground) and 4e-6 (light); the blue
+  // ground within 1.0 % of the sum with the extrapolated remainder (which is
+  // 28 % of it: the comparison is as good as the geometric extrapolation,
+  // hence the blue's 2 %), its light within 3e-4 (remainder 3.2 %). 93
+  // solver steps.
   for (int c = 0; c < 3; ++c) {
     const double ground = explicit_ground[c] + remainder[c];
     const double total_light = light[c] + light_remainder[c];
     std::printf("%g nm: ground sky light %.5e (600 orders + remainder), %.5e (solved), %+.2e; light %+.2e\n",
                 venus.wavelengths_nm[size_t(c)], ground, solved_ground[c], solved_ground[c] / ground - 1.0,
                 solved_light[c] / total_light - 1.0);
-    EXPECT_NEAR(solved_ground[c], ground, (c == 2 ? 0.01 : 1e-4) * ground) << c;
+    EXPECT_NEAR(solved_ground[c], ground, (c == 2 ? 0.02 : 1e-4) * ground) << c;
     EXPECT_NEAR(solved_light[c], total_light, (c == 2 ? 1e-3 : 1e-4) * total_light) << c;
   }
 }

@@ -32,7 +32,9 @@ constexpr char kMagic[8] = {'A', 'T', 'M', 'O', 'S', 'T', 'B', 'L'};
 // 5: the convergence entries hold the tail solver's entry (32 bytes each).
 // 6: delta-M in the scattering density (steps.cpp), the phase ratio of the
 //    spectral single aerosol table (precompute.cpp).
-constexpr std::uint32_t kFormatVersion = 6;
+// 7: the multiple scattering integrates the source function J / beta_ext
+//    with the linear-source rule (functions.glsl, source_integration_nodes).
+constexpr std::uint32_t kFormatVersion = 7;
 constexpr std::size_t kConvergenceEntryBytes = 4 + 4 + 3 * 8;
 
 struct Fnv1a {

@@ -352,11 +352,15 @@ struct ViewRay {
   std::array<float, MAX_RAY_NODES> mu_t{};
 };
 
-ViewRay make_view_ray(const AtmosphereParams& a, int y, int z, int intervals) {
+// `source`: the weights of source_integration_nodes (the multiple
+// scattering, which integrates the source function), else those of
+// ray_integration_nodes (the single scattering).
+ViewRay make_view_ray(const AtmosphereParams& a, int y, int z, int intervals, bool source) {
   ViewRay ray;
   float mu_s, nu;
   r_mu_mu_s_nu_from_scattering_texel(a, vec3(0.0f, float(y), float(z)), ray.r, ray.mu, mu_s, nu, ray.ground);
-  ray.nodes = ray_integration_nodes(a, ray.r, ray.mu, ray.ground, intervals);
+  ray.nodes = source ? source_integration_nodes(a, ray.r, ray.mu, ray.ground, intervals)
+                     : ray_integration_nodes(a, ray.r, ray.mu, ray.ground, intervals);
   for (int i = 0; i < ray.nodes.count; ++i) {
     ray.r_t[size_t(i)] = clamp_radius(a, radius_along_ray(ray.r, ray.mu, ray.nodes.t[i]));
     ray.mu_t[size_t(i)] = clamp_cosine(mu_along_ray(ray.r, ray.mu, ray.nodes.t[i], ray.r_t[size_t(i)]));
@@ -537,7 +541,7 @@ void compute_single_scattering_tables(const AtmosphereParams& a, const Table2D& 
   const sampler2D t = transmittance.sampler();
   const TexelColumns columns = make_texel_columns(a);
   for_each_view_ray(a, progress, [&](int y, int z) {
-    const ViewRay ray = make_view_ray(a, y, z, SINGLE_SCATTERING_INTERVALS);
+    const ViewRay ray = make_view_ray(a, y, z, SINGLE_SCATTERING_INTERVALS, false);
     // Node by node (outer loop), so that the transmittance row of the node
     // stays in the L1 cache while all texels of the view ray use it.
     std::vector<float> nu(static_cast<size_t>(width));
@@ -753,7 +757,7 @@ std::shared_ptr<const OrderGeometry> make_order_geometry(const AtmosphereParams&
                     [&](const tbb::blocked_range<int>& range) {
                       for (int i = range.begin(); i != range.end(); ++i)
                         g->rays[size_t(i)] = make_view_ray(a, i % a.scattering_mu_size, i / a.scattering_mu_size,
-                                                           MULTIPLE_SCATTERING_INTERVALS);
+                                                           MULTIPLE_SCATTERING_INTERVALS, true);
                     });
   return g;
 }
@@ -856,6 +860,8 @@ void compute_scattering_density_table(const AtmosphereParams& a, const OrderGeom
     // The delta-M forward peak (see above) needs L(v) in each output texel's
     // own direction: the same rows, for the output mu of this slice.
     const vec3 forward_scale = slice.forward_scale;
+    // The table holds the source function J / beta_ext (source_function).
+    const vec3 to_source = source_function(a, r, vec3(1.0f));
     const bool forward_peak = forward_scale.x > 0.0f || forward_scale.y > 0.0f || forward_scale.z > 0.0f;
     if (forward_peak)
       tbb::parallel_for(size_t(0), output_rows.size(), [&](size_t y) { make_rows(output_mu[y], output_rows[y]); });
@@ -970,6 +976,7 @@ void compute_scattering_density_table(const AtmosphereParams& a, const OrderGeom
               value += forward_scale * radiance_from_rows(output_rows[size_t(y)], mu_s_index, mu_s, texel_nu[size_t(y)]);
             // A truncated expansion can ring slightly below zero next to sharp
             // features (not clamped for the signed fields of the tail solver).
+            value *= to_source;
             density.at(x, y, z) = clamp_ringing ? max(value, vec3(0.0f)) : value;
           }
         }
