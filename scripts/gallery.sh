@@ -33,6 +33,10 @@ done
 (cd "$out/earth" && "$atmos" render --planet earth --wavelengths 15 --orders auto --altitude 4000000 \
   --sun-elevation 50 --sun-azimuth 180 --moon 180,49.4698,0.28 --look 180,-82 --fov 88 --size 960x600 \
   --tonemap filmic --exposure 12.5 -o eclipse-orbit.png)
+# Mars's blue sunset: the glow around the sun, at EV 13 (the default
+# sunset's exposure saturates it).
+(cd "$out/mars" && "$atmos" render --planet mars --wavelengths 15 --orders auto --altitude 2 --look 270,6 --fov 60 \
+  --sun-azimuth 270 --sun-elevation 3 --exposure 13 --tonemap filmic --size 960x540 -o blue-sunset.png)
 # Under Venus' clouds: the surface sky at EV 8 (its light is still
 # underestimated: see README, Planets).
 (cd "$out/venus" && "$atmos" render --planet venus --wavelengths 15 --orders auto --sun-elevation 40 --look 180,10 \

@@ -25,6 +25,7 @@
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
 #include "clear_sky_earth.hpp"
+#include "upward_flux.hpp"
 
 namespace {
 
@@ -44,20 +45,8 @@ TEST(Energy, WhiteGroundNonAbsorbingAtmosphereConservesEnergy) {
   const atmos::Tables tables =
       cache ? atmos::load_or_precompute_tables(a, options, cache).tables : atmos::precompute_tables(a, options);
   const atmos::SkyModel model(a, tables);
-
+  const glm::dvec3 up_flux = atmos_test::upward_flux_at_top(a, model, 200, 16);
   const glm::dvec3 top(0.0, 0.0, a.top_radius_m - 1.0), sun(0.0, 0.0, 1.0);
-  // Upward flux: midpoint rule in the angle from the nadir and in azimuth.
-  glm::dvec3 up_flux(0.0);
-  const int n_theta = 200, n_phi = 16;
-  for (int i = 0; i < n_theta; ++i) {
-    const double theta = (i + 0.5) / n_theta * M_PI / 2.0;
-    for (int j = 0; j < n_phi; ++j) {
-      const double phi = (j + 0.5) / n_phi * 2.0 * M_PI;
-      const glm::dvec3 down(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), -std::cos(theta));
-      up_flux += model.radiance(top, down, sun, false) * std::cos(theta) * std::sin(theta) * (M_PI / 2.0 / n_theta) *
-                 (2.0 * M_PI / n_phi);
-    }
-  }
 
   atmos::ReferenceOptions reference_options;
   reference_options.scattering_orders = 24;

@@ -93,8 +93,9 @@ TEST(Spectral, TablesAtManyWavelengths) {
     options.scattering_orders = n == 40 ? 2 : 3;
     const atmos::Tables t = atmos::precompute_tables(earth_at(n), options);
     EXPECT_EQ(t.spectral_sets(), (n + 2) / 3);
+    EXPECT_EQ(t.transmittance_tiles(), 2 * t.spectral_sets());
     EXPECT_EQ(t.spectral_optical_depth.size(),
-              size_t(t.sizes.transmittance_mu) * size_t(t.sizes.transmittance_r) * size_t(t.spectral_sets()));
+              size_t(t.sizes.transmittance_mu) * size_t(t.sizes.transmittance_r) * size_t(t.transmittance_tiles()));
     for (const auto* texels : {&t.set.scattering, &t.set.single_aerosol, &t.set.multiple_scattering,
                                &t.set.direct_irradiance, &t.set.indirect_irradiance})
       for (const glm::vec3& v : *texels) ASSERT_TRUE(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z));

@@ -97,15 +97,20 @@ struct Tables {
   TableSet set;                        // the render tables
   // The optical depth to the top of the atmosphere at every wavelength
   // triple (T = exp(-depth); see transmittance_to_top_atmosphere_boundary),
-  // triple k being the k-th of ceil(N / 3) tables side by side:
-  // (transmittance_mu * ceil(N / 3)) x transmittance_r texels. The run time
-  // computes every transmittance from it, spectrally, and integrates the
-  // low-sun single scattering with it.
+  // triple k being the k-th of ceil(N / 3) tables side by side, followed by
+  // the same for the delta-M scaled medium (transmittance_tiles()):
+  // (transmittance_mu * 2 ceil(N / 3)) x transmittance_r texels. The run
+  // time computes every transmittance from the first half, spectrally, and
+  // integrates the low-sun single scattering with the second.
   std::vector<glm::vec3> spectral_optical_depth;
   std::vector<OrderContribution> convergence;  // orders 2..K, then the tail if solved (filled by precompute_tables)
   std::vector<StepTiming> timings;             // filled by precompute_tables (empty when loaded from the cache)
 
   int spectral_sets() const { return int((wavelengths_nm.size() + 2) / 3); }
+  // Tiles of spectral_optical_depth: one per wavelength triple for the true
+  // medium, then one per triple for the delta-M scaled medium the single
+  // scattering reads (a copy of the first where no aerosol lobe is scaled).
+  int transmittance_tiles() const { return 2 * spectral_sets(); }
   int scattering_width() const { return sizes.scattering_nu * sizes.scattering_mu_s; }
   int scattering_height() const { return sizes.scattering_mu; }
   int scattering_depth() const { return sizes.scattering_r; }

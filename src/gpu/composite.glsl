@@ -221,8 +221,13 @@ INLINE void aerial_perspective_node(IN(AtmosphereParams) set, IN(sampler2D) spec
   vec3 beta_rayleigh;
   vec3 beta_aerosol;
   medium_at(set, r_t, beta_rayleigh, beta_aerosol, extinction);
-  vec3 to_sun = frame.low_sun ? transmittance_to_sun(set, spectral_transmittance_texture, r_t, mu_s_t)
-                              : transmittance_to_top_atmosphere_boundary(set, spectral_transmittance_texture, r_t,
+  // Sunlight through the delta-M scaled medium, as in the single scattering
+  // tables (single_scattering_tile; the view path keeps the true extinction:
+  // the volume's segments are short).
+  AtmosphereParams scaled = set;
+  scaled.transmittance_tile = set.single_scattering_tile;
+  vec3 to_sun = frame.low_sun ? transmittance_to_sun(scaled, spectral_transmittance_texture, r_t, mu_s_t)
+                              : transmittance_to_top_atmosphere_boundary(scaled, spectral_transmittance_texture, r_t,
                                                                          mu_s_t);
   to_sun *= sunlight;
   rayleigh_sunlit = beta_rayleigh * to_sun;

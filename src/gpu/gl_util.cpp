@@ -280,7 +280,7 @@ GpuTables::GpuTables(const Atmosphere& atmosphere, const Tables& tables, Texture
     const GLenum format = precision == TexturePrecision::half ? GL_RGB16F : GL_RGB32F;
     // The optical depth of every wavelength triple, side by side (32-bit
     // whatever the precision, see TexturePrecision).
-    textures_[0] = make_texture_2d(s.transmittance_mu * tables.spectral_sets(), s.transmittance_r,
+    textures_[0] = make_texture_2d(s.transmittance_mu * tables.transmittance_tiles(), s.transmittance_r,
                                    tables.spectral_optical_depth, GL_RGB32F);
     textures_[1] = make_texture_3d(tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
                                    t.scattering, format);

@@ -82,6 +82,20 @@ struct AtmosphereParams {
   // sets read tile k of the spectral transmittance texture.
   int transmittance_tile;
   int transmittance_tiles;
+  // The tile the single scattering's transmittance to the sun reads: the
+  // optical depth of the delta-M scaled medium (delta_scaled_params,
+  // parameters.hpp), so that sunlight scattered into the aerosol's forward
+  // peak on its way to the scattering point still arrives there, within a
+  // few degrees of the sun's direction (after the single-scattering
+  // correction of Nakajima & Tanaka 1988, J. Quant. Spectrosc. Radiat.
+  // Transfer 40, 51, which uses the scaled transmittances with the true
+  // phase function; here on the sun's path only, see precompute.cpp). The
+  // same as transmittance_tile where nothing is scaled.
+  int single_scattering_tile;
+  // 1: the nu axis of the 4D tables is uniform in the scattering angle
+  // acos(nu), for atmospheres with an aerosol lobe sharper than
+  // kDeltaScaledMaxG (see nu_from_unit_range); 0: uniform in nu.
+  int scattering_nu_in_angle;
 };
 
 // Most wavelength triples a spectral precomputation may use (48 wavelengths).

@@ -55,6 +55,21 @@ void set_aerosol_phase(AtmosphereParams& p, const PhaseFunction& aerosol, const 
   p.aerosol_forward_weight = two_lobes ? spectrum(aerosol.forward_weight) : vec3(1.0f);
 }
 
+// Whether delta_scaled_params scales the aerosol of some wavelength triple or
+// of the render parameters: the whole atmosphere's tables then use the nu
+// axis uniform in angle (every set's tables are summed texel by texel).
+bool has_scaled_lobe(const Atmosphere& atmosphere) {
+  const PhaseFunction phase = atmosphere.aerosol_phase();
+  std::vector<double> wavelengths = atmosphere.wavelengths_nm;
+  wavelengths.insert(wavelengths.end(), kRenderPhaseWavelengths.begin(), kRenderPhaseWavelengths.end());
+  bool has_aerosol = false;
+  for (const Constituent& c : atmosphere.constituents) has_aerosol |= c.phase.kind != PhaseFunction::Kind::rayleigh;
+  if (!has_aerosol) return false;
+  for (double w : wavelengths)
+    if (float(phase.g.at(w)) > kDeltaScaledMaxG) return true;
+  return false;
+}
+
 }  // namespace
 
 AtmosphereParams make_atmosphere_params(const Atmosphere& atmosphere, const TableSizes& sizes, int set,
@@ -100,6 +115,32 @@ AtmosphereParams make_atmosphere_params(const Atmosphere& atmosphere, const Tabl
   p.scattering_r_size = sizes.scattering_r;
   p.transmittance_tile = transmittance_tile;
   p.transmittance_tiles = transmittance_tiles;
+  p.single_scattering_tile = transmittance_tile;
+  p.scattering_nu_in_angle = has_scaled_lobe(atmosphere) ? 1 : 0;
+  return p;
+}
+
+AtmosphereParams delta_scaled_params(const AtmosphereParams& params, vec3& forward_fraction) {
+  AtmosphereParams p = params;
+  forward_fraction = vec3(0.0f);
+  const float g_star = kDeltaScaledMaxG;
+  for (int c = 0; c < 3; ++c) {
+    const float g = params.aerosol_g[c];
+    if (!(g > g_star)) continue;
+    // The forward lobe's own fraction, then its share of the phase function.
+    const float lobe_fraction = (g - g_star) / (1.0f - g_star);
+    p.aerosol_g[c] = g_star;
+    if (params.aerosol_phase_kind == PHASE_DOUBLE_HENYEY_GREENSTEIN) {
+      const float w = params.aerosol_forward_weight[c];
+      forward_fraction[c] = w * lobe_fraction;
+      // What is left of the forward lobe, renormalised with the second lobe.
+      p.aerosol_forward_weight[c] = w * (1.0f - lobe_fraction) / (1.0f - forward_fraction[c]);
+    } else {
+      forward_fraction[c] = lobe_fraction;
+    }
+  }
+  for (int i = 0; i < p.constituent_count; ++i)
+    if (p.is_aerosol[i] != 0) p.scattering[i] = params.scattering[i] * (vec3(1.0f) - forward_fraction);
   return p;
 }
 
@@ -140,7 +181,10 @@ std::unique_ptr<SpectralSets> make_spectral_sets(const Atmosphere& atmosphere, c
   *sets = SpectralSets{};
   sets->count = count;
   for (int k = 0; k < count; ++k) {
-    sets->set[k] = make_atmosphere_params(atmosphere, sizes, k, k, count);
+    // Tiles 0..count-1: the true optical depth; count..2 count-1: the scaled
+    // medium's, which the single scattering reads (Tables::transmittance_tiles).
+    sets->set[k] = make_atmosphere_params(atmosphere, sizes, k, k, 2 * count);
+    sets->set[k].single_scattering_tile = count + k;
     sets->to_channels[k] = set_to_channels(atmosphere.wavelengths_nm, k);
   }
   return sets;

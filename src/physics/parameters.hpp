@@ -44,7 +44,9 @@ glm::mat3 set_to_channels(const std::vector<double>& wavelengths_nm, int set);
 glm::mat3 channels_to_srgb_matrix(const std::vector<double>& wavelengths_nm);
 
 // The parameters of wavelength triple `set`, reading tile `transmittance_tile`
-// of a transmittance texture of `transmittance_tiles` tiles.
+// of a transmittance texture of `transmittance_tiles` tiles (and the same
+// tile for the single scattering: make_spectral_sets points that at the
+// scaled medium's tile).
 AtmosphereParams make_atmosphere_params(const Atmosphere& atmosphere, const TableSizes& sizes, int set,
                                         int transmittance_tile = 0, int transmittance_tiles = 1);
 
@@ -56,6 +58,29 @@ AtmosphereParams make_atmosphere_params(const Atmosphere& atmosphere, const Tabl
 // the SpectralSets. The aerosol phase function of sRGB channel c is that of
 // wavelength kRenderPhaseWavelengths[c] (see the .cpp).
 AtmosphereParams make_render_params(const Atmosphere& atmosphere, const TableSizes& sizes);
+
+// The delta-M scaled medium of the multiple scattering (Wiscombe 1977,
+// J. Atmos. Sci. 34, 1408; the delta-Eddington form of Joseph, Wiscombe &
+// Weinman 1976, J. Atmos. Sci. 33, 2452). An aerosol forward lobe sharper
+// than kDeltaScaledMaxG (Henyey-Greenstein or Cornette-Shanks g, the forward
+// lobe of a double HG) is split into a fraction f that goes straight on and
+// a lobe of asymmetry kDeltaScaledMaxG,
+//   P = f δ + (1 - f) P*,  f = (g - g*) / (1 - g*),  g* = kDeltaScaledMaxG,
+// which keeps the first moment: f + (1 - f) g* = g. Light scattered into
+// the δ stays on its ray, so the scaled medium has the scattering (1 - f)
+// β_A and the extinction β_ext - f β_A of the aerosol (its absorption is
+// unchanged), per channel. Its multiple scattering is smooth enough for the
+// tables' nu tiles and the density's degree-28 expansion; the peaked lobe
+// itself only enters the single scattering, which keeps the true medium and
+// phase function and receives its sunlight through the scaled medium
+// (precompute.cpp, single_scattering_tile). Orders >= 2 then miss the light
+// within a few degrees of the sun that the δ carries: the sky there is too
+// dark by day, and at sunset the glow is too bright within 2° of the sun
+// and too faint 5-15° from it (tests/mars_accuracy.cpp).
+// `forward_fraction` receives f (w f for a double HG) per channel. Without
+// a lobe sharper than g*, returns `params` unchanged and f = 0.
+inline constexpr float kDeltaScaledMaxG = 0.85f;
+AtmosphereParams delta_scaled_params(const AtmosphereParams& params, vec3& forward_fraction);
 
 // Every triple, each reading its tile of the spectral transmittance texture
 // (Tables::spectral_transmittance). Large (~40 KB): allocate, don't copy.

@@ -34,7 +34,10 @@ constexpr char kMagic[8] = {'A', 'T', 'M', 'O', 'S', 'T', 'B', 'L'};
 //    spectral single aerosol table (precompute.cpp).
 // 7: the multiple scattering integrates the source function J / beta_ext
 //    with the linear-source rule (functions.glsl, source_integration_nodes).
-constexpr std::uint32_t kFormatVersion = 7;
+// 8: a forward lobe sharper than g = 0.85 is delta-M scaled for the orders
+//    >= 2, with a second transmittance tile per wavelength triple (the
+//    scaled medium's) and the nu axis uniform in angle (delta_scaled_params).
+constexpr std::uint32_t kFormatVersion = 8;
 constexpr std::size_t kConvergenceEntryBytes = 4 + 4 + 3 * 8;
 
 struct Fnv1a {
@@ -178,7 +181,7 @@ std::string read_cache(const std::string& path, const std::string& key, const Pr
       sets != (wavelengths + 2) / 3 || convergence < 0 || convergence > 100)
     return "parameters mismatch";
   const std::size_t transmittance_floats = 3 * std::size_t(s.transmittance_mu) * s.transmittance_r;
-  const std::size_t floats = set_floats(s) + transmittance_floats * std::size_t(sets);
+  const std::size_t floats = set_floats(s) + transmittance_floats * std::size_t(2 * sets);
   const std::size_t expected =
       header + std::size_t(wavelengths) * 8 + std::size_t(convergence) * kConvergenceEntryBytes + floats * 4 + 8;
   if (data.size() != expected)
@@ -220,7 +223,7 @@ std::string read_cache(const std::string& path, const std::string& key, const Pr
   TableSet& set = tables.set;
   if (!take_vec3(set.direct_irradiance, e) ||
       !take_vec3(set.indirect_irradiance, e) || !take_vec3(set.scattering, sc) || !take_vec3(set.single_aerosol, sc) ||
-      !take_vec3(set.multiple_scattering, sc) || !take_vec3(tables.spectral_optical_depth, t * std::size_t(sets)))
+      !take_vec3(set.multiple_scattering, sc) || !take_vec3(tables.spectral_optical_depth, t * std::size_t(2 * sets)))
     return "non-finite texels";
   return "";
 }

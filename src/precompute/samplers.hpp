@@ -28,7 +28,7 @@ inline TableSamplers make_samplers(const Tables& tables) {
                         t.single_aerosol.data()};
   out.multiple_scattering = {tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
                              t.multiple_scattering.data()};
-  out.spectral_optical_depth = {s.transmittance_mu * tables.spectral_sets(), s.transmittance_r,
+  out.spectral_optical_depth = {s.transmittance_mu * tables.transmittance_tiles(), s.transmittance_r,
                                 tables.spectral_optical_depth.data()};
   return out;
 }
