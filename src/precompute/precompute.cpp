@@ -219,10 +219,8 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
     Table2D scaled_transmittance;
     Table3D scaled_single_rayleigh, scaled_single_aerosol;
     if (scaled)
-      timed("delta_m_single_scattering", cost_single, [&](auto&& progress) {
+      timed("delta_m_transmittance", 0.05, [&](auto&&) {
         scaled_transmittance = compute_transmittance_table(ms);
-        compute_single_scattering_tables(ms, scaled_transmittance, scaled_single_rayleigh, scaled_single_aerosol,
-                                         progress);
         const Table2D scaled_direct = compute_direct_irradiance_table(ms, scaled_transmittance);
         for (size_t i = 0; i < indirect_irradiance.texels.size(); ++i)
           indirect_irradiance.texels[i] += max(scaled_direct.texels[i] - direct_irradiance.texels[i], vec3(0.0f));
@@ -240,9 +238,15 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
     // blue of the glow around the setting sun (blue / red 2.5 against the
     // reference's 1.3, here 1.6) and makes the long view rays near the
     // horizon brighter still (tests/phase_spectrum_test.cpp: 25 % against
-    // 15 % RMS); the true extinction is kept along view rays.
+    // 15 % RMS); the true extinction is kept along view rays. The scaled
+    // medium's own single scattering (the source of its order 2) comes from
+    // the same pass.
     timed("single_scattering", cost_single, [&](auto&& progress) {
-      compute_single_scattering_tables(a, ms_transmittance, single_rayleigh, single_aerosol, progress);
+      if (scaled)
+        compute_single_scattering_tables(a, ms_transmittance, single_rayleigh, single_aerosol, progress, ms,
+                                         scaled_single_rayleigh, scaled_single_aerosol);
+      else
+        compute_single_scattering_tables(a, transmittance, single_rayleigh, single_aerosol, progress);
     });
     const Table3D& ms_single_rayleigh = scaled ? scaled_single_rayleigh : single_rayleigh;
     const Table3D& ms_single_aerosol = scaled ? scaled_single_aerosol : single_aerosol;

@@ -532,12 +532,20 @@ Table2D compute_indirect_irradiance_table(const AtmosphereParams& a, const Table
 }
 
 // compute_single_scattering() of functions.glsl for every texel, with the view
-// ray's nodes computed once per (mu, r) row.
-void compute_single_scattering_tables(const AtmosphereParams& a, const Table2D& transmittance, Table3D& rayleigh,
-                                      Table3D& aerosol, const StepProgress& progress) {
+// ray's nodes computed once per (mu, r) row; with `scaled`, also the scaled
+// medium's (see steps.hpp).
+namespace {
+
+void single_scattering_tables(const AtmosphereParams& a, const Table2D& transmittance, Table3D& rayleigh,
+                              Table3D& aerosol, const StepProgress& progress, const AtmosphereParams* scaled,
+                              Table3D* scaled_rayleigh, Table3D* scaled_aerosol) {
   const int width = a.scattering_nu_size * a.scattering_mu_s_size;
   rayleigh = Table3D(width, a.scattering_mu_size, a.scattering_r_size);
   aerosol = Table3D(width, a.scattering_mu_size, a.scattering_r_size);
+  if (scaled) {
+    *scaled_rayleigh = Table3D(width, a.scattering_mu_size, a.scattering_r_size);
+    *scaled_aerosol = Table3D(width, a.scattering_mu_size, a.scattering_r_size);
+  }
   const sampler2D t = transmittance.sampler();
   const TexelColumns columns = make_texel_columns(a);
   for_each_view_ray(a, progress, [&](int y, int z) {
@@ -548,14 +556,42 @@ void compute_single_scattering_tables(const AtmosphereParams& a, const Table2D& 
     for (int x = 0; x < width; ++x)
       nu[size_t(x)] = clamp_nu(ray.mu, columns.mu_s[size_t(x)], columns.tile_nu[size_t(x)]);
     std::vector<vec3> sum_rayleigh(size_t(width), vec3(0.0f)), sum_aerosol(size_t(width), vec3(0.0f));
+    std::vector<vec3> scaled_sum_rayleigh, scaled_sum_aerosol;
+    if (scaled) {
+      scaled_sum_rayleigh.assign(size_t(width), vec3(0.0f));
+      scaled_sum_aerosol.assign(size_t(width), vec3(0.0f));
+    }
     SunTransmittanceAtRadius sun(a, t, ray.r);
     std::vector<float> mu_s_t(static_cast<size_t>(width));
     std::vector<vec3> sun_transmittance(static_cast<size_t>(width));
+    // The optical depth the scaled medium lacks from the start of the ray to
+    // the node (f beta_A, integrated by Simpson's rule over 8 steps between
+    // nodes): its transmittance is the true one times exp(of it).
+    vec3 missing_depth(0.0f);
+    auto extinction_difference = [&](float t_along) {
+      const float r_t = clamp_radius(a, radius_along_ray(ray.r, ray.mu, t_along));
+      return extinction_at(a, r_t) - extinction_at(*scaled, r_t);
+    };
     for (int i = 0; i < ray.nodes.count; ++i) {
       vec3 beta_rayleigh, beta_aerosol, extinction;
       medium_at(a, ray.r_t[size_t(i)], beta_rayleigh, beta_aerosol, extinction);
-      beta_rayleigh *= ray.nodes.weight[i];
-      beta_aerosol *= ray.nodes.weight[i];
+      const vec3 weight = ray.nodes.weight[i];
+      vec3 scaled_beta_rayleigh(0.0f), scaled_beta_aerosol(0.0f);
+      if (scaled) {
+        if (i > 0) {
+          const float t0 = ray.nodes.t[i - 1], h = (ray.nodes.t[i] - t0) / 8.0f;
+          vec3 sum = extinction_difference(t0) + extinction_difference(ray.nodes.t[i]);
+          for (int k = 1; k < 8; ++k) sum += extinction_difference(t0 + float(k) * h) * (k % 2 == 1 ? 4.0f : 2.0f);
+          missing_depth += sum * (h / 3.0f);
+        }
+        vec3 scaled_extinction;
+        medium_at(*scaled, ray.r_t[size_t(i)], scaled_beta_rayleigh, scaled_beta_aerosol, scaled_extinction);
+        const vec3 scaled_weight = weight * exp(missing_depth);
+        scaled_beta_rayleigh *= scaled_weight;
+        scaled_beta_aerosol *= scaled_weight;
+      }
+      beta_rayleigh *= weight;
+      beta_aerosol *= weight;
       sun.reset(t, ray.r_t[size_t(i)]);
       // mu_s_along_ray() as two multiply-adds.
       const float along_mu_s = ray.r / ray.r_t[size_t(i)], along_nu = ray.nodes.t[i] / ray.r_t[size_t(i)];
@@ -566,12 +602,35 @@ void compute_single_scattering_tables(const AtmosphereParams& a, const Table2D& 
         sum_rayleigh[size_t(x)] += sun_transmittance[size_t(x)] * beta_rayleigh;
         sum_aerosol[size_t(x)] += sun_transmittance[size_t(x)] * beta_aerosol;
       }
+      if (scaled)
+        for (int x = 0; x < width; ++x) {
+          scaled_sum_rayleigh[size_t(x)] += sun_transmittance[size_t(x)] * scaled_beta_rayleigh;
+          scaled_sum_aerosol[size_t(x)] += sun_transmittance[size_t(x)] * scaled_beta_aerosol;
+        }
     }
     for (int x = 0; x < width; ++x) {
       rayleigh.at(x, y, z) = sum_rayleigh[size_t(x)] * a.solar_irradiance;
       aerosol.at(x, y, z) = sum_aerosol[size_t(x)] * a.solar_irradiance;
+      if (scaled) {
+        scaled_rayleigh->at(x, y, z) = scaled_sum_rayleigh[size_t(x)] * a.solar_irradiance;
+        scaled_aerosol->at(x, y, z) = scaled_sum_aerosol[size_t(x)] * a.solar_irradiance;
+      }
     }
   });
+}
+
+}  // namespace
+
+void compute_single_scattering_tables(const AtmosphereParams& a, const Table2D& transmittance, Table3D& rayleigh,
+                                      Table3D& aerosol, const StepProgress& progress) {
+  single_scattering_tables(a, transmittance, rayleigh, aerosol, progress, nullptr, nullptr, nullptr);
+}
+
+void compute_single_scattering_tables(const AtmosphereParams& a, const Table2D& transmittance, Table3D& rayleigh,
+                                      Table3D& aerosol, const StepProgress& progress, const AtmosphereParams& scaled,
+                                      Table3D& scaled_rayleigh, Table3D& scaled_aerosol) {
+  single_scattering_tables(a, transmittance, rayleigh, aerosol, progress, &scaled, &scaled_rayleigh,
+                           &scaled_aerosol);
 }
 
 // The scattering density through spherical harmonics. At a point (r, mu_s)

@@ -64,6 +64,16 @@ Table2D compute_indirect_irradiance_table(const AtmosphereParams& atmosphere, co
                                           const Table3D& single_rayleigh, const Table3D& single_aerosol,
                                           const Table3D& multiple_scattering, int order);
 
+// With `scaled` (the delta-M scaled medium of `atmosphere`,
+// delta_scaled_params), also that medium's single scattering through
+// `transmittance` into `scaled_rayleigh`, `scaled_aerosol`, in the same pass:
+// on the same view-ray nodes, weighted by the ratio of the two media's
+// transmittances along the ray (smooth), and sharing the lookups of the
+// sunlight, which dominate the cost.
+void compute_single_scattering_tables(const AtmosphereParams& atmosphere, const Table2D& transmittance,
+                                      Table3D& rayleigh, Table3D& aerosol, const StepProgress& progress,
+                                      const AtmosphereParams& scaled, Table3D& scaled_rayleigh,
+                                      Table3D& scaled_aerosol);
 void compute_single_scattering_tables(const AtmosphereParams& atmosphere, const Table2D& transmittance,
                                       Table3D& rayleigh, Table3D& aerosol, const StepProgress& progress);
 
