@@ -178,6 +178,29 @@ TEST(DeltaM, SharedSingleScatteringPassMatchesTheScaledMediumsOwn) {
   }
 }
 
+// A dense atmosphere with a scaled lobe: the dust of "mars" at 100x its
+// density (vertical optical depth 50). The true medium's node weights
+// underflow to 0 deep along the rays while the scaled medium's factor
+// exp(f tau) grows; uncapped that was 0 x inf, a NaN sky. Every texel must
+// be finite and non-negative.
+TEST(DeltaM, DenseScaledAtmosphereStaysFinite) {
+  atmos::Atmosphere mars = atmos::load_atmosphere("mars");
+  atmos::scale_density(mars, 100.0);
+  atmos::PrecomputeOptions options;
+  options.sizes = small_sizes();
+  options.scattering_orders = 6;
+  const atmos::Tables t = atmos::precompute_tables(mars, options);
+  for (const auto* texels : {&t.set.scattering, &t.set.single_aerosol, &t.set.multiple_scattering,
+                             &t.set.direct_irradiance, &t.set.indirect_irradiance, &t.spectral_optical_depth})
+    for (const glm::vec3& v : *texels)
+      ASSERT_TRUE(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && v.x >= 0.0f && v.y >= 0.0f &&
+                  v.z >= 0.0f);
+  const atmos::SkyModel model(mars, t);
+  const glm::dvec3 zenith = model.radiance(atmos::observer_position(mars, 0.0), glm::dvec3(0.0, 0.0, 1.0),
+                                           atmos::direction_from_azimuth_elevation(180.0, 30.0), false);
+  EXPECT_TRUE(std::isfinite(zenith.x) && std::isfinite(zenith.y) && std::isfinite(zenith.z));
+}
+
 // Energy with a peaked lobe: Mars with nothing absorbing over a white ground,
 // the sun at the zenith. The light the scaled medium carries in the δ must
 // reach the ground (added to the sky irradiance) and come back out (the

@@ -586,7 +586,10 @@ void single_scattering_tables(const AtmosphereParams& a, const Table2D& transmit
         }
         vec3 scaled_extinction;
         medium_at(*scaled, ray.r_t[size_t(i)], scaled_beta_rayleigh, scaled_beta_aerosol, scaled_extinction);
-        const vec3 scaled_weight = weight * exp(missing_depth);
+        // Capped: where the true medium's weight has underflowed to 0 an
+        // unbounded factor would make 0 x inf (a medium 100x Mars's dust,
+        // DeltaM.DenseScaledAtmosphereStaysFinite).
+        const vec3 scaled_weight = weight * exp(min(missing_depth, vec3(60.0f)));
         scaled_beta_rayleigh *= scaled_weight;
         scaled_beta_aerosol *= scaled_weight;
       }
