@@ -224,8 +224,7 @@ INLINE void aerial_perspective_node(IN(AtmosphereParams) set, IN(sampler2D) spec
   // Sunlight through the delta-M scaled medium, as in the single scattering
   // tables (single_scattering_tile; the view path keeps the true extinction:
   // the volume's segments are short).
-  AtmosphereParams scaled = set;
-  scaled.transmittance_tile = set.single_scattering_tile;
+  AtmosphereParams scaled = with_scaled_transmittance(set);
   vec3 to_sun = frame.low_sun ? transmittance_to_sun(scaled, spectral_transmittance_texture, r_t, mu_s_t)
                               : transmittance_to_top_atmosphere_boundary(scaled, spectral_transmittance_texture, r_t,
                                                                          mu_s_t);

@@ -541,6 +541,15 @@ INLINE vec3 transmittance_to_sun(IN(AtmosphereParams) atmosphere, IN(sampler2D) 
   return sum;
 }
 
+// `set` reading the delta-M scaled medium's optical depth instead of its own
+// (single_scattering_tile): the transmittances that the single scattering's
+// sunlight and the light of the planet's ground go through.
+INLINE AtmosphereParams with_scaled_transmittance(IN(AtmosphereParams) set) {
+  AtmosphereParams scaled = set;
+  scaled.transmittance_tile = set.single_scattering_tile;
+  return scaled;
+}
+
 // The two nu tiles around nu (the lower one's index) and the weight of the
 // upper one, for linear interpolation between tiles. A nu within 1e-4 of a
 // tile's spacing from a tile is that tile's: the axis uniform in angle does
@@ -1256,10 +1265,8 @@ INLINE void spectral_single_scattering(IN(AtmosphereParams) atmosphere, IN(Spect
     vec3 set_rayleigh;
     vec3 set_aerosol;
     float set_visibility;
-    // Sunlight through the delta-M scaled medium (single_scattering_tile).
-    AtmosphereParams set = spectral.set[k];
-    set.transmittance_tile = set.single_scattering_tile;
-    integrate_single_scattering(set, spectral_transmittance_texture, r, mu, mu_s, nu, d,
+    // Sunlight through the delta-M scaled medium.
+    integrate_single_scattering(with_scaled_transmittance(spectral.set[k]), spectral_transmittance_texture, r, mu, mu_s, nu, d,
                                 RUNTIME_SINGLE_SCATTERING_INTERVALS, RUNTIME_RAY_MAP_CELLS, moons, origin, view_ray,
                                 sun_direction, set_rayleigh, set_aerosol, set_visibility);
     rayleigh += spectral.to_channels[k] * set_rayleigh;
@@ -1351,9 +1358,7 @@ INLINE vec3 channel_transmittance(IN(AtmosphereParams) atmosphere, IN(SpectralSe
     if (path == PATH_TO_GROUND) {
       t = transmittance_to_ground(spectral.set[k], spectral_transmittance_texture, r, mu);
     } else if (path == PATH_TO_GROUND_SCALED) {
-      AtmosphereParams scaled = spectral.set[k];
-      scaled.transmittance_tile = scaled.single_scattering_tile;
-      t = transmittance_to_ground(scaled, spectral_transmittance_texture, r, mu);
+      t = transmittance_to_ground(with_scaled_transmittance(spectral.set[k]), spectral_transmittance_texture, r, mu);
     } else if (path == PATH_TO_SUN) {
       t = transmittance_to_sun(spectral.set[k], spectral_transmittance_texture, r, mu);
     } else {

@@ -58,6 +58,9 @@ void set_aerosol_phase(AtmosphereParams& p, const PhaseFunction& aerosol, const 
 // Whether delta_scaled_params scales the aerosol of some wavelength triple or
 // of the render parameters: the whole atmosphere's tables then use the nu
 // axis uniform in angle (every set's tables are summed texel by texel).
+// The one criterion of delta_scaled_params and has_scaled_lobe.
+bool lobe_is_scaled(float g) { return g > kDeltaScaledMaxG; }
+
 bool has_scaled_lobe(const Atmosphere& atmosphere) {
   const PhaseFunction phase = atmosphere.aerosol_phase();
   std::vector<double> wavelengths = atmosphere.wavelengths_nm;
@@ -66,7 +69,7 @@ bool has_scaled_lobe(const Atmosphere& atmosphere) {
   for (const Constituent& c : atmosphere.constituents) has_aerosol |= c.phase.kind != PhaseFunction::Kind::rayleigh;
   if (!has_aerosol) return false;
   for (double w : wavelengths)
-    if (float(phase.g.at(w)) > kDeltaScaledMaxG) return true;
+    if (lobe_is_scaled(float(phase.g.at(w)))) return true;
   return false;
 }
 
@@ -126,7 +129,7 @@ AtmosphereParams delta_scaled_params(const AtmosphereParams& params, vec3& forwa
   const float g_star = kDeltaScaledMaxG;
   for (int c = 0; c < 3; ++c) {
     const float g = params.aerosol_g[c];
-    if (!(g > g_star)) continue;
+    if (!lobe_is_scaled(g)) continue;
     // The forward lobe's own fraction, then its share of the phase function.
     const float lobe_fraction = (g - g_star) / (1.0f - g_star);
     p.aerosol_g[c] = g_star;

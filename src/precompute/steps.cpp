@@ -565,13 +565,8 @@ void single_scattering_tables(const AtmosphereParams& a, const Table2D& transmit
     std::vector<float> mu_s_t(static_cast<size_t>(width));
     std::vector<vec3> sun_transmittance(static_cast<size_t>(width));
     // The optical depth the scaled medium lacks from the start of the ray to
-    // the node (f beta_A, integrated by Simpson's rule over 8 steps between
-    // nodes): its transmittance is the true one times exp(of it).
+    // the node (f beta_A): its transmittance is the true one times exp(of it).
     vec3 missing_depth(0.0f);
-    auto extinction_difference = [&](float t_along) {
-      const float r_t = clamp_radius(a, radius_along_ray(ray.r, ray.mu, t_along));
-      return extinction_at(a, r_t) - extinction_at(*scaled, r_t);
-    };
     for (int i = 0; i < ray.nodes.count; ++i) {
       vec3 beta_rayleigh, beta_aerosol, extinction;
       medium_at(a, ray.r_t[size_t(i)], beta_rayleigh, beta_aerosol, extinction);
@@ -579,10 +574,9 @@ void single_scattering_tables(const AtmosphereParams& a, const Table2D& transmit
       vec3 scaled_beta_rayleigh(0.0f), scaled_beta_aerosol(0.0f);
       if (scaled) {
         if (i > 0) {
-          const float t0 = ray.nodes.t[i - 1], h = (ray.nodes.t[i] - t0) / 8.0f;
-          vec3 sum = extinction_difference(t0) + extinction_difference(ray.nodes.t[i]);
-          for (int k = 1; k < 8; ++k) sum += extinction_difference(t0 + float(k) * h) * (k % 2 == 1 ? 4.0f : 2.0f);
-          missing_depth += sum * (h / 3.0f);
+          const float t0 = ray.nodes.t[i - 1], t1 = ray.nodes.t[i];
+          missing_depth += optical_depth_along_ray(a, ray.r, ray.mu, t0, t1, 8) -
+                           optical_depth_along_ray(*scaled, ray.r, ray.mu, t0, t1, 8);
         }
         vec3 scaled_extinction;
         medium_at(*scaled, ray.r_t[size_t(i)], scaled_beta_rayleigh, scaled_beta_aerosol, scaled_extinction);
