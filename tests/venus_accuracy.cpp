@@ -9,15 +9,33 @@
 // placeholder, docs/preset-sources.md 1.2.4), not for the tables. The tables
 // are compared with the reference.
 //
-// The tables of the Venus tests (small, 32 radius samples, auto orders and
-// the solved tail) give 1.33e-2 of the sunlight at 550 nm, 0.21 of the
-// reference (before the multiple scattering integrated the source function,
-// functions.glsl source_integration_nodes: 1.85e-3, 0.03 of it). Tolerance:
-// the tables within [0.15, 1.25] of the reference: a bound against
-// regressions, not an accuracy claim. What is left is the tables' resolution
-// of a cloud of optical depth 30 (they also return 1.10x the light coming in
-// from a conservative Venus over a white ground,
-// Presets.ThickConservativeCloudConservesEnergy).
+// The tables (default sizes, auto orders and the solved tail) against the
+// reference, on the ground and for the light reflected to space (the upward
+// flux at 99 km), 550 nm, sun 40° up. Measured (session of 2026-11-23):
+//  - ground: 3.5e-2 of the sunlight, 0.56 of the reference's 6.3e-2
+//    (+- 12 %); reflected to space: 0.714, 0.81 of the reference's 0.885
+//    (+- 4 %). (The same tables for the wavelengths 549.5/550/550.5 nm put
+//    4.4e-2 on the ground, 0.71 of the reference: the auto orders and the
+//    tail see the other channels too; not looked into.)
+//  - The tables of this test used to be tiny (a 64 x 16 transmittance table,
+//    32 mu texels): those gave 1.33e-2 on the ground, 0.21 of the reference,
+//    and that figure was the tables' transmittance across the cloud top
+//    (3.6e-2 of the sun at 70 km against the reference's 0.125) more than
+//    their multiple scattering.
+//  - What is left at default sizes was traced to the mu axis: with 512 mu
+//    texels instead of 128 (and 549.5/550/550.5 nm, a 256 x 256
+//    transmittance table) the reflected light is 0.99 of the reference and
+//    the ground light 1.05 (+- 16 %); inside the cloud the upward hemisphere of a
+//    point 65 km up falls within 1-2 texels of the upper half of the axis,
+//    which is linear in the distance to the top. A log warp of that axis
+//    for optically thick atmospheres gives the same as 512 texels at 128
+//    (branch venus-mu-warp, not merged: the small-table tests of the tail
+//    and of energy conservation still need reworking). A cloud alone
+//    (conservative, black ground) shows a second, smaller error that needs
+//    128 radius samples: see the issue 3 notes.
+// Tolerances: a bound against regressions around the measurements, not an
+// accuracy claim: the ground within [0.4, 1.25] of the reference, the
+// reflected light within [0.7, 1.1].
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -32,8 +50,7 @@ namespace {
 TEST(VenusAccuracy, GroundLightAgainstTheReference) {
   const atmos::Atmosphere venus = atmos::load_atmosphere("venus");
   atmos::PrecomputeOptions options;
-  options.sizes = atmos::TableSizes{64, 16, 32, 8, 4, 16, 32, 8};
-  options.sizes.scattering_r = 32;
+  // Default sizes: 256 x 64 transmittance, 8 x 32 x 128 x 32 scattering.
   options.auto_orders = true;
   options.scattering_orders = 64;
   const atmos::Tables t = atmos::precompute_tables(venus, options);
@@ -43,6 +60,20 @@ TEST(VenusAccuracy, GroundLightAgainstTheReference) {
   model.horizontal_irradiance(atmos::observer_position(venus, 2.0), sun, ground_sun, ground_sky);
   model.horizontal_irradiance(atmos::observer_position(venus, 99e3), sun, top_sun, top_sky);
   const double tables = (ground_sun.y + ground_sky.y) / top_sun.y;
+  // The light going up at 99 km: ∫ L(-w) mu dw over the lower hemisphere
+  // (midpoint rule, 32 x 24 directions).
+  double tables_up = 0.0;
+  const glm::dvec3 top = atmos::observer_position(venus, 99e3);
+  for (int i = 0; i < 32; ++i) {
+    const double theta = (i + 0.5) / 32 * M_PI / 2;
+    for (int j = 0; j < 24; ++j) {
+      const double phi = (j + 0.5) / 24 * 2 * M_PI;
+      const glm::dvec3 down(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), -std::cos(theta));
+      tables_up += model.radiance(top, down, sun, false).y * std::cos(theta) * std::sin(theta) * (M_PI / 2 / 32) *
+                   (2 * M_PI / 24);
+    }
+  }
+  tables_up /= top_sun.y;
 
   // The reference at 550 nm (and 0.5 nm either side: it needs three
   // wavelengths, and mixing 440 and 680 nm into its paths would multiply its
@@ -58,8 +89,16 @@ TEST(VenusAccuracy, GroundLightAgainstTheReference) {
   const double truth = reference.radiance[1] / in;
   std::printf("venus, 550 nm, sun 40 deg: ground / top %.3e (tables), %.3e +- %.1e (reference): %.3f\n", tables,
               truth, reference.standard_error[1] / in, tables / truth);
-  EXPECT_GT(tables, 0.15 * truth);
+  EXPECT_GT(tables, 0.4 * truth);
   EXPECT_LT(tables, 1.25 * truth);
+  reference_options.paths = 1000;
+  const atmos::ReferenceResult up = atmos::reference_irradiance(green, top, glm::dvec3(0.0, 0.0, -1.0), sun,
+                                                                reference_options);
+  const double truth_up = up.radiance[1] / in;
+  std::printf("venus, 550 nm, sun 40 deg: reflected / in %.3f (tables), %.3f +- %.3f (reference): %.3f\n", tables_up,
+              truth_up, up.standard_error[1] / in, tables_up / truth_up);
+  EXPECT_GT(tables_up, 0.7 * truth_up);
+  EXPECT_LT(tables_up, 1.1 * truth_up);
 }
 
 }  // namespace
