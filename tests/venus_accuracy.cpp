@@ -44,6 +44,7 @@
 #include "atmos/reference.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "upward_flux.hpp"
 
 namespace {
 
@@ -60,20 +61,9 @@ TEST(VenusAccuracy, GroundLightAgainstTheReference) {
   model.horizontal_irradiance(atmos::observer_position(venus, 2.0), sun, ground_sun, ground_sky);
   model.horizontal_irradiance(atmos::observer_position(venus, 99e3), sun, top_sun, top_sky);
   const double tables = (ground_sun.y + ground_sky.y) / top_sun.y;
-  // The light going up at 99 km: ∫ L(-w) mu dw over the lower hemisphere
-  // (midpoint rule, 32 x 24 directions).
-  double tables_up = 0.0;
+  // The light going up at 99 km (32 x 24 directions).
   const glm::dvec3 top = atmos::observer_position(venus, 99e3);
-  for (int i = 0; i < 32; ++i) {
-    const double theta = (i + 0.5) / 32 * M_PI / 2;
-    for (int j = 0; j < 24; ++j) {
-      const double phi = (j + 0.5) / 24 * 2 * M_PI;
-      const glm::dvec3 down(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), -std::cos(theta));
-      tables_up += model.radiance(top, down, sun, false).y * std::cos(theta) * std::sin(theta) * (M_PI / 2 / 32) *
-                   (2 * M_PI / 24);
-    }
-  }
-  tables_up /= top_sun.y;
+  const double tables_up = atmos_test::upward_flux(model, top, sun, 32, 24).y / top_sun.y;
 
   // The reference at 550 nm (and 0.5 nm either side: it needs three
   // wavelengths, and mixing 440 and 680 nm into its paths would multiply its
