@@ -9,7 +9,7 @@ packages=(
   libglm-dev nlohmann-json3-dev libcli11-dev libtinyexr-dev libstb-dev
   libtbb-dev libgtest-dev libgmock-dev libbenchmark-dev
   libepoxy-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev
-  python3-matplotlib
+  libeigen3-dev python3-matplotlib
 )
 
 missing=()

@@ -4,17 +4,21 @@
 //
 // Venus is where the solver matters: in its cloud deck (optical depth 30,
 // single-scattering albedo 0.9995) over 17 (550 nm) to 42 (440 nm) optical
-// depths of CO2, each order adds 0.984 (680 nm), 0.989 (550 nm) and 0.996
-// (440 nm) of the light of the order before, and the light that reaches the
-// ground has been scattered hundreds of times. After 600 orders the red and
-// green channels have nearly converged (what is left is 2e-4 and 5e-3 of
-// the ground's sky light); the blue has not (0.996^600 = 0.08): what the
-// remaining orders add is extrapolated geometrically from the last orders,
-// where the ratio of successive orders has settled.
+// depths of CO2, each order adds 0.9925 (680 nm), 0.995 (550 nm) and 0.9975
+// (440 nm) of the light of the order before (these tables, whose mu axis is
+// warped; 0.984, 0.989 and 0.996 before the warp, which lost light at the
+// cloud top), and the light that reaches the ground has been scattered
+// hundreds of times. After 600 orders the red and green channels have
+// nearly converged (what is left is 2 % and 14 % of the ground's sky
+// light); the blue has not: what the remaining orders add is extrapolated
+// geometrically from the last orders, where the ratio of successive orders
+// has settled for red and green.
 //
 // Compared: the sky irradiance on the ground (the row of the indirect
 // irradiance table at the ground, every sun elevation) and the light of the
-// multiple scattering table, per wavelength.
+// multiple scattering table, per wavelength (red and green); and for every
+// channel, the residual of the solved tail's equation, recomputed outside
+// the solver.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -46,12 +50,18 @@ TEST(ConvergenceAccuracy, VenusTailEqualsSixHundredOrders) {
   Table3D radiance(single_rayleigh.width, single_rayleigh.height, single_rayleigh.depth), density;
   Table2D irradiance, ground_sum(a.irradiance_mu_s_size, a.irradiance_r_size);
   glm::dvec3 light(0.0), last_ground(0.0), previous_ground(0.0), last_light(0.0), previous_light(0.0);
+  Table3D radiance_17;
+  Table2D irradiance_17;
   for (int order = 2; order <= kOrders; ++order) {
     compute_scattering_density_table(a, *geometry, transmittance, single_rayleigh, single_aerosol, radiance,
                                      irradiance, order - 1, nullptr, density);
     irradiance = compute_indirect_irradiance_table(a, transmittance, single_rayleigh, single_aerosol, radiance,
                                                    order - 1);
     compute_multiple_scattering_table(a, *geometry, density, nullptr, radiance);
+    if (order == 17) {  // v_17 = (M_17, E_16): what the tail after 16 orders starts from
+      radiance_17 = radiance;
+      irradiance_17 = irradiance;
+    }
     for (size_t i = 0; i < irradiance.texels.size(); ++i) ground_sum.texels[i] += irradiance.texels[i];
     // The light of this order in the multiple scattering table (divided by
     // the Rayleigh phase function of the texel's tile, as stored).
@@ -91,25 +101,67 @@ TEST(ConvergenceAccuracy, VenusTailEqualsSixHundredOrders) {
   options.scattering_orders = 16;
   const atmos::Tables t = atmos::precompute_tables(venus, options);
   ASSERT_TRUE(t.convergence.back().tail);
+  EXPECT_LE(t.convergence.back().residual, options.tail_tolerance);
   std::printf("16 orders and the tail: %d solver steps, residual %.1e, the tail adds %.3e of the light\n",
               t.convergence.back().iterations, t.convergence.back().residual, t.convergence.back().relative);
   glm::dvec3 solved_ground(0.0), solved_light(0.0);
   for (int x = 0; x < sizes.irradiance_mu_s; ++x) solved_ground += glm::dvec3(t.set.indirect_irradiance[size_t(x)]);
   for (const glm::vec3& v : t.set.multiple_scattering) solved_light += glm::dvec3(v);
 
-  // Measured: red and green within 5e-6 (ground) and 4e-6 (light); the blue
-  // ground within 1.0 % of the sum with the extrapolated remainder (which is
-  // 28 % of it: the comparison is as good as the geometric extrapolation,
-  // hence the blue's 2 %), its light within 3e-4 (remainder 3.2 %). 93
-  // solver steps.
+  // Measured (the mu axis of Venus warped, functions.glsl scattering_u_mu):
+  // red within 7e-6 (ground) and 5e-6 (light), green within 1.5e-3 and
+  // 1.7e-4 (its remainder is 14 % of the ground light: the comparison is as
+  // good as the extrapolation), 82 solver steps. The blue cannot be checked
+  // this way any more: the ratio of its orders' ground light (0.9987) has
+  // not settled on that of their light (0.9975) after 600 orders, and its
+  // extrapolated remainder is 2.1 times the 600 orders' ground light; the
+  // solved ground light is 0.76 of that extrapolation, the light 1.005. The
+  // blue is checked by the residual of the solved tail below instead.
   for (int c = 0; c < 3; ++c) {
     const double ground = explicit_ground[c] + remainder[c];
     const double total_light = light[c] + light_remainder[c];
     std::printf("%g nm: ground sky light %.5e (600 orders + remainder), %.5e (solved), %+.2e; light %+.2e\n",
                 venus.wavelengths_nm[size_t(c)], ground, solved_ground[c], solved_ground[c] / ground - 1.0,
                 solved_light[c] / total_light - 1.0);
-    EXPECT_NEAR(solved_ground[c], ground, (c == 2 ? 0.02 : 1e-4) * ground) << c;
-    EXPECT_NEAR(solved_light[c], total_light, (c == 2 ? 1e-3 : 1e-4) * total_light) << c;
+    if (c == 2) continue;
+    EXPECT_NEAR(solved_ground[c], ground, (c == 1 ? 3e-3 : 1e-4) * ground) << c;
+    EXPECT_NEAR(solved_light[c], total_light, (c == 1 ? 5e-4 : 1e-4) * total_light) << c;
+  }
+
+  // The tail T after 16 orders must solve T = v_17 + A T, A one more order
+  // computed with the steps above: the residual |v_17 + A T - T| / |v_17|
+  // per channel, over the radiance texels and the ground's irradiance,
+  // computed here, outside the solver, in double from the float tables.
+  // Measured: 3.8e-5, 3.9e-5, 3.3e-5 at 680, 550, 440 nm, 82 steps (the
+  // solver's own recurrence says 1.1e-8, 3.9e-7, 9.3e-6: what is left is
+  // the rounding of the float tables). Bound: 1e-4.
+  const ScatteringTail tail = solve_scattering_tail(a, *geometry, transmittance, radiance_17, irradiance_17, 1e-5,
+                                                    300, 30, 10, nullptr);
+  const Table3D unused;
+  compute_scattering_density_table(a, *geometry, transmittance, unused, unused, tail.radiance, tail.irradiance, 2,
+                                   nullptr, density, false);
+  const Table2D applied_irradiance =
+      compute_indirect_irradiance_table(a, transmittance, unused, unused, tail.radiance, 2);
+  Table3D applied_radiance;
+  compute_multiple_scattering_table(a, *geometry, density, nullptr, applied_radiance);
+  glm::dvec3 residual(0.0), norm(0.0);
+  for (size_t i = 0; i < radiance_17.texels.size(); ++i) {
+    const glm::dvec3 v(radiance_17.texels[i]);
+    const glm::dvec3 r = v + glm::dvec3(applied_radiance.texels[i]) - glm::dvec3(tail.radiance.texels[i]);
+    residual += r * r;
+    norm += v * v;
+  }
+  for (size_t i = 0; i < irradiance_17.texels.size(); ++i) {
+    const glm::dvec3 v(irradiance_17.texels[i]);
+    const glm::dvec3 r = v + glm::dvec3(applied_irradiance.texels[i]) - glm::dvec3(tail.irradiance.texels[i]);
+    residual += r * r;
+    norm += v * v;
+  }
+  for (int c = 0; c < 3; ++c) {
+    const double relative = std::sqrt(residual[c] / norm[c]);
+    std::printf("%g nm: tail after 16 orders, %d steps: residual %.2e (solver), %.2e (recomputed)\n",
+                venus.wavelengths_nm[size_t(c)], tail.iterations, tail.relative_residual[c], relative);
+    EXPECT_LT(relative, 1e-4) << c;
   }
 }
 

@@ -2,8 +2,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 
+#include "atmos/atmosphere.hpp"
 #include "physics/parameters.hpp"
 #include "precompute/steps.hpp"
 
@@ -88,27 +90,36 @@ TEST_F(EarthParams, TransmittanceMappingRoundTrips) {
   }
 }
 
-TEST_F(EarthParams, ScatteringMappingRoundTrips) {
-  std::mt19937 rng(11);
+// Rays (r, mu, mu_s, nu) of random directions at random altitudes map to
+// texture coordinates of the scattering tables and back to the same rays;
+// the lower half of the mu axis (u < 0.5) holds the rays that reach the ground.
+void expect_scattering_mapping_round_trips(const AtmosphereParams& params, unsigned seed, int count) {
+  std::mt19937 rng(seed);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
-  for (int i = 0; i < 2000; ++i) {
+  for (int i = 0; i < count; ++i) {
     const float r = params.bottom_radius + 50.0f + u(rng) * (params.top_radius - params.bottom_radius - 100.0f);
     const float mu = -1.0f + 2.0f * u(rng);
     const float mu_s = params.mu_s_min + u(rng) * (1.0f - params.mu_s_min);
     const float nu = -1.0f + 2.0f * u(rng);
     const bool ground = ray_intersects_ground(params, r, mu);
     const vec4 uvwz = scattering_uvwz_from_r_mu_mu_s_nu(params, r, mu, mu_s, nu, ground);
+    ASSERT_GE(uvwz.z, 0.0f);
+    ASSERT_LE(uvwz.z, 1.0f);
+    EXPECT_EQ(uvwz.z < 0.5f, ground);
     float r2, mu2, mu_s2, nu2;
     bool ground2;
     r_mu_mu_s_nu_from_scattering_uvwz(params, uvwz, r2, mu2, mu_s2, nu2, ground2);
     EXPECT_EQ(ground2, ground);
     EXPECT_NEAR(r2, r, 5.0f);
     const float d = distance_to_nearest_atmosphere_boundary(params, r, mu, ground);
-    EXPECT_NEAR(distance_to_nearest_atmosphere_boundary(params, r2, mu2, ground2), d, 1e-3f * d + 30.0f);
+    EXPECT_NEAR(distance_to_nearest_atmosphere_boundary(params, r2, mu2, ground2), d, 1e-3f * d + 30.0f)
+        << "r " << r << " mu " << mu;
     EXPECT_NEAR(mu_s2, mu_s, 2e-4f);
     EXPECT_NEAR(nu2, nu, 1e-5f);
   }
 }
+
+TEST_F(EarthParams, ScatteringMappingRoundTrips) { expect_scattering_mapping_round_trips(params, 11, 2000); }
 
 TEST_F(EarthParams, IrradianceMappingRoundTrips) {
   for (float r = params.bottom_radius; r <= params.top_radius; r += 5000.0f) {
@@ -512,6 +523,91 @@ TEST(Geometry, RaySphereDistances) {
   EXPECT_FALSE(ray_intersects_ground(a, 6370e3f, 0.0f));
   // Horizontal ray from the ground to the top: sqrt(R_top² - R²).
   EXPECT_NEAR(distance_to_top_atmosphere_boundary(a, 6360e3f, 0.0f), std::sqrt(6420e3 * 6420e3 - 6360e3 * 6360e3), 2.0f);
+}
+
+// The warp of the scattering tables' mu axis (scattering_u_mu,
+// scattering_mu_log_weight): by vertical optical depth at 550 nm, so that
+// only optically thick atmospheres get it. The presets' depths are those of
+// their data files (docs/preset-sources.md): Earth's Rayleigh 0.098, ozone
+// and continental aerosol 0.27 in all; Venus's cloud deck 30 over 17 of CO2.
+TEST(MuWarp, OnlyOpticallyThickAtmospheresAreWarped) {
+  auto depth_and_weight = [](const atmos::Atmosphere& a) {
+    const AtmosphereParams p = make_atmosphere_params(a, atmos::TableSizes{}, 0);
+    const double tau = vertical_optical_depth_550(a, p);
+    EXPECT_EQ(double(p.scattering_mu_log_weight), double(float(scattering_mu_log_weight(tau))));
+    return std::pair<double, double>(tau, p.scattering_mu_log_weight);
+  };
+  for (const char* name : {"earth", "mars", "mars-thesis", "titan"}) {
+    const auto [tau, w] = depth_and_weight(atmos::load_atmosphere(name));
+    EXPECT_LT(tau, kMuLogWarpOpticalDepth[0]) << name;
+    EXPECT_EQ(w, 0.0) << name;
+  }
+  const auto [earth_tau, earth_w] = depth_and_weight(atmos::load_atmosphere("earth"));
+  EXPECT_GT(earth_tau, 0.2);
+  EXPECT_LT(earth_tau, 0.35);
+  const auto [venus_tau, venus_w] = depth_and_weight(atmos::load_atmosphere("venus"));
+  EXPECT_GT(venus_tau, 40.0);
+  EXPECT_LT(venus_tau, 55.0);
+  EXPECT_EQ(venus_w, 1.0);
+  // 100x Earth: 100 times the column, partly warped.
+  atmos::Atmosphere dense = atmos::load_atmosphere("earth");
+  atmos::scale_density(dense, 100.0);
+  const auto [dense_tau, dense_w] = depth_and_weight(dense);
+  EXPECT_NEAR(dense_tau, 100.0 * earth_tau, 1e-3 * dense_tau);
+  EXPECT_GT(dense_w, 0.9);
+  EXPECT_LT(dense_w, 1.0);
+  // The weight is a smoothstep in log τ: 0 and 1 at the ends, 1/2 at their
+  // geometric mean, monotonic.
+  EXPECT_EQ(scattering_mu_log_weight(kMuLogWarpOpticalDepth[0]), 0.0);
+  EXPECT_EQ(scattering_mu_log_weight(kMuLogWarpOpticalDepth[1]), 1.0);
+  EXPECT_NEAR(scattering_mu_log_weight(std::sqrt(kMuLogWarpOpticalDepth[0] * kMuLogWarpOpticalDepth[1])), 0.5, 1e-12);
+  for (double tau = 1.0; tau < 100.0; tau *= 1.1)
+    EXPECT_LE(scattering_mu_log_weight(tau), scattering_mu_log_weight(tau * 1.1));
+}
+
+class VenusParams : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    params = make_atmosphere_params(atmos::load_atmosphere("venus"), atmos::TableSizes{}, 0);
+    ASSERT_EQ(params.scattering_mu_log_weight, 1.0f);
+  }
+  AtmosphereParams params{};
+};
+
+// The warped axis still maps texture coordinates back to the rays they came
+// from, up and down, at every altitude.
+TEST_F(VenusParams, WarpedScatteringMappingRoundTrips) { expect_scattering_mapping_round_trips(params, 13, 4000); }
+
+// What the warp is for: at 65 km, inside Venus's cloud deck, the directions
+// from the zenith to 60° from it get one texel of Bruneton's axis (linear in
+// the distance to the top) and many of the warped one. Each half of the axis
+// stays monotonic: u falls from the nadir (0.5) to the horizon (0), then
+// from the zenith (0.5) to the horizon (1) as the distance grows.
+TEST_F(VenusParams, WarpGivesTheUpperHemisphereTexelsInsideTheCloud) {
+  const float r = params.bottom_radius + 65e3f;
+  AtmosphereParams linear = params;
+  linear.scattering_mu_log_weight = 0.0f;
+  auto texels = [&](const AtmosphereParams& p, float mu_a, float mu_b) {
+    const bool ground = ray_intersects_ground(p, r, mu_a);
+    return std::abs(scattering_u_mu(p, r, mu_b, ground) - scattering_u_mu(p, r, mu_a, ground)) *
+           float(p.scattering_mu_size);
+  };
+  const float linear_texels = texels(linear, 0.5f, 1.0f), warped_texels = texels(params, 0.5f, 1.0f);
+  std::printf("zenith to 60 deg at 65 km: %.2f texels (linear), %.2f (warped) of %d\n", double(linear_texels),
+              double(warped_texels), params.scattering_mu_size);
+  EXPECT_LT(linear_texels, 2.0f);
+  EXPECT_GT(warped_texels, 8.0f);
+  // The half of the axis below the horizontal keeps texels too.
+  const float mu_h = horizon_mu(params, r);
+  EXPECT_GT(texels(params, mu_h + 1e-4f, 0.0f), 8.0f);
+  float previous[2] = {1.0f, 1.0f};  // the last u of each half (0: above the horizon, 1: below)
+  for (float mu = -1.0f; mu <= 1.0f; mu += 1.0f / 512.0f) {
+    const bool ground = ray_intersects_ground(params, r, mu);
+    const float u_mu = scattering_u_mu(params, r, mu, ground);
+    EXPECT_EQ(u_mu < 0.5f, ground) << "mu " << mu;
+    EXPECT_LE(u_mu, previous[ground ? 1 : 0]) << "mu " << mu;
+    previous[ground ? 1 : 0] = u_mu;
+  }
 }
 
 }  // namespace

@@ -41,11 +41,13 @@ struct PrecomputeOptions {
   // optically thick, nearly conservative atmosphere such as Venus, where the
   // light that reaches the ground has been scattered hundreds of times and
   // each order adds almost as much as the one before): the light of all
-  // further orders is solved for at once instead of being left out — GMRES on
-  // the transport equation of the remaining light (src/precompute/tail.cpp),
-  // until the residual of every wavelength is below `tail_tolerance` of the
-  // first missing order, in at most `tail_iterations` steps of about one
-  // order's cost each, keeping up to 21 tables of the scattering table's size.
+  // further orders is solved for at once instead of being left out — GMRES
+  // with deflated restarts on the transport equation of the remaining light
+  // (src/precompute/tail.cpp), until the residual of every wavelength is
+  // below `tail_tolerance` of the first missing order, in at most
+  // `tail_iterations` steps of about one order's cost each, keeping up to 31
+  // tables of the scattering table's size (Venus at 15 wavelengths and the
+  // default sizes: 95-98 steps).
   // Tables::convergence then ends with an entry marked `tail`. Fixed orders
   // (auto_orders false) never solve the tail: K orders mean light scattered
   // at most K times.

@@ -19,7 +19,7 @@ namespace {
 static_assert(sizeof(physics::DensityProfile) == 4 * (2 + 2 * MAX_DENSITY_KNOTS),
               "DensityProfile changed: update atmosphere_params_glsl()");
 static_assert(sizeof(physics::AtmosphereParams) ==
-                  4 * (3 + 1 + 3 * 3 + 2 * 3 + 2 + 8 + 4) + MAX_CONSTITUENTS * (sizeof(physics::DensityProfile) + 4 * (3 + 3 + 1)),
+                  4 * (3 + 1 + 3 * 3 + 2 * 3 + 2 + 8 + 5) + MAX_CONSTITUENTS * (sizeof(physics::DensityProfile) + 4 * (3 + 3 + 1)),
               "AtmosphereParams changed: update atmosphere_params_glsl()");
 
 std::string glsl_int(int value) { return std::to_string(value); }
@@ -85,7 +85,8 @@ std::string atmosphere_params_expression(const physics::AtmosphereParams& p) {
        glsl_int(p.scattering_nu_size) + ", " + glsl_int(p.scattering_mu_s_size) + ", " +
        glsl_int(p.scattering_mu_size) + ", " + glsl_int(p.scattering_r_size) + ",\n";
   s += "    " + glsl_int(p.transmittance_tile) + ", " + glsl_int(p.transmittance_tiles) + ", " +
-       glsl_int(p.single_scattering_tile) + ", " + glsl_int(p.scattering_nu_in_angle) + ")";
+       glsl_int(p.single_scattering_tile) + ", " + glsl_int(p.scattering_nu_in_angle) + ", " +
+       glsl_float(p.scattering_mu_log_weight) + ")";
   return s;
 }
 

@@ -96,6 +96,9 @@ struct AtmosphereParams {
   // acos(nu), for atmospheres with an aerosol lobe sharper than
   // kDeltaScaledMaxG (see nu_from_unit_range); 0: uniform in nu.
   int scattering_nu_in_angle;
+  // Warp of the mu axis of the 4D tables towards log-spaced distances
+  // (0: linear in distance, 1: log; see scattering_u_mu).
+  float scattering_mu_log_weight;
 };
 
 // Most wavelength triples a spectral precomputation may use (48 wavelengths).

@@ -43,6 +43,33 @@ glm::mat3 set_to_channels(const std::vector<double>& wavelengths_nm, int set);
 // Linear sRGB on the cd/m² scale from the tables' channels.
 glm::mat3 channels_to_srgb_matrix(const std::vector<double>& wavelengths_nm);
 
+// Vertical optical depth (extinction, ground to top) at 550 nm, from the
+// density profiles of `params` (any triple of `atmosphere`: only its
+// geometry and profiles are read). One wavelength for every triple, so that
+// what depends on it is the same in all the tables that are summed.
+double vertical_optical_depth_550(const Atmosphere& atmosphere, const AtmosphereParams& params);
+
+// The warp of the scattering tables' mu axis towards log-spaced distances
+// (AtmosphereParams.scattering_mu_log_weight, see scattering_u_mu in
+// functions.glsl), from the vertical optical depth at 550 nm: 0 (Bruneton's
+// mapping, unchanged) up to kMuLogWarpOpticalDepth[0], 1 from
+// kMuLogWarpOpticalDepth[1], smoothstep in log τ between. Why by optical
+// depth: the warp gives the directions above and below a point inside an
+// optically thick layer the texels that its horizon loses, and that is where
+// the light comes from there: the Venus tables (τ 47, default sizes) go from
+// 0.81 to 0.97 of the reference's light reflected to space and from 0.56 to
+// 0.82 of its light on the ground (0.96 with the 32 intervals that
+// multiple_scattering_intervals gives the warped atmospheres;
+// tests/venus_accuracy.cpp). In thinner atmospheres the
+// light that matters is that of long grazing rays, seen from the ground or
+// along the limb from above, and the warp costs their horizon: Earth
+// (τ 0.27) seen from 100 km, 4.8-6.8 % RMS against the reference instead of
+// < 2 %; Titan (τ 9.3, an absorbing haze) gains nothing measurable in its
+// fluxes (within 2 % of the unwarped tables at 0-599 km). Earth, both Mars
+// and Titan keep 0; Venus and 100x Earth (τ 27, weight 0.97) are warped.
+inline constexpr std::array<double, 2> kMuLogWarpOpticalDepth = {10.0, 30.0};
+double scattering_mu_log_weight(double vertical_optical_depth);
+
 // The parameters of wavelength triple `set`, reading tile `transmittance_tile`
 // of a transmittance texture of `transmittance_tiles` tiles (and the same
 // tile for the single scattering: make_spectral_sets points that at the

@@ -37,7 +37,12 @@ constexpr char kMagic[8] = {'A', 'T', 'M', 'O', 'S', 'T', 'B', 'L'};
 // 8: a forward lobe sharper than g = 0.85 is delta-M scaled for the orders
 //    >= 2, with a second transmittance tile per wavelength triple (the
 //    scaled medium's) and the nu axis uniform in angle (delta_scaled_params).
-constexpr std::uint32_t kFormatVersion = 8;
+// 9: the mu axis of optically thick atmospheres is warped towards log-spaced
+//    distances (scattering_mu_log_weight, functions.glsl scattering_u_mu),
+//    and their multiple scattering integrates the view rays with 32
+//    intervals (multiple_scattering_intervals); the tail solver restarts
+//    with deflation (tail.cpp).
+constexpr std::uint32_t kFormatVersion = 9;
 constexpr std::size_t kConvergenceEntryBytes = 4 + 4 + 3 * 8;
 
 struct Fnv1a {

@@ -59,9 +59,11 @@ void check_tables_match(const Atmosphere& atmosphere, const Tables& tables) {
 
 namespace {
 
-// Fields kept by the tail solver between restarts (memory: 21 tables of the
-// scattering table's size, 265 MB with the default sizes).
-constexpr int kTailRestart = 20;
+// Fields kept by the tail solver between restarts (memory: 31 tables of the
+// scattering table's size, 390 MB with the default sizes), of which 10 are
+// carried over each restart (tail.cpp: the deflated restart).
+constexpr int kTailRestart = 30;
+constexpr int kTailDeflation = 10;
 
 // Radiance summed over the texels of a scattering table, weighted into
 // luminance by `luminance` (per channel of the set), with the phase function
@@ -336,7 +338,8 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
         delta_multiple = Table3D();
         const ScatteringTail tail =
             solve_scattering_tail(ms, *geometry, ms_transmittance, next_radiance, next_irradiance,
-                                  options.tail_tolerance, options.tail_iterations, kTailRestart, progress);
+                                  options.tail_tolerance, options.tail_iterations, kTailRestart, kTailDeflation,
+                                  progress);
         add_to_multiple(tail.radiance);
         for (size_t i = 0; i < indirect_irradiance.texels.size(); ++i)
           indirect_irradiance.texels[i] += tail.irradiance.texels[i];

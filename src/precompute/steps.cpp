@@ -813,7 +813,7 @@ std::shared_ptr<const OrderGeometry> make_order_geometry(const AtmosphereParams&
                     [&](const tbb::blocked_range<int>& range) {
                       for (int i = range.begin(); i != range.end(); ++i)
                         g->rays[size_t(i)] = make_view_ray(a, i % a.scattering_mu_size, i / a.scattering_mu_size,
-                                                           MULTIPLE_SCATTERING_INTERVALS, true);
+                                                           multiple_scattering_intervals(a), true);
                     });
   return g;
 }

@@ -109,7 +109,8 @@ void compute_multiple_scattering_table(const AtmosphereParams& atmosphere, const
 // (tail.cpp). Stops when the residual of every channel is below `tolerance`
 // relative to |v_{K+1}|, or after `max_iterations` applications of A, each
 // costing about one order; keeps at most `restart` + 1 fields (tables of the
-// size of a scattering table) at a time.
+// size of a scattering table) at a time, and carries `deflation` of them
+// (approximate eigenvectors of the slowest modes) over each restart.
 struct ScatteringTail {
   Table3D radiance;    // Σ_{n > K} M_n, radiance like an order's multiple scattering table
   Table2D irradiance;  // Σ_{n >= K} E_n, sky irradiance like compute_indirect_irradiance_table
@@ -119,7 +120,7 @@ struct ScatteringTail {
 ScatteringTail solve_scattering_tail(const AtmosphereParams& atmosphere, const OrderGeometry& geometry,
                                      const Table2D& transmittance, const Table3D& next_radiance,
                                      const Table2D& next_irradiance, double tolerance, int max_iterations, int restart,
-                                     const StepProgress& progress);
+                                     int deflation, const StepProgress& progress);
 
 // Legendre moments p_l = 2π ∫ P(x) P_l(x) dx, l = 0..max_degree, of a phase
 // function P (so that P(x) = Σ (2l + 1) / (4π) p_l P_l(x); p_0 = 1 when P is
