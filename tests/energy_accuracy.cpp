@@ -83,7 +83,7 @@ TEST(Energy, WhiteGroundNonAbsorbingAtmosphereConservesEnergy) {
 // tables returned 1.35 of the incoming light. The tail stops at the
 // 100-step cap with a residual of 9.3e-4 here (a white ground under a
 // conservative cloud leaves the iteration almost nothing to lose), but that
-// is not what is left: 200 steps without restarts (residual 1.3e-5) give the
+// is not what is left: 200 steps of GMRES(100) (residual 1.3e-5) give the
 // same out / in to 1e-3. Tolerance: the tables within [0.85, 1.05] of the
 // reference at 550 nm (its 3 sigma are 5.4 %), and out / in <= 1 at every
 // wavelength.
