@@ -251,7 +251,9 @@ ScatteringTail solve_scattering_tail(const AtmosphereParams& a, const OrderGeome
                                      const Table2D& next_irradiance, double tolerance, int max_iterations,
                                      int restart, int deflation, const StepProgress& progress) {
   const int m = std::max(1, std::min(restart, max_iterations));
-  const int k_wanted = std::clamp(deflation, 0, m - 2);
+  // At most m - 2 vectors kept, so that each cycle still adds Krylov
+  // vectors (0 or 1: plain restarts).
+  const int k_wanted = std::max(0, std::min(deflation, m - 2));
   const Table3D unused;
   Table3D density;
   // out = A in: one scattering order applied to a signed field.
