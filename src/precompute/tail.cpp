@@ -189,7 +189,9 @@ int harmonic_ritz_bases(const std::array<MatrixXd, 3>& h, const std::array<Vecto
     const MatrixXd hm = h[size_t(c)].topLeftCorner(m, m);
     const double last = h[size_t(c)](m, m - 1);
     Eigen::PartialPivLU<MatrixXd> lu(hm.transpose());
-    if (!(std::abs(lu.determinant()) > 0.0)) return 0;
+    // The determinant of a 30 x 30 matrix under- or overflows long before
+    // the matrix is singular: ask for its conditioning instead.
+    if (!(lu.rcond() > 1e-14)) return 0;
     const VectorXd f = lu.solve(VectorXd::Unit(m, m - 1));
     MatrixXd harmonic = hm;
     harmonic.col(m - 1) += last * last * f;
