@@ -77,9 +77,11 @@ TEST(Energy, WhiteGroundNonAbsorbingAtmosphereConservesEnergy) {
 // 0.018 (K = 6000, 2000 paths; the seed is fixed, so the test sees this
 // value): 0.98 +- 0.01 pooled.
 //
-// Measured (default tables, 680/550/440 nm): out / in = 0.888, 0.886, 0.881,
-// 0.88 of this reference run (0.90 of the pooled value). Before the mu axis
-// of thick atmospheres was warped (functions.glsl scattering_u_mu) the same
+// Measured (default tables, 680/550/440 nm): out / in = 0.905, 0.897, 0.889,
+// 0.89 of this reference run (0.92 of the pooled value); 0.888, 0.886,
+// 0.881 with Bruneton's r axis (before it followed the optical depth,
+// functions.glsl scattering_x_r_from_rho_fraction). Before the mu axis of
+// thick atmospheres was warped (functions.glsl scattering_u_mu) the same
 // tables returned 1.35 of the incoming light. The tail stops at the
 // 100-step cap with a residual of 9.3e-4 here (a white ground under a
 // conservative cloud leaves the iteration almost nothing to lose), but that

@@ -565,6 +565,27 @@ TEST(MuWarp, OnlyOpticallyThickAtmospheresAreWarped) {
     EXPECT_LE(scattering_mu_log_weight(tau), scattering_mu_log_weight(tau * 1.1));
 }
 
+// The r axis follows the optical depth in the same atmospheres, and only in
+// them: elsewhere it is Bruneton's x_r = rho / H, bit for bit.
+TEST(RAxis, OnlyOpticallyThickAtmospheresFollowTheOpticalDepth) {
+  for (const char* name : {"earth", "mars", "mars-thesis", "titan"}) {
+    const AtmosphereParams p = make_atmosphere_params(atmos::load_atmosphere(name), atmos::TableSizes{}, 0);
+    EXPECT_EQ(p.scattering_r_optical_depth_weight, 0.0f) << name;
+    for (float s = 0.0f; s <= 1.0f; s += 1.0f / 97.0f) {
+      EXPECT_EQ(scattering_x_r_from_rho_fraction(p, s), s) << name;
+      EXPECT_EQ(rho_fraction_from_scattering_x_r(p, s), s) << name;
+    }
+  }
+  atmos::Atmosphere dense = atmos::load_atmosphere("earth");
+  atmos::scale_density(dense, 100.0);
+  for (const atmos::Atmosphere& a : {atmos::load_atmosphere("venus"), dense}) {
+    const AtmosphereParams p = make_atmosphere_params(a, atmos::TableSizes{}, 0);
+    EXPECT_FLOAT_EQ(p.scattering_r_optical_depth_weight,
+                    float(kScatteringROpticalDepthShare * p.scattering_mu_log_weight));
+    EXPECT_GT(p.scattering_r_optical_depth_weight, 0.4f);
+  }
+}
+
 class VenusParams : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -573,6 +594,41 @@ class VenusParams : public ::testing::Test {
   }
   AtmosphereParams params{};
 };
+
+// Venus's r axis: from 0 at the ground to 1 at the top, increasing, its
+// inverse exact, and the cloud deck (47-90 km, optical depth 30 of 47) gets
+// 14 of the 32 texels instead of Bruneton's 8: the texels of rho / H crowd
+// near the ground, those of the optical depth into the cloud, and the axis
+// mixes the two half and half.
+TEST_F(VenusParams, RAxisGivesTheCloudDeckTexels) {
+  const float w = params.scattering_r_optical_depth_weight;
+  ASSERT_EQ(w, float(kScatteringROpticalDepthShare));
+  EXPECT_EQ(params.scattering_r_axis[0], 0.0f);
+  EXPECT_EQ(params.scattering_r_axis[SCATTERING_R_AXIS_KNOTS - 1], 1.0f);
+  for (int i = 1; i < SCATTERING_R_AXIS_KNOTS; ++i) {
+    // At least the rho / H part of each step: the optical depth only adds.
+    EXPECT_GE(params.scattering_r_axis[i] - params.scattering_r_axis[i - 1],
+              0.999f * (1.0f - w) / float(SCATTERING_R_AXIS_KNOTS - 1))
+        << i;
+  }
+  for (float x = 0.0f; x <= 1.0f; x += 1.0f / 1013.0f) {
+    const float s = rho_fraction_from_scattering_x_r(params, x);
+    EXPECT_NEAR(scattering_x_r_from_rho_fraction(params, s), x, 2e-6f) << x;
+  }
+  AtmosphereParams bruneton = params;
+  bruneton.scattering_r_optical_depth_weight = 0.0f;
+  auto texels = [&](const AtmosphereParams& p, float low_m, float high_m) {
+    return (scattering_u_r(p, p.bottom_radius + high_m) - scattering_u_r(p, p.bottom_radius + low_m)) *
+           float(p.scattering_r_size);
+  };
+  const float cloud = texels(params, 47e3f, 90e3f), cloud_bruneton = texels(bruneton, 47e3f, 90e3f);
+  std::printf("cloud deck (47-90 km): %.1f texels (Bruneton's %.1f) of %d\n", double(cloud), double(cloud_bruneton),
+              params.scattering_r_size);
+  EXPECT_LT(cloud_bruneton, 9.0f);
+  EXPECT_GT(cloud, 13.0f);
+  // The lowest kilometre keeps texels below 1 km (rho / H: 3 of 32).
+  EXPECT_GT(texels(params, 0.0f, 1e3f), 1.0f);
+}
 
 // The warped axis still maps texture coordinates back to the rays they came
 // from, up and down, at every altitude.

@@ -115,13 +115,17 @@ TEST(Presets, DerivedQuantities) {
 // optical depth 30, nearly conservative) needs 32 radius samples in the
 // scattering tables (with 8, 16 or 24 an order adds more light than the one
 // before, which precompute_tables reports as an error), and it is still
-// converging at the CLI's cap of 64 orders (the 64th adds 0.30 % of the
-// light with these tables): the tail solver adds the rest (23 % of the
-// light, in 69 steps with these tables). Each order keeps more of the light
+// converging at the CLI's cap of 64 orders (the 64th adds 0.37 % of the
+// light with these tables): the tail solver adds the rest (48 % of the
+// light, in 82 steps with these tables). Each order keeps more of the light
 // of the one before since the multiple scattering integrates the source
 // function (functions.glsl, source_integration_nodes), as light diffusing
 // through a nearly conservative cloud does (before: the 64th order added
-// 0.14 %, the tail 4.6 %).
+// 0.14 %, the tail 4.6 %), and more again since the r axis follows the
+// optical depth through the cloud (scattering_x_r_from_rho_fraction; before
+// it: the 64th order 0.27 %, the tail 39 % in 79 steps). These small
+// tables check that the solver converges, not the light
+// (tests/venus_accuracy.cpp).
 TEST(Presets, VenusAndTitanConvergeWithAutoOrders) {
   for (const char* name : {"titan", "venus"}) {
     SCOPED_TRACE(name);
@@ -146,7 +150,7 @@ TEST(Presets, VenusAndTitanConvergeWithAutoOrders) {
                     v.z >= 0.0f);
     if (venus) {
       EXPECT_EQ(t.scattering_orders, 64);
-      EXPECT_LT(last.relative, 4e-3);
+      EXPECT_LT(last.relative, 5e-3);
       // The orders after the cap, solved for (tail.cpp).
       const atmos::OrderContribution& tail = t.convergence.back();
       std::printf("venus: the tail (orders >= %d) adds %.3e of the light, %d solver steps, residual %.1e\n", tail.order,
@@ -155,7 +159,7 @@ TEST(Presets, VenusAndTitanConvergeWithAutoOrders) {
       EXPECT_EQ(tail.order, 65);
       EXPECT_LE(tail.residual, options.tail_tolerance);
       EXPECT_GT(tail.relative, 0.1);
-      EXPECT_LT(tail.relative, 0.4);
+      EXPECT_LT(tail.relative, 0.6);
     } else {
       EXPECT_LT(t.scattering_orders, 64);
       EXPECT_LE(last.relative, options.auto_orders_tolerance);

@@ -2,9 +2,10 @@
 //
 // docs/preset-sources.md 1.2.3 gives 1.5-2.6 % of the sunlight on the ground
 // (Venera 8, Pioneer Venus, Titov et al. 2007). The reference itself, on the
-// preset as it is, gives more: 6.3 % at 550 nm with the sun 40° up (K = 2000
-// interactions, converged: 5.8 % at K = 1000, 6.3 % at K = 4000; ± 12 % with
-// 2000 paths), so reaching the measured band is a question for the preset
+// preset as it is, gives more: 5.1 % at 550 nm with the sun 40° up (K = 2000
+// interactions, which runs at K = 1000 and 4000 found converged within
+// their 12 % noise; the mean of four seeds of 16000 paths), so reaching the
+// measured band is a question for the preset
 // (its cloud single-scattering albedo of 0.9995 above 500 nm is a
 // placeholder, docs/preset-sources.md 1.2.4), not for the tables. The tables
 // are compared with the reference.
@@ -12,39 +13,40 @@
 // The tables (default sizes, auto orders and the solved tail) against the
 // reference, on the ground (550 nm with the sun 40° and 70° up, 680 nm at
 // 40°) and for the light reflected to space (the upward flux at 99 km,
-// 550 nm, sun 40° up). Measured (2026-11-23):
-//  - ground, 550 nm, sun 40°: 6.1e-2 of the sunlight, 0.96 of the
-//    reference's 6.3e-2 (+- 12 %); sun 70°: 7.0e-2, 0.91 of 7.7e-2 (+- 10 %);
-//    680 nm, sun 40°: 9.3e-2, 1.26 of 7.4e-2 (+- 10 %);
-//  - reflected to space: 0.842, 0.95 of the reference's 0.885 (+- 4 %).
+// 550 nm, sun 40° up). Measured (2026-11-24), this test's reference runs
+// first, then the mean of 3-4 seeds (16000 paths each; 8000, 4000 and 1000
+// for the reflected light):
+//  - ground, 550 nm, sun 40°: 5.07e-2 of the sunlight; 0.96 of 5.27e-2
+//    (+- 5 %), 1.00 of the mean 5.08e-2;
+//  - ground, 550 nm, sun 70°: 6.10e-2; 0.98 of 6.20e-2, 0.99 of 6.15e-2;
+//  - ground, 680 nm, sun 40°: 7.14e-2; 0.92 of 7.75e-2, 0.92 of 7.77e-2;
+//  - reflected to space: 0.814; 0.89 of 0.920 (+- 2 %), 0.90 of 0.906.
+// With 16000 paths the seeds scatter as their stated errors say (at 680 nm
+// 7.39e-2 to 8.10e-2, +- 3.0e-3 each). This test used to run 2000 paths:
+// that run gave 6.3e-2 at 550 nm, 1.24 of the mean (1.6 of its stated
+// sigma), which made the old tables look right there and wrong in the red.
+// History (default sizes):
 //  - Before the mu axis of optically thick atmospheres was warped towards
-//    log-spaced distances (functions.glsl scattering_u_mu): ground 3.5e-2
-//    (0.56), reflected 0.714 (0.81). Inside the cloud, the axis linear in
-//    the distance to the top gave the whole upper hemisphere of a point
-//    65 km up 1-2 of its 128 texels, and the tables lost a fifth of the
-//    light at the cloud top; 512 texels or the warp at 128 both remove that.
-//  - With the warp but 16 intervals on the multiple scattering's view rays
-//    instead of 32 (multiple_scattering_intervals): ground 0.82, reflected
-//    0.97 (and 1.06 / 0.99 for the wavelengths 549.5/550/550.5 nm: one set
-//    of nodes serves the three wavelengths of the table).
-//  - The tables of this test used to be tiny (a 64 x 16 transmittance table,
-//    32 mu texels): those gave 0.21 of the reference on the ground, mostly
-//    through the transmittance across the cloud top.
-//  - What is left: the red's excess (1.26), not explained yet. The cloud
-//    deck alone (over vacuum, conservative, black ground, 550 nm) against a
-//    plane-parallel Monte Carlo (R 0.853, T 0.147): reflected 0.86, 0.94,
-//    0.98, 0.99 and transmitted 0.72, 0.64, 1.10, 1.04 of it with 32, 64,
-//    128, 256 radius samples (outside the tests; with 16 intervals the
-//    transmission stayed 16-22 % high at 128-256).
+//    log-spaced distances (functions.glsl scattering_u_mu): ground 3.5e-2,
+//    reflected 0.714. Inside the cloud, the axis linear in the distance to
+//    the top gave the whole upper hemisphere of a point 65 km up 1-2 of its
+//    128 texels, and the tables lost a fifth of the light at the cloud top.
+//  - With the warp and 32 intervals on the multiple scattering's view rays
+//    (multiple_scattering_intervals) but Bruneton's r axis: ground 6.1e-2,
+//    7.0e-2 and 9.3e-2 (1.20, 1.14 and 1.19 of the means), reflected 0.842
+//    (0.93). That excess shrank with more radius texels (680 nm: 8.5e-2 with
+//    64, 8.2e-2 with 128): Bruneton's r axis gives the cloud deck 8 of its 32
+//    texels. The r axis of thick atmospheres now also follows the optical
+//    depth (functions.glsl scattering_x_r_from_rho_fraction: 14 texels in
+//    the cloud), which removed the excess but costs the reflected light 3 %
+//    (parameters.hpp kScatteringROpticalDepthShare).
 //  - Before the warp the tables' ground light also depended too much on the
-//    sun: 3.3 times more at 70° than at 40° (550 and 680 nm, from atmos
-//    sample), against 1.7 with the warp and 1.8 for the reference (this
-//    test's two sun elevations at 550 nm). The red's excess is the cloud's
-//    transmission above.
-// Tolerances: the ground within [0.75, 1.25] of the reference at 550 nm and
-// [0.9, 1.45] at 680 nm (the reference's noise is fixed by the seed, so
-// these are bounds against regressions around the measurements), the
-// reflected light within [0.9, 1.1] (4 %).
+//    sun: 3.3 times more at 70° than at 40°, against 1.2 now and 1.2 for the
+//    reference.
+// Tolerances: the ground within [0.85, 1.15] of the reference (its scatter
+// between seeds is ~4 %; the seed is fixed, so these bound regressions
+// around the measurements), the reflected light within [0.83, 1.1].
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -73,7 +75,7 @@ TEST(VenusAccuracy, GroundLightAgainstTheReference) {
   // 680 nm into its paths would multiply its variance).
   atmos::ReferenceOptions reference_options;
   reference_options.scattering_orders = 2000;
-  reference_options.paths = 2000;
+  reference_options.paths = 16000;
   auto check_ground = [&](int channel, double elevation, double low, double high) {
     const double nm = venus.wavelengths_nm[size_t(channel)];
     const glm::dvec3 sun = atmos::direction_from_azimuth_elevation(180.0, elevation);
@@ -92,9 +94,9 @@ TEST(VenusAccuracy, GroundLightAgainstTheReference) {
     EXPECT_GT(tables, low * truth) << nm << " nm, sun " << elevation;
     EXPECT_LT(tables, high * truth) << nm << " nm, sun " << elevation;
   };
-  check_ground(1, 40.0, 0.75, 1.25);
-  check_ground(1, 70.0, 0.75, 1.25);
-  check_ground(0, 40.0, 0.9, 1.45);
+  check_ground(1, 40.0, 0.85, 1.15);
+  check_ground(1, 70.0, 0.85, 1.15);
+  check_ground(0, 40.0, 0.85, 1.15);
 
   // The light going up at 99 km (32 x 24 directions), 550 nm, sun 40° up.
   const glm::dvec3 sun = atmos::direction_from_azimuth_elevation(180.0, 40.0);
@@ -104,14 +106,14 @@ TEST(VenusAccuracy, GroundLightAgainstTheReference) {
   const double tables_up = atmos_test::upward_flux(model, top, sun, 32, 24).y / top_sun.y;
   atmos::Atmosphere green = venus;
   green.wavelengths_nm = {549.5, 550.0, 550.5};
-  reference_options.paths = 1000;
+  reference_options.paths = 4000;
   const atmos::ReferenceResult up = atmos::reference_irradiance(green, top, glm::dvec3(0.0, 0.0, -1.0), sun,
                                                                 reference_options);
   const double in = green.solar_irradiance.at(550.0) * std::sin(40.0 * M_PI / 180.0);
   const double truth_up = up.radiance[1] / in;
   std::printf("venus, 550 nm, sun 40 deg: reflected / in %.3f (tables), %.3f +- %.3f (reference): %.3f\n", tables_up,
               truth_up, up.standard_error[1] / in, tables_up / truth_up);
-  EXPECT_GT(tables_up, 0.9 * truth_up);
+  EXPECT_GT(tables_up, 0.83 * truth_up);
   EXPECT_LT(tables_up, 1.1 * truth_up);
 }
 

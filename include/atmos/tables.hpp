@@ -47,7 +47,7 @@ struct PrecomputeOptions {
   // below `tail_tolerance` of the first missing order, in at most
   // `tail_iterations` steps of about one order's cost each, keeping up to 31
   // tables of the scattering table's size (Venus at 15 wavelengths and the
-  // default sizes: 95-98 steps).
+  // default sizes: 90 steps).
   // Tables::convergence then ends with an entry marked `tail`. Fixed orders
   // (auto_orders false) never solve the tail: K orders mean light scattered
   // at most K times.

@@ -25,6 +25,8 @@
 
 #define MAX_CONSTITUENTS 4
 #define MAX_DENSITY_KNOTS 8
+// Knots of the scattering tables' r axis (AtmosphereParams.scattering_r_axis).
+#define SCATTERING_R_AXIS_KNOTS 33
 
 #define PHASE_HENYEY_GREENSTEIN 0
 #define PHASE_CORNETTE_SHANKS 1
@@ -99,6 +101,12 @@ struct AtmosphereParams {
   // Warp of the mu axis of the 4D tables towards log-spaced distances
   // (0: linear in distance, 1: log; see scattering_u_mu).
   float scattering_mu_log_weight;
+  // The r axis of the 4D tables (see scattering_x_r_from_rho_fraction):
+  // with weight 0 Bruneton's x_r = rho / H; else x_r is the piecewise-linear
+  // map whose values at rho / H = i / (SCATTERING_R_AXIS_KNOTS - 1) are
+  // scattering_r_axis[i] (0 at the ground, 1 at the top, increasing).
+  float scattering_r_optical_depth_weight;
+  float scattering_r_axis[SCATTERING_R_AXIS_KNOTS];
 };
 
 // Most wavelength triples a spectral precomputation may use (48 wavelengths).

@@ -233,9 +233,48 @@ INLINE void r_mu_from_transmittance_uv(IN(AtmosphereParams) atmosphere, vec2 uv,
   mu = d == 0.0f ? 1.0f : clamp_cosine((H * H - rho * rho - d * d) / (2.0f * r * d));
 }
 
+// The r axis of the scattering tables. Bruneton's x_r = rho / H puts the
+// texels densely near the ground, where the density is highest in a thin
+// atmosphere. In an optically thick one the radiance changes on the scale
+// of one optical depth wherever that lies: Venus's cloud deck (optical depth
+// 30 between 47 and 90 km) gets only 8 of 32 texels from rho / H, and the
+// ground light there converges only slowly with their number (at 680 nm
+// 9.3, 8.5, 8.2 % of the sunlight with 32, 64, 128 texels, the reference
+// 7.8 %; with the axis below 7.1 and 7.9 % with 32 and 64, and at 550 nm
+// 5.1 % with 32 against the reference's 5.1 %). So there the axis is
+//   x_r = (1 - w) rho / H + w (1 - tau(r) / tau(bottom)),
+// tau(r) the vertical optical depth at 550 nm from r to the top and
+// w = scattering_r_optical_depth_weight (make_atmosphere_params), tabulated
+// at SCATTERING_R_AXIS_KNOTS values of rho / H and linear between, so that
+// the inverse below is exact and cheap. w = 0 is Bruneton's axis exactly.
+INLINE float scattering_x_r_from_rho_fraction(IN(AtmosphereParams) atmosphere, float s) {
+  if (atmosphere.scattering_r_optical_depth_weight == 0.0f) return s;
+  float f = clamp(s, 0.0f, 1.0f) * float(SCATTERING_R_AXIS_KNOTS - 1);
+  int i = min(int(f), SCATTERING_R_AXIS_KNOTS - 2);
+  return mix(atmosphere.scattering_r_axis[i], atmosphere.scattering_r_axis[i + 1], f - float(i));
+}
+
+INLINE float rho_fraction_from_scattering_x_r(IN(AtmosphereParams) atmosphere, float x) {
+  if (atmosphere.scattering_r_optical_depth_weight == 0.0f) return x;
+  // Bisection for the knot interval [lo, hi] holding x (the knots increase).
+  int lo = 0;
+  int hi = SCATTERING_R_AXIS_KNOTS - 1;
+  while (hi - lo > 1) {
+    int mid = (lo + hi) / 2;
+    if (atmosphere.scattering_r_axis[mid] <= x) {
+      lo = mid;
+    } else {
+      hi = mid;
+    }
+  }
+  float a = atmosphere.scattering_r_axis[lo];
+  float b = atmosphere.scattering_r_axis[hi];
+  return (float(lo) + clamp((x - a) / (b - a), 0.0f, 1.0f)) / float(SCATTERING_R_AXIS_KNOTS - 1);
+}
+
 INLINE float scattering_u_r(IN(AtmosphereParams) atmosphere, float r) {
-  return texture_coord_from_unit_range(horizon_length(atmosphere, r) / horizon_length_at_top(atmosphere),
-                                       atmosphere.scattering_r_size);
+  float s = horizon_length(atmosphere, r) / horizon_length_at_top(atmosphere);
+  return texture_coord_from_unit_range(scattering_x_r_from_rho_fraction(atmosphere, s), atmosphere.scattering_r_size);
 }
 
 // The mu axis of the scattering tables, within each half: the ray's
@@ -349,7 +388,8 @@ INLINE vec4 scattering_uvwz_from_r_mu_mu_s_nu(IN(AtmosphereParams) atmosphere, f
 INLINE void r_mu_mu_s_nu_from_scattering_uvwz(IN(AtmosphereParams) atmosphere, vec4 uvwz, OUT(float) r, OUT(float) mu,
                                               OUT(float) mu_s, OUT(float) nu, OUT(bool) ray_r_mu_intersects_ground) {
   float H = horizon_length_at_top(atmosphere);
-  float rho = H * unit_range_from_texture_coord(uvwz.w, atmosphere.scattering_r_size);
+  float rho = H * rho_fraction_from_scattering_x_r(atmosphere,
+                                                   unit_range_from_texture_coord(uvwz.w, atmosphere.scattering_r_size));
   r = sqrt(rho * rho + atmosphere.bottom_radius * atmosphere.bottom_radius);
 
   int half_mu_size = atmosphere.scattering_mu_size / 2;
@@ -1057,9 +1097,10 @@ INLINE void integrate_single_scattering(IN(AtmosphereParams) atmosphere, IN(samp
 // Measured against the reference on Venus at 550 nm (tests/venus_accuracy.cpp,
 // default sizes): with the preset's 680/550/440 nm the ground gets 0.82 of
 // the reference's light with 16 intervals and 0.96 with 32 (549.5/550/550.5
-// nm with 16: 1.06, +-12 %); the precomputation's multiple scattering step
-// costs twice as much (Venus at 15 wavelengths, auto orders: 181 s in all
-// instead of 152 s).
+// nm with 16: 1.06, +-12 %; ratios to that test's 2000-path reference of
+// the time, which later runs of 16000 paths put 1.24 times too high); the
+// precomputation's multiple scattering step costs twice as much (Venus at
+// 15 wavelengths, auto orders: 181 s in all instead of 152 s).
 INLINE int multiple_scattering_intervals(IN(AtmosphereParams) atmosphere) {
   return atmosphere.scattering_mu_log_weight > 0.0f ? 2 * MULTIPLE_SCATTERING_INTERVALS
                                                     : MULTIPLE_SCATTERING_INTERVALS;

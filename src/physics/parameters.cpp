@@ -74,18 +74,59 @@ bool has_scaled_lobe(const Atmosphere& atmosphere) {
   return false;
 }
 
-}  // namespace
-
-double vertical_optical_depth_550(const Atmosphere& atmosphere, const AtmosphereParams& params) {
+// `params` with every constituent's coefficients at 550 nm in all channels.
+AtmosphereParams params_at_550(const Atmosphere& atmosphere, const AtmosphereParams& params) {
   AtmosphereParams p = params;
   for (int i = 0; i < p.constituent_count; ++i) {
     const Constituent& c = atmosphere.constituents[size_t(i)];
     p.scattering[i] = vec3(float(c.scattering.at(550.0)));
     p.absorption[i] = vec3(float(c.absorption.at(550.0)));
   }
-  // 4000 trapezoid steps: 25 m on Earth, within 1e-4 of the column of a
-  // piecewise-linear profile whose knots are kilometres apart.
-  return double(optical_depth_along_ray(p, p.bottom_radius, 1.0f, 0.0f, p.top_radius - p.bottom_radius, 4000).x);
+  return p;
+}
+
+// The vertical optical depth from radius r to the top, of params_at_550:
+// 4000 trapezoid steps over the whole column (25 m on Earth, within 1e-4 of
+// the column of a piecewise-linear profile whose knots are kilometres
+// apart), proportionally fewer from higher up.
+double optical_depth_to_top(const AtmosphereParams& p, float r) {
+  const float length = p.top_radius - r;
+  const int steps = std::max(16, int(std::ceil(4000.0 * length / (p.top_radius - p.bottom_radius))));
+  return double(optical_depth_along_ray(p, r, 1.0f, 0.0f, length, steps).x);
+}
+
+// AtmosphereParams.scattering_r_axis for weight w (see
+// scattering_x_r_from_rho_fraction in functions.glsl): at rho / H = i / (n - 1),
+// (1 - w) rho / H + w (1 - tau(r) / tau(bottom)).
+void set_scattering_r_axis(const Atmosphere& atmosphere, AtmosphereParams& p, double w) {
+  p.scattering_r_optical_depth_weight = float(w);
+  const int n = SCATTERING_R_AXIS_KNOTS;
+  if (w == 0.0) {  // Bruneton's axis; the knots are not read, they say so
+    for (int i = 0; i < n; ++i) p.scattering_r_axis[i] = float(i) / float(n - 1);
+    return;
+  }
+  const AtmosphereParams p550 = params_at_550(atmosphere, p);
+  const double tau_bottom = optical_depth_to_top(p550, p550.bottom_radius);
+  const double H = std::sqrt((double(p.top_radius) - p.bottom_radius) * (double(p.top_radius) + p.bottom_radius));
+  for (int i = 0; i < n; ++i) {
+    const double s = double(i) / double(n - 1);
+    const double r = std::sqrt(s * s * H * H + double(p.bottom_radius) * p.bottom_radius);
+    const double tau = i == n - 1 ? 0.0 : optical_depth_to_top(p550, float(std::min(r, double(p.top_radius))));
+    p.scattering_r_axis[i] = float((1.0 - w) * s + w * (1.0 - tau / tau_bottom));
+  }
+  p.scattering_r_axis[0] = 0.0f;
+  p.scattering_r_axis[n - 1] = 1.0f;
+}
+
+}  // namespace
+
+double vertical_optical_depth_550(const Atmosphere& atmosphere, const AtmosphereParams& params) {
+  const AtmosphereParams p = params_at_550(atmosphere, params);
+  return optical_depth_to_top(p, p.bottom_radius);
+}
+
+double scattering_r_optical_depth_weight(double mu_log_weight) {
+  return kScatteringROpticalDepthShare * mu_log_weight;
 }
 
 double scattering_mu_log_weight(double vertical_optical_depth) {
@@ -140,7 +181,9 @@ AtmosphereParams make_atmosphere_params(const Atmosphere& atmosphere, const Tabl
   p.transmittance_tiles = transmittance_tiles;
   p.single_scattering_tile = transmittance_tile;
   p.scattering_nu_in_angle = has_scaled_lobe(atmosphere) ? 1 : 0;
-  p.scattering_mu_log_weight = float(scattering_mu_log_weight(vertical_optical_depth_550(atmosphere, p)));
+  const double mu_log_weight = scattering_mu_log_weight(vertical_optical_depth_550(atmosphere, p));
+  p.scattering_mu_log_weight = float(mu_log_weight);
+  set_scattering_r_axis(atmosphere, p, scattering_r_optical_depth_weight(mu_log_weight));
   return p;
 }
 

@@ -42,7 +42,10 @@ constexpr char kMagic[8] = {'A', 'T', 'M', 'O', 'S', 'T', 'B', 'L'};
 //    and their multiple scattering integrates the view rays with 32
 //    intervals (multiple_scattering_intervals); the tail solver restarts
 //    with deflation (tail.cpp).
-constexpr std::uint32_t kFormatVersion = 9;
+// 10: the r axis of optically thick atmospheres follows their optical depth
+//    (scattering_r_optical_depth_weight, functions.glsl
+//    scattering_x_r_from_rho_fraction; set in parameters.cpp).
+constexpr std::uint32_t kFormatVersion = 10;
 constexpr std::size_t kConvergenceEntryBytes = 4 + 4 + 3 * 8;
 
 struct Fnv1a {
