@@ -271,7 +271,7 @@ def plot_convergence(plt, data, out, info):
                           label=f"orders {int(first[0])}+ (solved at once)")
             right.semilogy(first, column(header, tail, "relative"), "s", color="#2ca02c",
                            label=f"orders {int(first[0])}+ / all the light")
-        right.axhline(1e-3, color="0.4", ls="--", lw=0.9, label="--orders auto stops below 0.1 %")
+        right.axhline(1e-3, color="0.4", ls="--", lw=0.9, label="--orders auto tolerance (0.1 %)")
         ticks = orders + (column(header, tail, "order") if tail else [])
         for ax in (left, right):
             ax.set_xticks(ticks if len(ticks) <= 20 else ticks[::max(1, len(ticks) // 10)])

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -20,10 +21,23 @@ struct CliRun {
   std::string err;
 };
 
-// A directory of this test process for `tag` (created once).
+// A directory of this test process for `tag` (created once, removed with
+// everything in it when the process exits: ctest runs every test in its own
+// process, and each left one behind in the temporary directory).
 inline fs::path scratch_directory(const std::string& tag) {
+  struct Directories {
+    std::set<fs::path> paths;
+    ~Directories() {
+      for (const fs::path& p : paths) {
+        std::error_code ignored;
+        fs::remove_all(p, ignored);
+      }
+    }
+  };
+  static Directories directories;
   const fs::path d = fs::temp_directory_path() / ("atmos-" + tag + "-test-" + std::to_string(::getpid()));
   fs::create_directories(d);
+  directories.paths.insert(d);
   return d;
 }
 

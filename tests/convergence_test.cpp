@@ -131,6 +131,35 @@ TEST_F(DenseEarth, FourOrdersAndTheTailEqualSixtyOrders) {
   EXPECT_EQ(t.set.direct_irradiance, explicit_->set.direct_irradiance);
 }
 
+// Auto orders stop when what is left of the series is below the tolerance,
+// both in the whole scattering table and in the sky light on the ground
+// (the bottom row of the irradiance table), in every channel. The ground is
+// the test's point: there the light has been scattered most often and each
+// order adds most of what the one before did, so an order that adds a
+// fraction of all the light smaller than the tolerance may still leave
+// several times the tolerance of the ground's sky light out.
+TEST_F(DenseEarth, AutoOrdersStopWhenTheGroundsSkyLightHasConverged) {
+  auto ground = [](const atmos::Tables& t) {
+    glm::dvec3 sum(0.0);
+    for (int x = 0; x < t.sizes.irradiance_mu_s; ++x) sum += glm::dvec3(t.set.indirect_irradiance[size_t(x)]);
+    return sum;
+  };
+  for (double tolerance : {1e-2, 1e-3}) {
+    SCOPED_TRACE(tolerance);
+    atmos::PrecomputeOptions options = auto_orders(64);
+    options.auto_orders_tolerance = tolerance;
+    const atmos::Tables t = atmos::precompute_tables(*atmosphere_, options);
+    EXPECT_FALSE(t.convergence.back().tail);
+    const glm::dvec3 a = ground(t), b = ground(*explicit_);
+    const glm::dvec3 s = channel_sum(t.set.scattering), e = channel_sum(explicit_->set.scattering);
+    std::printf("tolerance %.0e: %d orders, ground's sky light short by %.2e %.2e %.2e, all light by %.2e %.2e %.2e\n",
+                tolerance, t.scattering_orders, 1.0 - a.x / b.x, 1.0 - a.y / b.y, 1.0 - a.z / b.z, 1.0 - s.x / e.x,
+                1.0 - s.y / e.y, 1.0 - s.z / e.z);
+    EXPECT_LT(relative_difference(a, b), tolerance);
+    EXPECT_LT(relative_difference(s, e), tolerance);
+  }
+}
+
 // Without the solver, the same cap leaves the tail out; and fixed orders
 // never solve it (K orders are light scattered at most K times).
 TEST_F(DenseEarth, NoTailWithoutTheSolverOrWithFixedOrders) {

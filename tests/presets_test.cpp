@@ -109,8 +109,15 @@ TEST(Presets, DerivedQuantities) {
 }
 
 // Auto orders on the dense presets: the tables stay finite, each order adds
-// less light than the one before (no divergence), and Titan stops before the
-// cap (29 orders with these tables). Venus
+// less light than the one before (no divergence), and both reach the CLI's
+// cap of 64 orders. Titan's orders still add light to its ground: each adds
+// 0.9 of what the one before added to the sky light on the ground, so the
+// orders after the 64th would add more than the tolerance there (with the
+// criterion on all the light alone, it stopped after 29 orders with these
+// tables, though by the ratio of its orders the ground still lacked about
+// 6 % of its sky light at the default sizes); the tail solver adds them in a few steps (measured: the
+// 64th order adds 1.7e-5 of all the light, the tail 1.4e-4, in 6 steps).
+// Venus
 // (Rayleigh optical depth 17 at 550 nm and 42 at 440 nm under a cloud of
 // optical depth 30, nearly conservative) needs 32 radius samples in the
 // scattering tables (with 8, 16 or 24 an order adds more light than the one
@@ -136,7 +143,8 @@ TEST(Presets, VenusAndTitanConvergeWithAutoOrders) {
     options.auto_orders = true;
     options.scattering_orders = 64;
     const atmos::Tables t = atmos::precompute_tables(atmos::load_atmosphere(name), options);
-    ASSERT_EQ(t.convergence.size(), size_t(t.scattering_orders - 1) + (venus ? 1 : 0));
+    ASSERT_EQ(t.scattering_orders, 64);
+    ASSERT_EQ(t.convergence.size(), size_t(t.scattering_orders - 1) + 1);
     const atmos::OrderContribution& last = t.convergence[size_t(t.scattering_orders - 2)];
     std::printf("%s: %d orders, the last adds %.3e of the light\n", name, t.scattering_orders, last.relative);
     for (size_t i = 1; i < size_t(t.scattering_orders - 1); ++i) {
@@ -148,22 +156,21 @@ TEST(Presets, VenusAndTitanConvergeWithAutoOrders) {
       for (const glm::vec3& v : *texels)
         ASSERT_TRUE(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && v.x >= 0.0f && v.y >= 0.0f &&
                     v.z >= 0.0f);
+    // The orders after the cap, solved for (tail.cpp).
+    const atmos::OrderContribution& tail = t.convergence.back();
+    std::printf("%s: the tail (orders >= %d) adds %.3e of the light, %d solver steps, residual %.1e\n", name,
+                tail.order, tail.relative, tail.iterations, tail.residual);
+    EXPECT_TRUE(tail.tail);
+    EXPECT_EQ(tail.order, 65);
+    EXPECT_LE(tail.residual, options.tail_tolerance);
     if (venus) {
-      EXPECT_EQ(t.scattering_orders, 64);
       EXPECT_LT(last.relative, 5e-3);
-      // The orders after the cap, solved for (tail.cpp).
-      const atmos::OrderContribution& tail = t.convergence.back();
-      std::printf("venus: the tail (orders >= %d) adds %.3e of the light, %d solver steps, residual %.1e\n", tail.order,
-                  tail.relative, tail.iterations, tail.residual);
-      EXPECT_TRUE(tail.tail);
-      EXPECT_EQ(tail.order, 65);
-      EXPECT_LE(tail.residual, options.tail_tolerance);
       EXPECT_GT(tail.relative, 0.1);
       EXPECT_LT(tail.relative, 0.6);
     } else {
-      EXPECT_LT(t.scattering_orders, 64);
-      EXPECT_LE(last.relative, options.auto_orders_tolerance);
-      EXPECT_FALSE(t.convergence.back().tail);
+      EXPECT_LT(last.relative, 1e-4);
+      EXPECT_LT(tail.relative, 1e-3);
+      EXPECT_LT(tail.iterations, 20);
     }
   }
 }

@@ -233,8 +233,8 @@ TEST_F(SpectralAccuracy, TwilightWithinFivePercent) {
   EXPECT_LE(setup_->rms_error(kObservers[2], -5.0), 0.05);
 }
 
-// A dense atmosphere (issue 3, seed 004 Fig. 4): 10x Earth, orders until one
-// adds less than 0.1 % (the reference gets the same count). Many orders and
+// A dense atmosphere (issue 3, seed 004 Fig. 4): 10x Earth, auto orders
+// (the reference gets the same count). Many orders and
 // optically thick rays: the quadrature follows the visible extinction
 // (extinction_ray_map). Tolerance 5 % RMS in daylight (measured: see the
 // printout; individual directions near the horizon are lowest, where the

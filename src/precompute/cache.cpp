@@ -45,7 +45,10 @@ constexpr char kMagic[8] = {'A', 'T', 'M', 'O', 'S', 'T', 'B', 'L'};
 // 10: the r axis of optically thick atmospheres follows their optical depth
 //    (scattering_r_optical_depth_weight, functions.glsl
 //    scattering_x_r_from_rho_fraction; set in parameters.cpp).
-constexpr std::uint32_t kFormatVersion = 10;
+// 11: auto orders stop when the rest of the series, foreseen from the ratio
+//    of the last two orders, is below the tolerance in every channel, in all
+//    the light and in the sky light on the ground (precompute.cpp).
+constexpr std::uint32_t kFormatVersion = 11;
 constexpr std::size_t kConvergenceEntryBytes = 4 + 4 + 3 * 8;
 
 struct Fnv1a {

@@ -32,6 +32,7 @@ struct Table2D {
   Table2D() = default;
   Table2D(int w, int h) : width(w), height(h), texels(std::size_t(w) * std::size_t(h), vec3(0.0f)) {}
   vec3& at(int x, int y) { return texels[std::size_t(y) * std::size_t(width) + std::size_t(x)]; }
+  const vec3& at(int x, int y) const { return texels[std::size_t(y) * std::size_t(width) + std::size_t(x)]; }
   physics::sampler2D sampler() const { return {width, height, texels.data()}; }
 };
 
