@@ -630,6 +630,51 @@ TEST_F(VenusParams, RAxisGivesTheCloudDeckTexels) {
   EXPECT_GT(texels(params, 0.0f, 1e3f), 1.0f);
 }
 
+// The irradiance rows of an optically thick atmosphere (irradiance_x_r):
+// the bottom row is the ground and the top row the top, the axis increases
+// and its inverse (a bisection) round-trips, the lowest 3 km, where terrain
+// is lit and the sky light changes most, get several rows instead of half of
+// one, and the cloud deck keeps at least the rows of the linear axis (its
+// optical depth part). Earth's rows stay linear in altitude.
+TEST_F(VenusParams, IrradianceRowsCrowdNearTheGroundAndFollowTheCloud) {
+  const int n = params.irradiance_r_size;
+  const float top = params.top_radius - params.bottom_radius;
+  auto row = [&](const AtmosphereParams& p, float altitude_m) {
+    return irradiance_uv_from_r_mu_s(p, p.bottom_radius + altitude_m, 0.5f).y * float(n) - 0.5f;
+  };
+  EXPECT_EQ(row(params, 0.0f), 0.0f);
+  EXPECT_NEAR(row(params, top), float(n - 1), 1e-4f);
+  float previous = -1.0f;
+  for (float h = 0.0f; h <= top; h += 250.0f) {
+    const float x = irradiance_x_r(params, params.bottom_radius + h);
+    EXPECT_GT(x, previous) << h;
+    previous = x;
+    for (float mu_s : {params.mu_s_min + 0.01f, 0.0f, 0.3f, 1.0f}) {
+      float r2, mu_s2;
+      r_mu_s_from_irradiance_uv(params, irradiance_uv_from_r_mu_s(params, params.bottom_radius + h, mu_s), r2, mu_s2);
+      EXPECT_NEAR(r2 - params.bottom_radius, h, 1.0f) << h;
+      EXPECT_NEAR(mu_s2, mu_s, 2e-4f) << h;
+    }
+  }
+  // The texel centres the precomputation computes map back to their rows.
+  for (int y = 0; y < n; ++y) {
+    float r, mu_s;
+    r_mu_s_from_irradiance_uv(params, vec2(0.5f, (float(y) + 0.5f) / float(n)), r, mu_s);
+    EXPECT_NEAR(row(params, r - params.bottom_radius), float(y), 1e-3f) << y;
+  }
+  AtmosphereParams linear = params;
+  linear.scattering_r_optical_depth_weight = 0.0f;
+  std::printf("rows below 3 km: %.2f (linear %.2f); in the cloud deck (47-75 km): %.2f (linear %.2f) of %d\n",
+              double(row(params, 3e3f)), double(row(linear, 3e3f)), double(row(params, 75e3f) - row(params, 47e3f)),
+              double(row(linear, 75e3f) - row(linear, 47e3f)), n);
+  EXPECT_NEAR(row(linear, 3e3f), 3e3f / top * float(n - 1), 1e-4f);
+  EXPECT_GT(row(params, 3e3f), 4.0f * row(linear, 3e3f));
+  EXPECT_GT(row(params, 75e3f) - row(params, 47e3f), row(linear, 75e3f) - row(linear, 47e3f));
+  const AtmosphereParams earth = make_atmosphere_params(atmos::load_atmosphere("earth"), atmos::TableSizes{}, 0);
+  ASSERT_EQ(earth.scattering_r_optical_depth_weight, 0.0f);
+  EXPECT_FLOAT_EQ(row(earth, 30e3f), 30e3f / (earth.top_radius - earth.bottom_radius) * float(n - 1));
+}
+
 // The warped axis still maps texture coordinates back to the rays they came
 // from, up and down, at every altitude.
 TEST_F(VenusParams, WarpedScatteringMappingRoundTrips) { expect_scattering_mapping_round_trips(params, 13, 4000); }
