@@ -30,11 +30,11 @@ struct TableSizes {
 };
 
 // Scattering orders: a fixed count, or `auto`: orders are added until the
-// last one adds less than `auto_orders_tolerance` of the luminance gathered so
-// far, both over the whole scattering table and in the sky light on the
-// ground, and so would the rest of the series where the orders decay
-// geometrically (the ratio of the last two orders foretells it); at most
-// `scattering_orders`, the cap, in that case.
+// last one adds less than `auto_orders_tolerance` of the light gathered so
+// far, in every channel, both over the whole scattering table and in the sky
+// light on the ground, and so would the rest of the series where the orders
+// decay geometrically (the ratio of the last two orders foretells it); at
+// most `scattering_orders`, the cap, in that case.
 struct PrecomputeOptions {
   TableSizes sizes;
   int scattering_orders = 4;  // K >= 1: light scattered (or reflected by the ground) at most K times
