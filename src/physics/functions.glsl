@@ -507,11 +507,20 @@ INLINE vec2 irradiance_uv_from_r_mu_s(IN(AtmosphereParams) atmosphere, float r, 
               texture_coord_from_unit_range(irradiance_x_r(atmosphere, r), atmosphere.irradiance_r_size));
 }
 
+// The two axes of the irradiance table are independent: r depends on the
+// texture's v only and mu_s on its u only, so a precomputation can take the r
+// of a row once (for thick atmospheres it is a bisection).
+INLINE float irradiance_r_from_v(IN(AtmosphereParams) atmosphere, float v) {
+  return irradiance_r_from_x_r(atmosphere, unit_range_from_texture_coord(v, atmosphere.irradiance_r_size));
+}
+
+INLINE float irradiance_mu_s_from_u(IN(AtmosphereParams) atmosphere, float u) {
+  return mu_s_from_unit_range(atmosphere, unit_range_from_texture_coord(u, atmosphere.irradiance_mu_s_size));
+}
+
 INLINE void r_mu_s_from_irradiance_uv(IN(AtmosphereParams) atmosphere, vec2 uv, OUT(float) r, OUT(float) mu_s) {
-  float x_mu_s = unit_range_from_texture_coord(uv.x, atmosphere.irradiance_mu_s_size);
-  float x_r = unit_range_from_texture_coord(uv.y, atmosphere.irradiance_r_size);
-  r = irradiance_r_from_x_r(atmosphere, x_r);
-  mu_s = mu_s_from_unit_range(atmosphere, x_mu_s);
+  r = irradiance_r_from_v(atmosphere, uv.y);
+  mu_s = irradiance_mu_s_from_u(atmosphere, uv.x);
 }
 
 // ===========================================================================

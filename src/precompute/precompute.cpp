@@ -291,15 +291,13 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
     delta_multiple = Table3D(single_rayleigh.width, single_rayleigh.height, single_rayleigh.depth);
     // The light gathered so far and what the last order added, per channel,
     // in the whole scattering table and in the sky light on the ground (the
-    // irradiance row at r = bottom), for auto orders (`series_converged`);
-    // `total` and `previous_added`, their luminance over the whole table,
-    // for the convergence report and the check that the orders decrease.
+    // irradiance row at r = bottom), for auto orders (`series_converged`).
+    // The convergence report and the check that the orders decrease use
+    // their luminance over the whole table.
     const glm::dvec3 to_luminance(luminance);
     glm::dvec3 channels_total = channel_sums(a, single_rayleigh, 1) + channel_sums(a, single_aerosol, 2);
     glm::dvec3 channels_previous(0.0);
     glm::dvec3 ground_total = ground_sums(indirect_irradiance), ground_previous(0.0);
-    double total = glm::dot(to_luminance, channels_total);
-    double previous_added = 0.0;
     // What the orders of this set share (view rays, density quadrature).
     std::shared_ptr<const OrderGeometry> geometry;
     // Adds the radiance of orders to `multiple`, stored divided by the
@@ -345,7 +343,7 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
       // a medium for the table resolution: before the quadrature followed the
       // visible extinction, 30x Earth did from order 12). Refuse rather than
       // return tables that grow without bound.
-      if (order > 2 && added > previous_added * (1.0 + 1e-6) && added > 0.0)
+      if (order > 2 && added > glm::dot(to_luminance, channels_previous) * (1.0 + 1e-6) && added > 0.0)
         throw Error(atmosphere.origin + ": scattering order " + std::to_string(order) +
                     " adds more light than order " + std::to_string(order - 1) +
                     ": the tables cannot represent an atmosphere this dense (wavelengths " +
@@ -363,8 +361,7 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
           series_converged(ground_added, ground_previous, ground_total, options.auto_orders_tolerance);
       channels_previous = channels_added;
       ground_previous = ground_added;
-      previous_added = added;
-      total += added;
+      const double total = glm::dot(to_luminance, channels_total);
       set_added.resize(size_t(set) + 1);
       set_total.resize(size_t(set) + 1);
       set_added[size_t(set)].push_back(added);
@@ -408,7 +405,7 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
         c.added = glm::dot(to_luminance, channel_sums(a, tail.radiance, 0));
         c.iterations = tail.iterations;
         c.residual = std::max({tail.relative_residual.x, tail.relative_residual.y, tail.relative_residual.z});
-        set_total_before_tail[size_t(set)] = total;
+        set_total_before_tail[size_t(set)] = glm::dot(to_luminance, channels_total);
       });
     }
 

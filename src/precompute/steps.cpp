@@ -490,10 +490,9 @@ Table2D compute_indirect_irradiance_table(const AtmosphereParams& a, const Table
   const float d_phi = PI / float(kThetaSamples);
   tbb::parallel_for(0, table.height, [&](int y) {
     std::vector<float> mu_s(static_cast<size_t>(table.width)), coordinate(static_cast<size_t>(table.width));
-    float r = 0.0f;
+    const float r = irradiance_r_from_v(a, (float(y) + 0.5f) / float(table.height));
     for (int x = 0; x < table.width; ++x) {
-      r_mu_s_from_irradiance_uv(a, vec2((float(x) + 0.5f) / float(table.width), (float(y) + 0.5f) / float(table.height)),
-                                r, mu_s[size_t(x)]);
+      mu_s[size_t(x)] = irradiance_mu_s_from_u(a, (float(x) + 0.5f) / float(table.width));
       coordinate[size_t(x)] = texel_of_mu_s(mu_s[size_t(x)]);
     }
     std::vector<v4f> first, second, sum(static_cast<size_t>(table.width), splat(0.0f));
