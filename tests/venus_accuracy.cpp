@@ -16,11 +16,15 @@
 // 550 nm, sun 40° up). Measured (2026-11-24), this test's reference runs
 // first, then the mean of 3-4 seeds (16000 paths each; 8000, 4000 and 1000
 // for the reflected light):
-//  - ground, 550 nm, sun 40°: 5.07e-2 of the sunlight; 0.96 of 5.27e-2
-//    (+- 5 %), 1.00 of the mean 5.08e-2;
-//  - ground, 550 nm, sun 70°: 6.10e-2; 0.98 of 6.20e-2, 0.99 of 6.15e-2;
-//  - ground, 680 nm, sun 40°: 7.14e-2; 0.92 of 7.75e-2, 0.92 of 7.77e-2;
-//  - reflected to space: 0.814; 0.89 of 0.920 (+- 2 %), 0.90 of 0.906.
+//  - ground, 550 nm, sun 40°: 4.98e-2 of the sunlight; 0.95 of 5.27e-2
+//    (+- 5 %), 0.98 of the mean 5.08e-2;
+//  - ground, 550 nm, sun 70°: 5.99e-2; 0.97 of 6.20e-2, 0.97 of 6.15e-2;
+//  - ground, 680 nm, sun 40°: 7.55e-2; 0.97 of 7.75e-2, 0.97 of 7.77e-2;
+//  - reflected to space: 0.813; 0.88 of 0.920 (+- 2 %), 0.90 of 0.906.
+// Before the multiple scattering's nodes were uniform in optical depth over
+// the first optical depths of each view ray (functions.glsl,
+// source_integration_nodes): 5.07e-2, 6.10e-2, 7.14e-2 (0.92 of the mean at
+// 680 nm) and 0.814.
 // With 16000 paths the seeds scatter as their stated errors say (at 680 nm
 // 7.39e-2 to 8.10e-2, +- 3.0e-3 each). This test used to run 2000 paths:
 // that run gave 6.3e-2 at 550 nm, 1.24 of the mean (1.6 of its stated
@@ -43,9 +47,10 @@
 //  - Before the warp the tables' ground light also depended too much on the
 //    sun: 3.3 times more at 70° than at 40°, against 1.2 now and 1.2 for the
 //    reference.
-// Tolerances: the ground within [0.85, 1.15] of the reference (its scatter
-// between seeds is ~4 %; the seed is fixed, so these bound regressions
-// around the measurements), the reflected light within [0.83, 1.1].
+// Tolerances: the ground within [0.85, 1.15] of the reference, [0.93, 1.15]
+// at 680 nm (its scatter between seeds is ~4 %; the seed is fixed, so these
+// bound regressions around the measurements; the old nodes gave 0.92 at
+// 680 nm), the reflected light within [0.83, 1.1].
 
 #include <gtest/gtest.h>
 
@@ -96,7 +101,7 @@ TEST(VenusAccuracy, GroundLightAgainstTheReference) {
   };
   check_ground(1, 40.0, 0.85, 1.15);
   check_ground(1, 70.0, 0.85, 1.15);
-  check_ground(0, 40.0, 0.85, 1.15);
+  check_ground(0, 40.0, 0.93, 1.15);
 
   // The light going up at 99 km (32 x 24 directions), 550 nm, sun 40° up.
   const glm::dvec3 sun = atmos::direction_from_azimuth_elevation(180.0, 40.0);
