@@ -565,6 +565,34 @@ TEST(MuWarp, OnlyOpticallyThickAtmospheresAreWarped) {
     EXPECT_LE(scattering_mu_log_weight(tau), scattering_mu_log_weight(tau * 1.1));
 }
 
+// The multiple scattering's nodes are uniform in optical depth over the
+// first optical depths of each view ray (source_integration_nodes) in
+// atmospheres of several optical depths only: Earth, both Mars and 10x Earth
+// keep nodes that follow the transmittance (bit for bit: 0), Titan, Venus
+// and 100x Earth get (nearly) the full kSourceFlatOpticalDepth, and the
+// weight rises monotonically in between.
+TEST(SourceNodes, UniformInOpticalDepthOnlyWhereTheAtmosphereIsThick) {
+  auto flat = [](const atmos::Atmosphere& a) {
+    const AtmosphereParams p = make_atmosphere_params(a, atmos::TableSizes{}, 0);
+    EXPECT_EQ(double(p.source_flat_optical_depth),
+              double(float(source_flat_optical_depth(vertical_optical_depth_550(a, p)))));
+    return double(p.source_flat_optical_depth);
+  };
+  for (const char* name : {"earth", "mars", "mars-thesis"}) EXPECT_EQ(flat(atmos::load_atmosphere(name)), 0.0) << name;
+  atmos::Atmosphere ten = atmos::load_atmosphere("earth");
+  atmos::scale_density(ten, 10.0);
+  EXPECT_EQ(flat(ten), 0.0);
+  atmos::Atmosphere hundred = atmos::load_atmosphere("earth");
+  atmos::scale_density(hundred, 100.0);
+  EXPECT_EQ(flat(hundred), kSourceFlatOpticalDepth);
+  EXPECT_EQ(flat(atmos::load_atmosphere("venus")), kSourceFlatOpticalDepth);
+  EXPECT_GT(flat(atmos::load_atmosphere("titan")), 0.95 * kSourceFlatOpticalDepth);
+  EXPECT_EQ(source_flat_optical_depth(kSourceFlatOpticalDepthRange[0]), 0.0);
+  EXPECT_EQ(source_flat_optical_depth(kSourceFlatOpticalDepthRange[1]), kSourceFlatOpticalDepth);
+  for (double tau = 1.0; tau < 20.0; tau *= 1.1)
+    EXPECT_LE(source_flat_optical_depth(tau), source_flat_optical_depth(tau * 1.1));
+}
+
 // The r axis follows the optical depth in the same atmospheres, and only in
 // them: elsewhere it is Bruneton's x_r = rho / H, bit for bit.
 TEST(RAxis, OnlyOpticallyThickAtmospheresFollowTheOpticalDepth) {

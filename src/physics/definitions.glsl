@@ -107,6 +107,10 @@ struct AtmosphereParams {
   // scattering_r_axis[i] (0 at the ground, 1 at the top, increasing).
   float scattering_r_optical_depth_weight;
   float scattering_r_axis[SCATTERING_R_AXIS_KNOTS];
+  // Optical depth over which the multiple scattering's nodes along a view
+  // ray are uniform in optical depth (0: they follow the transmittance; see
+  // source_integration_nodes).
+  float source_flat_optical_depth;
 };
 
 // Most wavelength triples a spectral precomputation may use (48 wavelengths).

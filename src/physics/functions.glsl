@@ -716,9 +716,6 @@ INLINE vec3 irradiance_lookup(IN(AtmosphereParams) atmosphere, IN(sampler2D) irr
 #define SINGLE_SCATTERING_INTERVALS 32
 #define MULTIPLE_SCATTERING_INTERVALS 16
 #define MAX_RAY_NODES 41
-// Optical depth over which the multiple scattering's nodes are uniform in
-// optical depth in optically thick atmospheres (see source_integration_nodes).
-#define SOURCE_FLAT_OPTICAL_DEPTH 4.0f
 // Cells of the piecewise-linear importance density that places the nodes.
 #define RAY_MAP_CELLS 128
 // The run-time integration of single scattering (scattering_along_ray):
@@ -947,30 +944,28 @@ INLINE RayNodes ray_integration_nodes(IN(AtmosphereParams) atmosphere, float r, 
 // instead of 4.5 % from the ground with the sun 5° down.) On the view rays of
 // the default Earth tables the scale is 0.96-1.03.
 //
-// In optically thick atmospheres the nodes are uniform in optical depth over
-// the first SOURCE_FLAT_OPTICAL_DEPTH optical depths of the ray (times the
-// weight of the mu warp, scattering_mu_log_weight: the placement changes
-// continuously from the thin atmospheres' one, which is kept where the weight
-// is 0), and follow the transmittance only beyond. The source function is not
-// uniform there: on a ray looking up from deep in the atmosphere it grows
-// towards the sunlit top faster than the transmittance back to the start
-// falls (the sun's optical depth shrinks by 1/mu_s per optical depth
-// climbed), so much of the integral comes from where T is already small, and
-// nodes uniform in 1 - T leave a handful there. Measured against the
-// reference (sky light on the ground, sun 40° up): the full 100x Earth at
-// 680 nm (16 optical depths) got 0.84 of it with 32 radius texels and 0.74
-// with 64, a quadrature error that more texels made worse; with these nodes
-// 1.16 and 1.04, converging with the texels (128 intervals with the old
-// placement: 1.12 and 1.00, at 2.6x the precomputation time). Venus at
-// 680 nm: 0.92 -> 0.97 of the reference. Found on 100x Earth without its
-// aerosol and ozone (3.6 optical depths at 680 nm, 9.7 at 550 nm: weight 0,
-// so still the old placement), whose radiance of orders 1 + 2 on the ground
-// comes out 15-29 % too high above 20° elevation.
+// In atmospheres of several optical depths the nodes are uniform in optical
+// depth over the first source_flat_optical_depth optical depths of the ray
+// (4 from a vertical optical depth of 10 at 550 nm, 0 below 3; see
+// parameters.hpp source_flat_optical_depth) and follow the transmittance
+// only beyond. The source function is not uniform there: on a ray looking up
+// from deep in the atmosphere it grows towards the sunlit top faster than
+// the transmittance back to the start falls (the sun's optical depth shrinks
+// by 1/mu_s per optical depth climbed), so much of the integral comes from
+// where T is already small, and nodes uniform in 1 - T leave a handful
+// there. Measured against the reference on 100x Earth's air alone (3.6
+// optical depths at 680 nm, black ground): the radiance of orders 1 + 2 on
+// the ground was 15-29 % too high above 20° elevation with nodes uniform in
+// 1 - T, within -5..+2 % with these. The sky light on the ground of the full
+// 100x Earth at 680 nm (16 optical depths) was 0.84 of the reference with
+// 32 radius texels and 0.74 with 64, an error that more texels made worse;
+// with these nodes 1.16 and 1.04, converging with the texels (128 intervals
+// with the old placement: 1.12 and 1.00, at 2.6x the precomputation time).
+// More in parameters.hpp.
 INLINE RayNodes source_integration_nodes(IN(AtmosphereParams) atmosphere, float r, float mu,
                                          bool ray_r_mu_intersects_ground, int intervals) {
   float d = distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ray_r_mu_intersects_ground);
-  RayMap map = extinction_ray_map(atmosphere, r, mu, d, RAY_MAP_CELLS,
-                                  SOURCE_FLAT_OPTICAL_DEPTH * atmosphere.scattering_mu_log_weight);
+  RayMap map = extinction_ray_map(atmosphere, r, mu, d, RAY_MAP_CELLS, atmosphere.source_flat_optical_depth);
   RayNodes nodes = ray_integration_nodes_from_map(d, map, 0.25f, intervals);
   vec3 sum = vec3(0.0f);
   for (int i = 0; i < nodes.count; ++i) {

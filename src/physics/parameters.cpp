@@ -129,11 +129,25 @@ double scattering_r_optical_depth_weight(double mu_log_weight) {
   return kScatteringROpticalDepthShare * mu_log_weight;
 }
 
-double scattering_mu_log_weight(double vertical_optical_depth) {
-  const double lo = kMuLogWarpOpticalDepth[0], hi = kMuLogWarpOpticalDepth[1];
-  const double x = std::clamp((std::log(std::max(vertical_optical_depth, 1e-30)) - std::log(lo)) /
-                                  (std::log(hi) - std::log(lo)), 0.0, 1.0);
+namespace {
+
+// 0 up to optical depth `range`[0], 1 from `range`[1], smoothstep in log τ
+// between.
+double log_smoothstep(double optical_depth, const std::array<double, 2>& range) {
+  const double x = std::clamp((std::log(std::max(optical_depth, 1e-30)) - std::log(range[0])) /
+                                  (std::log(range[1]) - std::log(range[0])),
+                              0.0, 1.0);
   return x * x * (3.0 - 2.0 * x);
+}
+
+}  // namespace
+
+double scattering_mu_log_weight(double vertical_optical_depth) {
+  return log_smoothstep(vertical_optical_depth, kMuLogWarpOpticalDepth);
+}
+
+double source_flat_optical_depth(double vertical_optical_depth) {
+  return kSourceFlatOpticalDepth * log_smoothstep(vertical_optical_depth, kSourceFlatOpticalDepthRange);
 }
 
 AtmosphereParams make_atmosphere_params(const Atmosphere& atmosphere, const TableSizes& sizes, int set,
@@ -181,8 +195,10 @@ AtmosphereParams make_atmosphere_params(const Atmosphere& atmosphere, const Tabl
   p.transmittance_tiles = transmittance_tiles;
   p.single_scattering_tile = transmittance_tile;
   p.scattering_nu_in_angle = has_scaled_lobe(atmosphere) ? 1 : 0;
-  const double mu_log_weight = scattering_mu_log_weight(vertical_optical_depth_550(atmosphere, p));
+  const double vertical_optical_depth = vertical_optical_depth_550(atmosphere, p);
+  const double mu_log_weight = scattering_mu_log_weight(vertical_optical_depth);
   p.scattering_mu_log_weight = float(mu_log_weight);
+  p.source_flat_optical_depth = float(source_flat_optical_depth(vertical_optical_depth));
   set_scattering_r_axis(atmosphere, p, scattering_r_optical_depth_weight(mu_log_weight));
   return p;
 }

@@ -48,9 +48,10 @@ constexpr char kMagic[8] = {'A', 'T', 'M', 'O', 'S', 'T', 'B', 'L'};
 // 11: auto orders stop when the rest of the series, foreseen from the ratio
 //    of the last two orders, is below the tolerance in every channel, in all
 //    the light and in the sky light on the ground (precompute.cpp).
-// 12: the multiple scattering's nodes in optically thick atmospheres are
-//    uniform in optical depth over the first optical depths of each view ray
-//    (functions.glsl source_integration_nodes, SOURCE_FLAT_OPTICAL_DEPTH).
+// 12: the multiple scattering's nodes in atmospheres of several optical
+//    depths are uniform in optical depth over the first optical depths of
+//    each view ray (functions.glsl source_integration_nodes,
+//    AtmosphereParams.source_flat_optical_depth).
 constexpr std::uint32_t kFormatVersion = 12;
 constexpr std::size_t kConvergenceEntryBytes = 4 + 4 + 3 * 8;
 
