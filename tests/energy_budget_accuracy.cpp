@@ -28,25 +28,26 @@
 //    together lose 5 % of the light that enters (energy_accuracy.cpp's
 //    white-ground Venus misses about a tenth in the end).
 // Where: split into the shells between radius rows (a variant of this code,
-// not kept), the budget of order 12
-// balances in the gas and fails in the cloud, where the rows are 2-3.4
-// optical depths apart (47-70 km): light is missing in the shells around
-// the peak of the order's light (59-70 km, +0.2 % of it per shell) and
-// created in the shells below and above it (-0.1 %); that is the linear
-// interpolation in r of a source function that curves over a row spacing.
+// not kept), the budget of order 12 balances in the gas and fails in the
+// cloud, where the rows are 2-3.4 optical depths apart (47-70 km): light is
+// missing in the shells around the peak of the order's light (59-70 km,
+// +0.2 % of it per shell) and created in the shells below and above it
+// (-0.1 %); that is the linear interpolation in r of a source function that
+// curves over a row spacing.
 // With 64 rows instead of 32 the transport loses 0.16 % of order 10 and
 // 0.07 % of order 30, and the white-ground Venus of energy_accuracy.cpp
 // returns 0.94 of the sunlight at 550 nm. With 48 rows it returns 0.88,
-// although its orders lose less than with 32 (0.23 % of order 10; orders
-// 1-10 together 2.2 % of the light in, against 3.2 % with 32 and 0.6 % with
-// 64): what the orders after 30 lose, where the light reaches the ground,
-// is not measured here. 128 rows were not measured. Twice the mu or mu_s texels change the losses by
-// less than 2 %; 16 nu tiles instead of 8 lower them by 10-30 % at orders
-// 2-5 and not at all from order 10 on. Two higher-order
-// interpolations in r were tried in the transport and made the white-ground
-// Venus worse, not better (550 nm): Catmull-Rom on the rows (0.47 of the
-// sunlight returned), and a Catmull-Rom profile of each (nu, mu_s) column
-// times the linear interpolation of the rest (0.85). Why is not understood.
+// although its orders 1-10 lose less than with 32 (0.23 % of order 10;
+// together 2.2 % of the light in, against 3.2 % with 32 and 0.6 % with 64);
+// why is not understood (the budget of the later orders below was taken
+// with 32 rows only). 128 rows were not measured. Twice the mu or mu_s
+// texels change the losses by less than 2 %; 16 nu tiles instead of 8 lower
+// them by 10-30 % at orders 2-5 and not at all from order 10 on.
+// Two higher-order interpolations in r were tried in the transport and made
+// the white-ground Venus worse, not better (550 nm): Catmull-Rom on the rows
+// (0.47 of the sunlight returned), and a Catmull-Rom profile of each
+// (nu, mu_s) column times the linear interpolation of the rest (0.85). Why
+// is not understood either.
 // The same budget over a white ground (a variant of this code, not kept),
 // 150 explicit orders: almost no light reaches the ground before order 70,
 // the irradiance table then gives the ground 0.26 % more than the flux of
