@@ -150,17 +150,19 @@ class BudgetQuadrature {
   template <class F>
   double directions(double r, double mu_s, int half, const F& f) const {
     const double mu_h = physics::horizon_mu(a_, float(r));
-    constexpr int kCosines = 20, kAzimuths = 12;
+    constexpr int kAzimuths = 12;
     double sum = 0.0;
     for (int part = -1; part <= 1; part += 2) {
       if (half != 0 && half != part) continue;
-      const Rule rule = part < 0 ? gauss(kCosines, -1.0, mu_h) : gauss(kCosines, mu_h, 1.0);
-      for (size_t i = 0; i < rule.x.size(); ++i) {
-        const double mu = rule.x[i], sin_view = std::sqrt(std::max(0.0, 1.0 - mu * mu));
+      // The rule on [-1, 1] moved to [lo, hi].
+      const double lo = part < 0 ? -1.0 : mu_h, hi = part < 0 ? mu_h : 1.0;
+      for (size_t i = 0; i < cosines_.x.size(); ++i) {
+        const double mu = lo + 0.5 * (hi - lo) * (cosines_.x[i] + 1.0), weight = 0.5 * (hi - lo) * cosines_.w[i];
+        const double sin_view = std::sqrt(std::max(0.0, 1.0 - mu * mu));
         const double sin_sun = std::sqrt(std::max(0.0, 1.0 - mu_s * mu_s));
         for (int k = 0; k < kAzimuths; ++k) {
           const double nu = mu * mu_s + sin_view * sin_sun * std::cos((k + 0.5) * M_PI / kAzimuths);
-          sum += rule.w[i] * (2.0 * M_PI / kAzimuths) * f(float(mu), physics::clamp_cosine(float(nu)));
+          sum += weight * (2.0 * M_PI / kAzimuths) * f(float(mu), physics::clamp_cosine(float(nu)));
         }
       }
     }
@@ -196,6 +198,7 @@ class BudgetQuadrature {
 
   const AtmosphereParams& a_;
   Rule radii_, sun_;
+  const Rule cosines_ = gauss(20, -1.0, 1.0);  // view zenith cosines, per half
 };
 
 // The budgets of orders 1..orders of the first wavelength set of
