@@ -47,6 +47,17 @@
 //  - Before the warp the tables' ground light also depended too much on the
 //    sun: 3.3 times more at 70° than at 40°, against 1.2 now and 1.2 for the
 //    reference.
+// With the energy balance of the orders (PrecomputeOptions::balance_orders,
+// src/precompute/energy_balance.cpp; 2026-11-24, same reference means):
+// ground 5.38e-2, 6.46e-2 and 8.15e-2 (1.06, 1.05 and 1.05 of the means),
+// reflected 0.841 (0.93). It returns more light to space, as it should, but
+// the ground gets too much: the balance puts back the light that the orders
+// lose between the rows of the cloud in proportion to each order's whole
+// source, and so, presumably, partly below the cloud where it was not lost
+// (where it was lost was not measured). A loss of 2-3 % on the ground
+// became a gain of 5-6 %, so it stays off by default. Its tolerances: the ground within [0.85, 1.15] of the
+// reference, the reflected light above the unbalanced tables' (by 0.01 at
+// least) and below 1.1 of the reference.
 // Tolerances: the ground within [0.85, 1.15] of the reference, [0.93, 1.15]
 // at 680 nm (its scatter between seeds is ~4 %; the seed is fixed, so these
 // bound regressions around the measurements; the old nodes gave 0.92 at
@@ -72,6 +83,11 @@ TEST(VenusAccuracy, GroundLightAgainstTheReference) {
   options.scattering_orders = 64;
   const atmos::Tables t = atmos::precompute_tables(venus, options);
   const atmos::SkyModel model(venus, t);
+  // The same with the energy balance of the orders (experimental, off by
+  // default: PrecomputeOptions::balance_orders).
+  options.balance_orders = true;
+  const atmos::Tables balanced_tables = atmos::precompute_tables(venus, options);
+  const atmos::SkyModel balanced(venus, balanced_tables);
 
   // The light on the ground, as a fraction of the sunlight on a horizontal
   // surface at the top, for one channel of the tables and the sun at
@@ -81,23 +97,30 @@ TEST(VenusAccuracy, GroundLightAgainstTheReference) {
   atmos::ReferenceOptions reference_options;
   reference_options.scattering_orders = 2000;
   reference_options.paths = 16000;
+  auto ground_light = [&](const atmos::SkyModel& m, int channel, const glm::dvec3& sun) {
+    glm::dvec3 ground_sun, ground_sky, top_sun, top_sky;
+    m.horizontal_irradiance(atmos::observer_position(venus, 2.0), sun, ground_sun, ground_sky);
+    m.horizontal_irradiance(atmos::observer_position(venus, 99e3), sun, top_sun, top_sky);
+    return (ground_sun[channel] + ground_sky[channel]) / top_sun[channel];
+  };
   auto check_ground = [&](int channel, double elevation, double low, double high) {
     const double nm = venus.wavelengths_nm[size_t(channel)];
     const glm::dvec3 sun = atmos::direction_from_azimuth_elevation(180.0, elevation);
-    glm::dvec3 ground_sun, ground_sky, top_sun, top_sky;
-    model.horizontal_irradiance(atmos::observer_position(venus, 2.0), sun, ground_sun, ground_sky);
-    model.horizontal_irradiance(atmos::observer_position(venus, 99e3), sun, top_sun, top_sky);
-    const double tables = (ground_sun[channel] + ground_sky[channel]) / top_sun[channel];
+    const double tables = ground_light(model, channel, sun), with_balance = ground_light(balanced, channel, sun);
     atmos::Atmosphere narrow = venus;
     narrow.wavelengths_nm = {nm - 0.5, nm, nm + 0.5};
     const atmos::ReferenceResult reference = atmos::reference_horizontal_irradiance(
         narrow, atmos::observer_position(narrow, 0.0), sun, reference_options);
     const double in = narrow.solar_irradiance.at(nm) * std::sin(elevation * M_PI / 180.0);
     const double truth = reference.radiance[1] / in;
-    std::printf("venus, %g nm, sun %g deg: ground / top %.3e (tables), %.3e +- %.1e (reference): %.3f\n", nm,
-                elevation, tables, truth, reference.standard_error[1] / in, tables / truth);
+    std::printf("venus, %g nm, sun %g deg: ground / top %.3e (tables), %.3e (balanced orders), %.3e +- %.1e "
+                "(reference): %.3f, %.3f\n",
+                nm, elevation, tables, with_balance, truth, reference.standard_error[1] / in, tables / truth,
+                with_balance / truth);
     EXPECT_GT(tables, low * truth) << nm << " nm, sun " << elevation;
     EXPECT_LT(tables, high * truth) << nm << " nm, sun " << elevation;
+    EXPECT_GT(with_balance, 0.85 * truth) << nm << " nm, sun " << elevation;
+    EXPECT_LT(with_balance, 1.15 * truth) << nm << " nm, sun " << elevation;
   };
   check_ground(1, 40.0, 0.85, 1.15);
   check_ground(1, 70.0, 0.85, 1.15);
@@ -109,6 +132,7 @@ TEST(VenusAccuracy, GroundLightAgainstTheReference) {
   model.horizontal_irradiance(atmos::observer_position(venus, 99e3), sun, top_sun, top_sky);
   const glm::dvec3 top = atmos::observer_position(venus, 99e3);
   const double tables_up = atmos_test::upward_flux(model, top, sun, 32, 24).y / top_sun.y;
+  const double balanced_up = atmos_test::upward_flux(balanced, top, sun, 32, 24).y / top_sun.y;
   atmos::Atmosphere green = venus;
   green.wavelengths_nm = {549.5, 550.0, 550.5};
   reference_options.paths = 4000;
@@ -116,10 +140,14 @@ TEST(VenusAccuracy, GroundLightAgainstTheReference) {
                                                                 reference_options);
   const double in = green.solar_irradiance.at(550.0) * std::sin(40.0 * M_PI / 180.0);
   const double truth_up = up.radiance[1] / in;
-  std::printf("venus, 550 nm, sun 40 deg: reflected / in %.3f (tables), %.3f +- %.3f (reference): %.3f\n", tables_up,
-              truth_up, up.standard_error[1] / in, tables_up / truth_up);
+  std::printf("venus, 550 nm, sun 40 deg: reflected / in %.3f (tables), %.3f (balanced orders), %.3f +- %.3f "
+              "(reference): %.3f, %.3f\n",
+              tables_up, balanced_up, truth_up, up.standard_error[1] / in, tables_up / truth_up,
+              balanced_up / truth_up);
   EXPECT_GT(tables_up, 0.83 * truth_up);
   EXPECT_LT(tables_up, 1.1 * truth_up);
+  EXPECT_GT(balanced_up, tables_up + 0.01);
+  EXPECT_LT(balanced_up, 1.1 * truth_up);
 }
 
 }  // namespace
