@@ -269,7 +269,7 @@ INLINE AerialPerspectiveMarch aerial_perspective_march_begin(IN(AtmosphereParams
   }
   m.single_rayleigh = vec3(0.0f);
   m.aerosol = vec3(0.0f);
-  m.multiple_0 = scattering_lookup(atmosphere, multiple_scattering_texture, m.r, m.mu, m.mu_s, m.nu, m.ground);
+  m.multiple_0 = ray_scattering_lookup(atmosphere, multiple_scattering_texture, m.r, m.mu, m.mu_s, m.nu, m.ground);
   m.t_previous = 0.0f;
   m.depth_previous = vec3(0.0f);
   m.multiple_d = vec3(0.0f);
@@ -378,7 +378,7 @@ INLINE AerialPerspectiveSlice aerial_perspective_march_slice(IN(AtmosphereParams
   float r_t = clamp_radius(atmosphere, radius_along_ray(m.r, m.mu, t));
   float mu_t = clamp_cosine(mu_along_ray(m.r, m.mu, t, r_t));
   float mu_s_t = clamp_cosine(mu_s_along_ray(m.r, m.mu_s, m.nu, t, r_t));
-  vec3 multiple_t = scattering_lookup(atmosphere, multiple_scattering_texture, r_t, mu_t, mu_s_t, m.nu, m.ground);
+  vec3 multiple_t = ray_scattering_lookup(atmosphere, multiple_scattering_texture, r_t, mu_t, mu_s_t, m.nu, m.ground);
   vec3 depth = -log(max(slice.transmittance, vec3(1e-30f)));
   if (m.ground && t_s > m.d) {
     if (m.t_previous <= m.d) {  // the first slice beyond d
