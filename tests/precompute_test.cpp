@@ -179,7 +179,8 @@ TEST(DenseAtmosphere, SingleScatteringOfGroundRaysFromLowCameras) {
   const Table2D transmittance = compute_transmittance_table(p);
   Table3D rayleigh, aerosol;
   compute_single_scattering_tables(p, transmittance, rayleigh, aerosol, nullptr);
-  const float h_1 = scattering_row_height(p, 1);
+  const float h_1 = p.scattering_row_1_height;
+  EXPECT_EQ(h_1, scattering_row_height(p, 1));
   EXPECT_NEAR(h_1, 105.0f, 2.0f);  // Bruneton's r axis: rho_1 = H / 31
   const float mu_s = 0.64f;        // the sun 40 deg up
   // The ray from `height` that meets the ground after d (false if none),

@@ -19,7 +19,7 @@ namespace {
 static_assert(sizeof(physics::DensityProfile) == 4 * (2 + 2 * MAX_DENSITY_KNOTS),
               "DensityProfile changed: update atmosphere_params_glsl()");
 static_assert(sizeof(physics::AtmosphereParams) ==
-                  4 * (3 + 1 + 3 * 3 + 2 * 3 + 2 + 8 + 6 + SCATTERING_R_AXIS_KNOTS + 1) +
+                  4 * (3 + 1 + 3 * 3 + 2 * 3 + 2 + 8 + 6 + SCATTERING_R_AXIS_KNOTS + 2) +
                       MAX_CONSTITUENTS * (sizeof(physics::DensityProfile) + 4 * (3 + 3 + 1)),
               "AtmosphereParams changed: update atmosphere_params_glsl()");
 
@@ -91,7 +91,7 @@ std::string atmosphere_params_expression(const physics::AtmosphereParams& p) {
   s += "    " + glsl_float(p.scattering_r_optical_depth_weight) + ", " +
        glsl_array("float", SCATTERING_R_AXIS_KNOTS, [&](int i) { return glsl_float(p.scattering_r_axis[i]); }) +
        ",\n";
-  s += "    " + glsl_float(p.source_flat_optical_depth) + ")";
+  s += "    " + glsl_float(p.source_flat_optical_depth) + ", " + glsl_float(p.scattering_row_1_height) + ")";
   return s;
 }
 

@@ -73,7 +73,8 @@ INLINE PathScattering table_scattering_to_distance(IN(AtmosphereParams) atmosphe
   float mu_s_t = clamp_cosine(mu_s_along_ray(r, mu_s, nu, t, r_t));
   vec3 transmittance = channel_transmittance_along_ray(atmosphere, spectral, spectral_transmittance_texture, r, mu, t,
                                                        ray_r_mu_intersects_ground);
-  vec3 scattering_0 = ray_scattering_lookup(atmosphere, scattering_texture, r, mu, mu_s, nu, ray_r_mu_intersects_ground);
+  vec3 scattering_0 =
+      ray_scattering_lookup(atmosphere, scattering_texture, r, mu, mu_s, nu, ray_r_mu_intersects_ground);
   vec3 scattering_t =
       ray_scattering_lookup(atmosphere, scattering_texture, r_t, mu_t, mu_s_t, nu, ray_r_mu_intersects_ground);
   // Without `split`, single Rayleigh and multiple stay summed in
@@ -84,7 +85,8 @@ INLINE PathScattering table_scattering_to_distance(IN(AtmosphereParams) atmosphe
     multiple_0 =
         ray_scattering_lookup(atmosphere, multiple_scattering_texture, r, mu, mu_s, nu, ray_r_mu_intersects_ground);
     multiple_t =
-        ray_scattering_lookup(atmosphere, multiple_scattering_texture, r_t, mu_t, mu_s_t, nu, ray_r_mu_intersects_ground);
+        ray_scattering_lookup(atmosphere, multiple_scattering_texture, r_t, mu_t, mu_s_t, nu,
+                              ray_r_mu_intersects_ground);
   }
   vec3 aerosol_0 =
       ray_scattering_lookup(atmosphere, single_aerosol_texture, r, mu, mu_s, nu, ray_r_mu_intersects_ground);

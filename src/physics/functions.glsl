@@ -769,7 +769,14 @@ INLINE vec3 scattering_lookup(IN(AtmosphereParams) atmosphere, IN(sampler3D) sca
 INLINE float scattering_row_height(IN(AtmosphereParams) atmosphere, int row) {
   float rho = horizon_length_at_top(atmosphere) *
               rho_fraction_from_scattering_x_r(atmosphere, float(row) / float(atmosphere.scattering_r_size - 1));
-  return rho * rho / (sqrt(rho * rho + atmosphere.bottom_radius * atmosphere.bottom_radius) + atmosphere.bottom_radius);
+  float bottom = atmosphere.bottom_radius;
+  return rho * rho / (sqrt(rho * rho + bottom * bottom) + bottom);
+}
+
+// Texture coordinate u_r of radius row `row` of the scattering tables.
+INLINE float scattering_row_u_r(IN(AtmosphereParams) atmosphere, int row) {
+  return texture_coord_from_unit_range(float(row) / float(atmosphere.scattering_r_size - 1),
+                                       atmosphere.scattering_r_size);
 }
 
 // The light of the ray of the tables' radius row 1 (h_1 above the ground)
@@ -782,20 +789,19 @@ INLINE vec3 same_length_ground_ray_lookup(IN(AtmosphereParams) atmosphere, IN(sa
   float r_1 = atmosphere.bottom_radius + h_1;
   float d_1 = max(d, h_1);
   float mu_1 = clamp_cosine(-(h_1 * (atmosphere.bottom_radius + r_1) + d_1 * d_1) / (2.0f * r_1 * d_1));
-  vec4 uvwz = scattering_uvwz_from_r_mu_mu_s_nu(atmosphere, r_1, mu_1, mu_s, nu, true);
-  uvwz.w = texture_coord_from_unit_range(1.0f / float(atmosphere.scattering_r_size - 1), atmosphere.scattering_r_size);
+  vec4 uvwz = vec4(0.0f, scattering_u_mu_s(atmosphere, mu_s), scattering_u_mu(atmosphere, r_1, mu_1, true),
+                   scattering_row_u_r(atmosphere, 1));
   return scattering_lookup_uvwz(atmosphere, scattering_texture, uvwz, nu) * min(d / h_1, 1.0f);
 }
 
 // The light of the grazing ray of radius row `row` (level at the start,
-// tangent to the ground: the last texel of the upper half of mu, x = 1 in
+// tangent to the ground: the upper half of mu at x = 1, see
 // scattering_u_mu), read exactly on the row.
 INLINE vec3 grazing_ray_lookup(IN(AtmosphereParams) atmosphere, IN(sampler3D) scattering_texture, int row,
                                float mu_s, float nu) {
-  vec4 uvwz = scattering_uvwz_from_r_mu_mu_s_nu(atmosphere, atmosphere.bottom_radius, 0.0f, mu_s, nu, false);
-  uvwz.z = 0.5f + 0.5f * texture_coord_from_unit_range(1.0f, atmosphere.scattering_mu_size / 2);
-  uvwz.w = texture_coord_from_unit_range(float(row) / float(atmosphere.scattering_r_size - 1),
-                                         atmosphere.scattering_r_size);
+  vec4 uvwz = vec4(0.0f, scattering_u_mu_s(atmosphere, mu_s),
+                   0.5f + 0.5f * texture_coord_from_unit_range(1.0f, atmosphere.scattering_mu_size / 2),
+                   scattering_row_u_r(atmosphere, row));
   return scattering_lookup_uvwz(atmosphere, scattering_texture, uvwz, nu);
 }
 
@@ -820,9 +826,9 @@ INLINE vec3 grazing_ray_lookup(IN(AtmosphereParams) atmosphere, IN(sampler3D) sc
 //     (same_length_ground_ray_lookup) runs through the same lowest air down
 //     to the ground, so its light s_1 saturates as the ray's does.
 //  2. It starts higher, and near the ground the light changes fast with
-//     height: a dark ground sends little up (on Venus a ray 0.5° above the
-//     horizon is 0.58 as bright from 2 m as from 330 m; reference), dense haze dims
-//     the sunlight. The grazing rays of rows 0 and 1 (grazing_ray_lookup, g_0
+//     height: a dark ground sends little up (on Venus a ray 0.5° above
+//     the horizon is 0.58 as bright from 2 m as from 330 m; reference),
+//     dense haze dims the sunlight. The grazing rays of rows 0 and 1 (grazing_ray_lookup, g_0
 //     and g_1) measure that change between the ground and h_1, and s_1 is
 //     scaled by (g_0 / g_1)^e, with e the fraction of h_1 between where row
 //     1's ray and the camera's ray collect their light: e = (1 - h / h_1)
@@ -840,7 +846,7 @@ INLINE vec3 grazing_ray_lookup(IN(AtmosphereParams) atmosphere, IN(sampler3D) sc
 // the density is a property of a point, not of a ray, and row 0 holds it.
 INLINE vec3 ground_ray_scattering_below_row_1(IN(AtmosphereParams) atmosphere, IN(sampler3D) scattering_texture,
                                               float r, float mu, float mu_s, float nu) {
-  float h_1 = scattering_row_height(atmosphere, 1);
+  float h_1 = atmosphere.scattering_row_1_height;
   float height = r - atmosphere.bottom_radius;
   float d = distance_to_bottom_atmosphere_boundary(atmosphere, r, mu);
   vec3 s_1 = same_length_ground_ray_lookup(atmosphere, scattering_texture, h_1, d, mu_s, nu);
@@ -871,7 +877,7 @@ INLINE vec3 ground_ray_scattering_below_row_1(IN(AtmosphereParams) atmosphere, I
 INLINE vec3 ray_scattering_lookup(IN(AtmosphereParams) atmosphere, IN(sampler3D) scattering_texture, float r,
                                   float mu, float mu_s, float nu, bool ray_r_mu_intersects_ground) {
   if (ray_r_mu_intersects_ground && atmosphere.scattering_r_optical_depth_weight > 0.0f &&
-      r - atmosphere.bottom_radius < scattering_row_height(atmosphere, 1))
+      r - atmosphere.bottom_radius < atmosphere.scattering_row_1_height)
     return ground_ray_scattering_below_row_1(atmosphere, scattering_texture, r, mu, mu_s, nu);
   return scattering_lookup(atmosphere, scattering_texture, r, mu, mu_s, nu, ray_r_mu_intersects_ground);
 }

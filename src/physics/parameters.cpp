@@ -200,6 +200,7 @@ AtmosphereParams make_atmosphere_params(const Atmosphere& atmosphere, const Tabl
   p.scattering_mu_log_weight = float(mu_log_weight);
   p.source_flat_optical_depth = float(source_flat_optical_depth(vertical_optical_depth));
   set_scattering_r_axis(atmosphere, p, scattering_r_optical_depth_weight(mu_log_weight));
+  p.scattering_row_1_height = scattering_row_height(p, 1);
   return p;
 }
 
