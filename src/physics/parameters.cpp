@@ -97,8 +97,9 @@ double optical_depth_to_top(const AtmosphereParams& p, float r) {
 
 // AtmosphereParams.scattering_r_axis for weight w (see
 // scattering_x_r_from_rho_fraction in functions.glsl): at rho / H = i / (n - 1),
-// (1 - w) rho / H + w (1 - tau(r) / tau(bottom)).
-void set_scattering_r_axis(const Atmosphere& atmosphere, AtmosphereParams& p, double w) {
+// (1 - w) rho / H + w (1 - tau(r) / tau(bottom)), with tau(bottom) =
+// vertical_optical_depth_550 (given: computed once).
+void set_scattering_r_axis(const Atmosphere& atmosphere, AtmosphereParams& p, double w, double tau_bottom) {
   p.scattering_r_optical_depth_weight = float(w);
   const int n = SCATTERING_R_AXIS_KNOTS;
   if (w == 0.0) {  // Bruneton's axis; the knots are not read, they say so
@@ -106,7 +107,6 @@ void set_scattering_r_axis(const Atmosphere& atmosphere, AtmosphereParams& p, do
     return;
   }
   const AtmosphereParams p550 = params_at_550(atmosphere, p);
-  const double tau_bottom = optical_depth_to_top(p550, p550.bottom_radius);
   const double H = std::sqrt((double(p.top_radius) - p.bottom_radius) * (double(p.top_radius) + p.bottom_radius));
   for (int i = 0; i < n; ++i) {
     const double s = double(i) / double(n - 1);
@@ -199,7 +199,7 @@ AtmosphereParams make_atmosphere_params(const Atmosphere& atmosphere, const Tabl
   const double mu_log_weight = scattering_mu_log_weight(vertical_optical_depth);
   p.scattering_mu_log_weight = float(mu_log_weight);
   p.source_flat_optical_depth = float(source_flat_optical_depth(vertical_optical_depth));
-  set_scattering_r_axis(atmosphere, p, scattering_r_optical_depth_weight(mu_log_weight));
+  set_scattering_r_axis(atmosphere, p, scattering_r_optical_depth_weight(mu_log_weight), vertical_optical_depth);
   p.scattering_row_1_height = scattering_row_height(p, 1);
   return p;
 }
