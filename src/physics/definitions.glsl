@@ -115,8 +115,9 @@ struct AtmosphereParams {
   // (scattering_row_height(1), functions.glsl), stored because the run time
   // needs it for every lookup of a ray to the ground in a thick atmosphere
   // (ray_scattering_lookup) and shader compilers do not fold the search
-  // through the r axis's knots: computed there per lookup it cost the plugin's
-  // aerial-perspective volume 50 % more time on Venus seen from 2 m.
+  // through the r axis's knots. (Computed per lookup it seemed to cost the
+  // plugin's aerial-perspective volume on Venus 50 % more time, but that was
+  // measured beside a CI run, when timings vary by +-30 %; not re-measured.)
   float scattering_row_1_height;
 };
 
