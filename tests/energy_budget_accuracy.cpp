@@ -62,14 +62,15 @@
 // of each radius row's own basis function, a unit isotropic source on that
 // row that falls linearly (in the r texture coordinate) to 0 at the rows
 // next to it. Measured, one transport step: the rows of the cloud deck
-// (48-66 km) keep their light within -0.7..+1.4 %, with signs that alternate
-// from row to row; the two rows around the cloud base (39 and 46 km, where
+// (48-66 km) lose up to 1.4 % of their light or create up to 0.7 %, the
+// sign alternating from row to row; the two rows around the cloud base (39 and 46 km, where
 // the extinction grows by orders of magnitude within one shell) create
-// 16.6 % and lose 11.1 %; smooth sources keep theirs within 0.04-0.22 %
+// 16.6 % and lose 11.1 %; smooth sources lose 0.04-0.22 % of theirs
 // (uniform, a sine over the first 40 optical depths, e^(-tau/5)). (The
 // ground row, -10 %, and the two top rows, -8 and +28 % of a source in 0.01
 // optical depths, are at the ends of this quadrature and hold almost no
-// light; the gas rows between them keep it within 2 %.) So the
+// light; below the cloud, the row at 33 km creates 3.9 %, the gas rows under
+// it keep their light within 2 %.) So the
 // loss is a defect of the discrete transport, row by row, not of a source
 // that curves. Correcting it was tried (2026-11-25, not kept): one factor
 // per row and channel, computed once from the operator alone (the transport
@@ -79,7 +80,8 @@
 // (the cloud base within 1 %) and the smooth sources within 0.003-0.012 %,
 // but now creating light, and over a white ground the series, which loses
 // only a few ten-thousandths per order there, turned that into gain: out /
-// in 1.02 / 1.25 / 0.91 (680 / 550 / 440 nm) instead of 0.90. A correction
+// in 1.02 / 1.25 / 0.91 (680 / 550 / 440 nm) instead of 0.900 / 0.898 /
+// 0.895 (energy_accuracy.cpp, re-read the same day). A correction
 // has to be exact to about 1e-4 of an order's light.
 // The same budget over a white ground (a variant of this code, not kept),
 // 150 explicit orders: almost no light reaches the ground before order 70,
