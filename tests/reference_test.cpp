@@ -1010,3 +1010,105 @@ TEST(Reference, EclipseOptionsValidated) {
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------------------
+// The plane-parallel adding-doubling reference (reference_plane_parallel_fluxes).
+
+namespace {
+
+// The same slab, solved both ways: 3 optical depths of forward HG scattering
+// with single-scattering albedos 1 / 0.99 / 0.97 at the three wavelengths
+// (the same extinction keeps the Monte Carlo's shared paths efficient), a
+// grey ground of albedo 0.3, sun 60° from the zenith. The Monte Carlo counts
+// up to 400 interactions (the light of the rest is < 1e-6 of the sun's),
+// 10000 paths. Tolerance: 4 standard errors + 3e-3 (the slab's curvature,
+// as in the energy test).
+TEST(PlaneParallelReference, SlabMatchesMonteCarlo) {
+  const double z = 10000.0;
+  const std::vector<double> bs = {3.0 / z, 2.97 / z, 2.91 / z}, ba = {0.0, 0.03 / z, 0.09 / z};
+  const Atmosphere a = slab(z, bs, ba, PhaseFunction{PhaseFunction::Kind::henyey_greenstein, 0.7}, 0.3);
+  const dvec3 sun = direction(60.0, 0.0);
+  const atmos::PlaneParallelFluxes pp = atmos::reference_plane_parallel_fluxes(a, sun.z);
+  ReferenceOptions o;
+  o.scattering_orders = 400;
+  o.paths = 10000;
+  const ReferenceResult down = atmos::reference_horizontal_irradiance(a, dvec3(0.0, 0.0, a.bottom_radius_m), sun, o);
+  o.seed = 2;
+  const ReferenceResult up =
+      atmos::reference_irradiance(a, dvec3(0.0, 0.0, a.top_radius_m), dvec3(0.0, 0.0, -1.0), sun, o);
+  for (size_t l = 0; l < 3; ++l) {
+    const std::string what = "wavelength " + std::to_string(l);
+    std::printf("%s: ground %.5f (Monte Carlo %.5f +- %.5f), up %.5f (%.5f +- %.5f)\n", what.c_str(),
+                pp.ground_direct[l] + pp.ground_diffuse[l], down.radiance[l], down.standard_error[l], pp.upward_top[l],
+                up.radiance[l], up.standard_error[l]);
+    expect_close(pp.ground_direct[l] + pp.ground_diffuse[l], down.radiance[l], down.standard_error[l], 4.0, 3e-3,
+                 "ground, " + what);
+    expect_close(pp.upward_top[l], up.radiance[l], up.standard_error[l], 4.0, 3e-3, "up, " + what);
+    EXPECT_NEAR(pp.ground_direct[l], sun_irradiance(a, l) * sun.z * std::exp(-(bs[l] + ba[l]) * z / sun.z),
+                1e-9 * sun_irradiance(a, l));
+  }
+}
+
+// Nothing absorbs: what enters leaves through the top or into a black ground
+// (all of it through the top over a white one), to 1e-4 (the thin layers'
+// first-order start and the quadratures) in Venus's 47 optical depths.
+TEST(PlaneParallelReference, ConservesEnergyInAThickCloud) {
+  Atmosphere venus = atmos::parse_atmosphere(
+      [] {
+        std::ifstream in(std::string(ATMOS_SOURCE_DIR) + "/data/planets/venus.json", std::ios::binary);
+        std::stringstream ss;
+        ss << in.rdbuf();
+        return ss.str();
+      }(),
+      "venus.json");
+  for (atmos::Constituent& c : venus.constituents) c.absorption = atmos::Spectrum::constant(0.0);
+  for (double albedo : {0.0, 1.0}) {
+    venus.ground_albedo = atmos::Spectrum::constant(albedo);
+    atmos::PlaneParallelOptions options;
+    options.streams = 8;
+    const double mu_s = 0.6;
+    const atmos::PlaneParallelFluxes pp = atmos::reference_plane_parallel_fluxes(venus, mu_s, options);
+    for (size_t l = 0; l < 3; ++l) {
+      const double in = sun_irradiance(venus, l) * mu_s;
+      const double out = pp.upward_top[l] + (1.0 - albedo) * (pp.ground_direct[l] + pp.ground_diffuse[l]);
+      EXPECT_NEAR(out / in, 1.0, 1e-4) << "albedo " << albedo << ", wavelength " << l;
+      // Through 47 optical depths the sun itself is gone; its light is not.
+      EXPECT_LT(pp.ground_direct[l], 1e-12 * in);
+      EXPECT_GT(pp.ground_diffuse[l], (albedo > 0.0 ? 0.5 : 0.01) * in);
+    }
+  }
+}
+
+// Converged in its quadratures: 16 streams against 32, layers of 0.05
+// optical depths against 0.01, within 1e-4 of the light on a hazy slab (8
+// streams: 2.3e-4).
+TEST(PlaneParallelReference, ConvergedInStreamsAndLayers) {
+  const double z = 5000.0;
+  const Atmosphere a = slab(z, {1.0 / z, 3.0 / z, 8.0 / z}, {0.01 / z, 0.0, 0.1 / z},
+                            PhaseFunction{PhaseFunction::Kind::henyey_greenstein, 0.75}, 0.2);
+  atmos::PlaneParallelOptions coarse, fine;
+  coarse.streams = 16;
+  fine.streams = 32;
+  fine.max_layer_optical_depth = 0.01;
+  const auto c = atmos::reference_plane_parallel_fluxes(a, 0.5, coarse);
+  const auto f = atmos::reference_plane_parallel_fluxes(a, 0.5, fine);
+  for (size_t l = 0; l < 3; ++l) {
+    const double in = sun_irradiance(a, l) * 0.5;
+    EXPECT_NEAR(c.upward_top[l] / in, f.upward_top[l] / in, 1e-4) << l;
+    EXPECT_NEAR(c.ground_diffuse[l] / in, f.ground_diffuse[l] / in, 1e-4) << l;
+  }
+}
+
+TEST(PlaneParallelReference, Validated) {
+  const Atmosphere a = slab(1000.0, {1e-4, 1e-4, 1e-4}, {0.0, 0.0, 0.0}, PhaseFunction{}, 0.1);
+  EXPECT_THROW(atmos::reference_plane_parallel_fluxes(a, 0.0), atmos::Error);
+  EXPECT_THROW(atmos::reference_plane_parallel_fluxes(a, std::nan("")), atmos::Error);
+  atmos::PlaneParallelOptions o;
+  o.streams = 1;
+  EXPECT_THROW(atmos::reference_plane_parallel_fluxes(a, 0.5, o), atmos::Error);
+  o.streams = 8;
+  o.max_layer_optical_depth = 0.0;
+  EXPECT_THROW(atmos::reference_plane_parallel_fluxes(a, 0.5, o), atmos::Error);
+}
+
+}  // namespace
