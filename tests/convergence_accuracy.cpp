@@ -87,9 +87,13 @@ TEST(ConvergenceAccuracy, VenusTailEqualsSixHundredOrders) {
   glm::dvec3 remainder(0.0), light_remainder(0.0);
   for (int c = 0; c < 3; ++c) {
     const double ratio = last_ground[c] / previous_ground[c], light_ratio = last_light[c] / previous_light[c];
-    ASSERT_LT(ratio, 1.0) << c;
+    // Every channel's light decays; the blue's light on the ground still
+    // grows after 600 orders (see below) and is not extrapolated.
     ASSERT_LT(light_ratio, 1.0) << c;
-    remainder[c] = last_ground[c] * ratio / (1.0 - ratio);
+    if (c < 2) {
+      ASSERT_LT(ratio, 1.0) << c;
+    }
+    remainder[c] = ratio < 1.0 ? last_ground[c] * ratio / (1.0 - ratio) : 0.0;
     light_remainder[c] = last_light[c] * light_ratio / (1.0 - light_ratio);
     std::printf("%g nm: order %d adds %.3e of the ground's sky light, ratio %.5f, remainder %.3e; light %.5f, %.3e\n",
                 venus.wavelengths_nm[size_t(c)], kOrders, last_ground[c] / explicit_ground[c], ratio,
@@ -125,6 +129,19 @@ TEST(ConvergenceAccuracy, VenusTailEqualsSixHundredOrders) {
   // extrapolated remainder is 2.6 times the 600 orders' ground light; the
   // solved ground light is 0.69 of that extrapolation, the light 1.009. The
   // blue is checked by the residual of the solved tail below instead.
+  // Since the source is read between radius rows with cubic weights
+  // (functions.glsl source_function_lookup; 2026-11-26), the orders lose
+  // less light and the series converges more slowly. Measured: red within
+  // 5.0e-5 (ground) and 1.8e-5 (light), 117 solver steps; green -2.0 % and
+  // -8.2e-4, but its remainder is now 51 % of the ground light and 15 % of
+  // the light, and its ground's ratio (0.99710) is further from its light's
+  // (0.99686): that difference alone moves the remainder by 8 %, 4 % of the
+  // ground light. Bounds: red as before; green 3e-2 and 1.5e-3. The blue's ground
+  // light takes longer still to arrive: its orders' ratio is 1.0024 at order
+  // 600, still rising, while their light decays (0.996 from order 250 on);
+  // the old linear interpolation in u_r put too much source just above the
+  // ground and brought the light down sooner (1.55 of the plane-parallel
+  // reference's ground light at default sizes, tests/venus_accuracy.cpp).
   for (int c = 0; c < 3; ++c) {
     const double ground = explicit_ground[c] + remainder[c];
     const double total_light = light[c] + light_remainder[c];
@@ -132,8 +149,8 @@ TEST(ConvergenceAccuracy, VenusTailEqualsSixHundredOrders) {
                 venus.wavelengths_nm[size_t(c)], ground, solved_ground[c], solved_ground[c] / ground - 1.0,
                 solved_light[c] / total_light - 1.0);
     if (c == 2) continue;
-    EXPECT_NEAR(solved_ground[c], ground, (c == 1 ? 1e-2 : 1e-4) * ground) << c;
-    EXPECT_NEAR(solved_light[c], total_light, (c == 1 ? 5e-4 : 1e-4) * total_light) << c;
+    EXPECT_NEAR(solved_ground[c], ground, (c == 1 ? 3e-2 : 1e-4) * ground) << c;
+    EXPECT_NEAR(solved_light[c], total_light, (c == 1 ? 1.5e-3 : 1e-4) * total_light) << c;
   }
 
   // The tail T after 16 orders must solve T = v_17 + A T, A one more order
@@ -151,7 +168,7 @@ TEST(ConvergenceAccuracy, VenusTailEqualsSixHundredOrders) {
   const Table2D applied_irradiance =
       compute_indirect_irradiance_table(a, transmittance, unused, unused, tail.radiance, 2);
   Table3D applied_radiance;
-  compute_multiple_scattering_table(a, *geometry, density, nullptr, applied_radiance);
+  compute_multiple_scattering_table(a, *geometry, density, nullptr, applied_radiance, false);
   glm::dvec3 residual(0.0), norm(0.0);
   for (size_t i = 0; i < radiance_17.texels.size(); ++i) {
     const glm::dvec3 v(radiance_17.texels[i]);

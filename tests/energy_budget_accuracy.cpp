@@ -19,7 +19,22 @@
 // light against order n + 1's emitted light) and the transport, the
 // multiple scattering step (emitted - removed - escaped).
 //
-// Measured, Venus with nothing absorbing at 550 nm, default sizes:
+// Since 2026-11-26 the multiple scattering step reads the source function
+// between radius rows with cubic weights in optical depth
+// (functions.glsl source_function_lookup). Measured then (this file's
+// quadrature, which reads the tables linearly in r, so what it calls the
+// transport's loss now includes the difference between the two
+// interpolations): the transport loses 2.1 / 1.5 / 0.8 % of orders 2 / 3 /
+// 4, 0.013 % of order 8 and then creates a little, 0.05 % of order 12;
+// with 64 radius rows it loses 0.14 % of order 6 and 0.023 % of order 10.
+// End to end (energy_accuracy.cpp) the white-ground Venus now returns
+// 1.006 of the sunlight against the reference's 0.98: the orders are
+// nearly balanced, slightly on the side of creating light. Everything below
+// about losses of 0.2 % per order, row by row or shell by shell, measured
+// the linear interpolation that the cubic replaced.
+//
+// Measured, Venus with nothing absorbing at 550 nm, default sizes (linear
+// interpolation between rows, before 2026-11-26):
 //  - the density step keeps the light within 0.06 % from order 3 on; from
 //    order 1 to 2 it adds 4.1 % (the 8 nu tiles cannot hold the forward
 //    lobe of order 2: 0.2 % with 16 tiles);
@@ -56,8 +71,13 @@
 // the white-ground Venus worse, not better (550 nm): Catmull-Rom on the rows
 // (0.47 of the sunlight returned), and a Catmull-Rom profile of each
 // (nu, mu_s) column times the linear interpolation of the rest (0.85). Why
-// is not understood either.
-// Row by row (the last test below): the transport is linear in the source,
+// is not understood either. (A Hermite cubic in the optical depth, with a
+// floor where the source changes tenfold between rows, is what the tables
+// use since 2026-11-26, see above: 1.006. Those two attempts' code is gone;
+// Catmull-Rom in u_r, tried again the same day, gave Venus's reflected
+// light within 1 % of the plane-parallel reference, so the 0.47 was
+// presumably a defect of that implementation.)
+// Row by row (measured by the last test below, until 2026-11-26): the transport is linear in the source,
 // so it keeps every source's light exactly if and only if it keeps the light
 // of each radius row's own basis function, a unit isotropic source on that
 // row that falls linearly (in the r texture coordinate) to 0 at the rows
@@ -379,29 +399,25 @@ class VenusBudget : public ::testing::Test {
 std::vector<OrderBudget>* VenusBudget::budgets_ = nullptr;
 
 // The density step keeps the light of each order from order 3 on (measured:
-// within 0.06 %), and the transport loses a few thousandths of each order
-// from order 8 on, and never creates light (measured: 0.23 % of order 8,
-// 0.17 % of order 12). The bounds: the density step within 0.2 %, the
-// transport's loss within [-0.05, 0.4] %.
-TEST_F(VenusBudget, OrdersLoseAFewThousandthsInTheTransportOnly) {
+// within 0.06 %), and the transport keeps each order's light within a
+// thousandth from order 8 on (measured: +0.013, -0.020, -0.037, -0.046,
+// -0.051 % lost of orders 8-12; with the linear interpolation between rows
+// before 2026-11-26 it lost 0.23 % of order 8 and 0.17 % of order 12). The
+// bounds: the density step within 0.2 %, the transport within 0.1 %.
+TEST_F(VenusBudget, OrdersKeepTheirLightWithinAThousandthInTheTransport) {
   for (int n = 3; n < 12; ++n) EXPECT_NEAR(order(n).density_gain(), 0.0, 0.002) << n;
-  for (int n = 8; n <= 12; ++n) {
-    EXPECT_GT(order(n).transport_loss(), -0.0005) << n;
-    EXPECT_LT(order(n).transport_loss(), 0.004) << n;
-  }
+  for (int n = 8; n <= 12; ++n) EXPECT_NEAR(order(n).transport_loss(), 0.0, 0.001) << n;
 }
 
-// The loss comes from the radius axis: with 64 rows instead of 32 the
-// transport loses less of every order from 6 to 10 (measured: 0.098 %
-// instead of 0.188 % of order 10).
-TEST_F(VenusBudget, TransportLosesLessWithMoreRadiusRows) {
+// With 64 radius rows instead of 32 the transport keeps the light of orders
+// 6-10 within 0.2 % too (measured: it loses 0.139, 0.085, 0.054, 0.035 and
+// 0.023 %; with the linear interpolation, 0.098 % of order 10 instead of
+// 0.188 % with 32 rows).
+TEST_F(VenusBudget, TransportKeepsTheLightWithMoreRadiusRowsToo) {
   atmos::TableSizes fine;
   fine.scattering_r = 2 * fine.scattering_r;
   const std::vector<OrderBudget> fine_budgets = order_budgets(conservative_venus(), fine, 10);
-  for (int n = 6; n <= 10; ++n) {
-    EXPECT_GT(fine_budgets[size_t(n - 1)].transport_loss(), 0.0) << n;
-    EXPECT_LT(fine_budgets[size_t(n - 1)].transport_loss(), 0.8 * order(n).transport_loss()) << n;
-  }
+  for (int n = 6; n <= 10; ++n) EXPECT_NEAR(fine_budgets[size_t(n - 1)].transport_loss(), 0.0, 0.002) << n;
 }
 
 // With the energy balance of the orders (src/precompute/energy_balance.cpp,
@@ -463,19 +479,27 @@ std::vector<double> transport_losses(const AtmosphereParams& a, const OrderGeome
   return losses;
 }
 
-// Measured (default sizes, 550 nm): see the header. Bounds: the rows of the
-// cloud deck within 2.5 %, the smooth sources within [-0.02, 0.5] %.
-TEST(VenusRowTransport, EachRowKeepsItsLightWithinAFewPercentInTheCloud) {
+// Smooth sources transported once (see the header), at the default sizes
+// and 550 nm. Measured: uniform +0.068 %, a sine over the first 40 optical
+// depths -0.013 %, exp(-tau / 5) +0.58 % lost (with the linear
+// interpolation between rows before 2026-11-26: 0.068, 0.037, 0.22 %; the
+// quadrature here reads the tables linearly in r, which the steep
+// exponential's cubic source is not). Bounds: within [-0.1, 1] %. The
+// transport of each radius row's own unit source, which this test measured
+// for the linear interpolation's hat functions (up to 1.4 % lost or created
+// in the cloud deck, 11-17 % at the cloud base), has no meaning for the
+// cubic weights: an isolated row's source is where the floor of
+// source_function_lookup acts.
+TEST(VenusRowTransport, SmoothSourcesKeepTheirLightWithinAPercent) {
   const AtmosphereParams a = physics::make_atmosphere_params(conservative_venus(), atmos::TableSizes{}, 0);
   const BudgetQuadrature q(a);
   const auto geometry = make_order_geometry(a);
   const int n = a.scattering_r_size;
-  std::vector<double> height_km(static_cast<size_t>(n)), tau_above(static_cast<size_t>(n));
+  std::vector<double> tau_above(static_cast<size_t>(n));
   for (int z = 0; z < n; ++z) {
     float r, mu, mu_s, nu;
     bool ground;
     physics::r_mu_mu_s_nu_from_scattering_texel(a, physics::vec3(0.0f, 0.0f, float(z)), r, mu, mu_s, nu, ground);
-    height_km[size_t(z)] = (double(r) - a.bottom_radius) / 1000.0;
     constexpr int kSteps = 2000;
     for (int i = 0; i < kSteps; ++i) {
       const double step = (a.top_radius - double(r)) / kSteps;
@@ -492,21 +516,8 @@ TEST(VenusRowTransport, EachRowKeepsItsLightWithinAFewPercentInTheCloud) {
   const char* names[] = {"uniform", "sine over 40 optical depths", "exp(-tau / 5)"};
   for (int c = 0; c < 3; ++c) {
     std::printf("%s source: the transport loses %+.3f %%\n", names[c], 100.0 * smooth[size_t(c)]);
-    EXPECT_GT(smooth[size_t(c)], -2e-4) << names[c];
-    EXPECT_LT(smooth[size_t(c)], 5e-3) << names[c];
-  }
-  for (int k = 0; k < n; k += 3) {
-    for (int z = 0; z < n; ++z)
-      rows[size_t(z)] = physics::vec3(z == k ? 1.0f : 0.0f, z == k + 1 ? 1.0f : 0.0f, z == k + 2 ? 1.0f : 0.0f);
-    const std::vector<double> losses = transport_losses(a, *geometry, q, rows);
-    for (int c = 0; c < 3 && k + c < n; ++c) {
-      const double h = height_km[size_t(k + c)];
-      std::printf("row %2d (%6.2f km, %5.2f optical depths below the top): the transport loses %+.3f %%\n", k + c, h,
-                  tau_above[size_t(k + c)], 100.0 * losses[size_t(c)]);
-      if (h > 48.0 && h < 66.0) {
-        EXPECT_LT(std::abs(losses[size_t(c)]), 0.025) << k + c;
-      }
-    }
+    EXPECT_GT(smooth[size_t(c)], -1e-3) << names[c];
+    EXPECT_LT(smooth[size_t(c)], 1e-2) << names[c];
   }
 }
 

@@ -326,19 +326,81 @@ TEST_F(EarthSteps, IndirectIrradianceFastPathEqualsTheSharedDefinition) {
   }
 }
 
-TEST_F(EarthSteps, MultipleScatteringFastPathEqualsTheSharedDefinition) {
-  const Table3D& density = *density1_;
-  const Table3D& multiple = *multiple2_;
-  std::mt19937 rng(9);
+// compute_multiple_scattering() of functions.glsl at 300 random texels of
+// `multiple`, the fast path's table from `density`: relative difference
+// below 2e-3, with an absolute floor of `floor`.
+void expect_multiple_scattering_matches_the_shared_definition(const AtmosphereParams& p, const Table3D& density,
+                                                              const Table3D& multiple, float floor, unsigned seed) {
+  std::mt19937 rng(seed);
   for (int k = 0; k < 300; ++k) {
     const int x = int(rng() % unsigned(multiple.width)), y = int(rng() % unsigned(multiple.height)),
               z = int(rng() % unsigned(multiple.depth));
     float r, mu, mu_s, nu;
     bool ground;
-    r_mu_mu_s_nu_from_scattering_texel(params_, vec3(float(x), float(y), float(z)), r, mu, mu_s, nu, ground);
-    const vec3 direct = compute_multiple_scattering(params_, density.sampler(), r, mu, mu_s, nu, ground);
-    EXPECT_LT(relative(const_cast<Table3D&>(multiple).at(x, y, z), direct, 1e-7f), 2e-3) << x << " " << y << " " << z;
+    r_mu_mu_s_nu_from_scattering_texel(p, vec3(float(x), float(y), float(z)), r, mu, mu_s, nu, ground);
+    const vec3 direct = compute_multiple_scattering(p, density.sampler(), r, mu, mu_s, nu, ground);
+    EXPECT_LT(relative(const_cast<Table3D&>(multiple).at(x, y, z), direct, floor), 2e-3) << x << " " << y << " " << z;
   }
+}
+
+TEST_F(EarthSteps, MultipleScatteringFastPathEqualsTheSharedDefinition) {
+  expect_multiple_scattering_matches_the_shared_definition(params_, *density1_, *multiple2_, 1e-7f, 9);
+}
+
+// Optically thick atmospheres read the source function between radius rows
+// with cubic Hermite weights (source_function_lookup in functions.glsl). The
+// CPU fast path precomputes them per view ray node; it must give what the
+// shared definition gives, on Venus's order-2 density (small tables).
+TEST(DenseAtmosphere, MultipleScatteringFastPathEqualsTheSharedDefinition) {
+  const AtmosphereParams p = make_atmosphere_params(atmos::load_atmosphere("venus"), small_sizes(), 0);
+  ASSERT_EQ(p.scattering_mu_log_weight, 1.0f);
+  const Table2D transmittance = compute_transmittance_table(p);
+  Table3D rayleigh, aerosol;
+  compute_single_scattering_tables(p, transmittance, rayleigh, aerosol, nullptr);
+  const Table3D empty(rayleigh.width, rayleigh.height, rayleigh.depth);
+  const Table3D density =
+      compute_scattering_density_table(p, transmittance, rayleigh, aerosol, empty, Table2D(), 1, nullptr);
+  const Table3D multiple = compute_multiple_scattering_table(p, density, nullptr);
+  float largest = 0.0f;
+  for (const vec3& v : multiple.texels) largest = std::max(largest, v.y);
+  expect_multiple_scattering_matches_the_shared_definition(p, density, multiple, 1e-5f * largest, 11);
+}
+
+// The row weights of the thick-atmosphere source: they add up to 1 (a
+// uniform source stays uniform), reproduce a source linear in the
+// coordinate exactly (Hermite with difference slopes), end on the rows
+// themselves, and are texture()'s linear weights for thin atmospheres.
+TEST(DenseAtmosphere, SourceRowWeightsReproduceLinearSources) {
+  const AtmosphereParams p = make_atmosphere_params(atmos::load_atmosphere("venus"), atmos::TableSizes{}, 0);
+  const int n = p.scattering_r_size;
+  std::vector<float> c(static_cast<size_t>(n));
+  for (int z = 0; z < n; ++z) c[size_t(z)] = source_row_coordinate(p, z);
+  for (int z = 1; z < n; ++z) ASSERT_GT(c[size_t(z)], c[size_t(z - 1)]) << z;
+  auto at = [&](int z) { return z >= 0 && z < n ? c[size_t(z)] : 0.0f; };
+  for (int z0 = 0; z0 + 1 < n; ++z0)
+    for (float f : {0.0f, 0.3f, 0.7f, 1.0f}) {
+      // The coordinate at linear weight f between the rows, as a radius.
+      const float r = p.bottom_radius + (1.0f - f) * scattering_row_height(p, z0) + f * scattering_row_height(p, z0 + 1);
+      const float cr = source_r_coordinate(p, r);
+      const vec4 w = source_row_weights(p, z0, f, cr, at(z0 - 1), at(z0), at(z0 + 1), at(z0 + 2));
+      EXPECT_NEAR(w.x + w.y + w.z + w.w, 1.0f, 1e-5f) << z0 << " " << f;
+      const float linear = w.x * at(z0 - 1) + w.y * at(z0) + w.z * at(z0 + 1) + w.w * at(z0 + 2);
+      EXPECT_NEAR(linear, cr, 1e-4f * (at(z0 + 1) - at(z0)) + 1e-6f) << z0 << " " << f;
+      if (z0 == 0) {
+        EXPECT_EQ(w.x, 0.0f);
+      }
+      if (z0 + 2 == n) {
+        EXPECT_EQ(w.w, 0.0f);
+      }
+    }
+  const vec4 at_row = source_row_weights(p, 5, 0.0f, at(5), at(4), at(5), at(6), at(7));
+  EXPECT_NEAR(at_row.y, 1.0f, 1e-6f);
+  EXPECT_NEAR(at_row.x, 0.0f, 1e-6f);
+  EXPECT_NEAR(at_row.z, 0.0f, 1e-6f);
+  const AtmosphereParams earth = make_atmosphere_params(atmos::load_atmosphere("earth"), atmos::TableSizes{}, 0);
+  ASSERT_EQ(earth.scattering_mu_log_weight, 0.0f);
+  const vec4 thin = source_row_weights(earth, 3, 0.25f, 0.5f, 0.1f, 0.2f, 0.9f, 1.0f);
+  EXPECT_EQ(thin, vec4(0.0f, 0.75f, 0.25f, 0.0f));
 }
 
 void expect_finite(const std::vector<vec3>& texels, const char* name) {

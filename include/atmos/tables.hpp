@@ -49,28 +49,31 @@ struct PrecomputeOptions {
   // (src/precompute/tail.cpp), until the residual of every wavelength is
   // below `tail_tolerance` of the first missing order, in at most
   // `tail_iterations` steps of about one order's cost each, keeping up to 31
-  // tables of the scattering table's size (Venus at 15 wavelengths and the
-  // default sizes: 90 steps).
+  // tables of the scattering table's size (Venus at the default sizes: 114
+  // steps with 3 wavelengths, up to 179 with 15, the light of the orders
+  // after 64 being 0.57 of all of it; a tail that reaches the cap is kept,
+  // with its residual in Tables::convergence).
   // Tables::convergence then ends with an entry marked `tail`. Fixed orders
   // (auto_orders false) never solve the tail: K orders mean light scattered
   // at most K times.
   bool solve_tail = true;
   double tail_tolerance = 1e-5;
-  int tail_iterations = 100;
+  int tail_iterations = 200;
   // Experimental, off by default: in optically thick atmospheres (Venus,
   // 100x Earth: where the tables' radius rows follow the optical depth),
   // each explicit order's source is scaled so that the order re-emits the
   // light the medium removed from the one before, found from what that order
   // emitted and the flux it let out at the top and into the ground
-  // (src/precompute/energy_balance.cpp). Without it the linear interpolation
-  // between rows a few optical depths apart loses a few thousandths of every
-  // order: over a white ground Venus returns 0.895 of the sunlight at 550
-  // nm, with it 0.938, the brute-force reference 0.98. But on Venus it puts
-  // too much light on the ground (1.05 of the reference instead of 0.97-0.98)
-  // while the light reflected to space rises from 0.90 to 0.93 of it
-  // (tests/venus_accuracy.cpp). Costs about as much as the multiple
-  // scattering step. No effect on other atmospheres. Throws Error if the
-  // tables are too coarse for it (a factor beyond [0.8, 1.25]).
+  // (src/precompute/energy_balance.cpp). It was made for the light that the
+  // linear interpolation between radius rows lost; since the source is read
+  // between rows with cubic weights (functions.glsl source_function_lookup)
+  // the orders nearly keep their light, and the balance takes the white-
+  // ground Venus from 1.006 to 0.986 of the sunlight (the brute-force
+  // reference: 0.98) but lowers the real Venus: reflected light 0.96 of the
+  // reference instead of 0.98, the light on the ground 0.90-0.96 of it
+  // instead of 0.92-0.98 (tests/venus_accuracy.cpp). Costs about as much as
+  // the multiple scattering step. No effect on other atmospheres. Throws
+  // Error if the tables are too coarse for it (a factor beyond [0.8, 1.25]).
   bool balance_orders = false;
   // Called from the calling thread with the name of the running step and the
   // fraction of the whole precomputation done, in [0, 1].

@@ -52,7 +52,10 @@ constexpr char kMagic[8] = {'A', 'T', 'M', 'O', 'S', 'T', 'B', 'L'};
 //    depths are uniform in optical depth over the first optical depths of
 //    each view ray (functions.glsl source_integration_nodes,
 //    AtmosphereParams.source_flat_optical_depth).
-constexpr std::uint32_t kFormatVersion = 12;
+// 13: optically thick atmospheres read the source function between radius
+//    rows with cubic Hermite weights (functions.glsl source_function_lookup,
+//    precomputed per view ray node in steps.cpp).
+constexpr std::uint32_t kFormatVersion = 13;
 constexpr std::size_t kConvergenceEntryBytes = 4 + 4 + 3 * 8;
 
 struct Fnv1a {

@@ -60,7 +60,14 @@
 // of the reference's light to space instead of 0.90 (tests/venus_
 // accuracy.cpp). One factor per order puts the lost light back wherever
 // the order's source is, and presumably partly below the cloud, where it
-// was not lost.
+// was not lost. (Those figures are of the linear interpolation of the
+// source between radius rows, which lost the light. Since the source is
+// read between rows with cubic weights, functions.glsl
+// source_function_lookup, the orders nearly keep their light, and the
+// balance takes the white-ground Venus from 1.006 to 0.986 of the sunlight
+// but lowers the real Venus: 0.96 of the reference's reflected light
+// instead of 0.98, 0.90-0.96 of its light on the ground instead of
+// 0.92-0.98; 2026-11-26.)
 //
 // The integrals are quadratures of their own: Gauss-Legendre in r between
 // each pair of rows (the interpolated tables have kinks at the rows), in the

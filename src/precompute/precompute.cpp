@@ -353,6 +353,13 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
       });
       timed("multiple_scattering", cost_order * 0.5, [&](auto&& progress) {
         compute_multiple_scattering_table(ms, *geometry, density, progress, delta_multiple);
+        // In optically thick atmospheres the source is read between radius
+        // rows with cubic weights (source_function_lookup), which undershoot
+        // next to sharp features of the source: a few texels of an order can
+        // come out slightly negative (100x the dusty Mars: -0.6 % of the
+        // table's largest value). Light is not negative. (The tail solver's
+        // signed fields are not clamped: its operator must stay linear.)
+        for (vec3& v : delta_multiple.texels) v = max(v, vec3(0.0f));
         add_to_multiple(delta_multiple);
       });
       if (balance)

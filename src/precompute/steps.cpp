@@ -340,6 +340,39 @@ void interpolate_mu_r_row(const Table3D& table, float u_mu, float u_r, int paddi
   for (int x = table.width; x < table.width + padding; ++x) row[size_t(x)] = splat(0.0f);
 }
 
+// interpolate_mu_r_row() for the source rows of a thick atmosphere: rows
+// z0 - 1 .. z0 + 2 with `weight` (source_function_lookup), each linear in
+// u_mu at the same u_mu.
+void interpolate_source_rows(const Table3D& table, float u_mu, int z0, const vec4& weight, bool floor, int padding,
+                             std::vector<v4f>& row) {
+  int y0, y1;
+  float fy;
+  detail::linear_tap(u_mu, table.height, y0, y1, fy);
+  row.assign(size_t(table.width + padding), splat(0.0f));
+  auto texels = [&](int j, int y) {
+    return &table.texels[(size_t(z0 - 1 + j) * size_t(table.height) + size_t(y)) * size_t(table.width)];
+  };
+  for (int j = 0; j < 4; ++j) {
+    if (weight[j] == 0.0f) continue;
+    const vec3 *c0 = texels(j, y0), *c1 = texels(j, y1);
+    const v4f w0 = splat(weight[j] * (1.0f - fy)), w1 = splat(weight[j] * fy);
+    for (int x = 0; x < table.width; ++x) row[size_t(x)] += to_v4f(c0[x]) * w0 + to_v4f(c1[x]) * w1;
+  }
+  if (!floor) return;
+  // Where the two rows around the node differ by more than
+  // SOURCE_FLOOR_RATIO, not below the smaller (see source_function_lookup).
+  // Here per (nu, mu_s) texel of the rows, before the interpolation in mu_s
+  // and nu that source_function_lookup's floor follows: the same wherever the
+  // floor acts on all or none of the texels around the lookup.
+  const vec3 *a0 = texels(1, y0), *a1 = texels(1, y1), *b0 = texels(2, y0), *b1 = texels(2, y1);
+  for (int x = 0; x < table.width; ++x) {
+    const vec3 bracket0 = a0[x] * (1.0f - fy) + a1[x] * fy, bracket1 = b0[x] * (1.0f - fy) + b1[x] * fy;
+    const vec3 floor_value = source_floor(bracket0, bracket1);
+    v4f& v = row[size_t(x)];
+    for (int c = 0; c < 3; ++c) v[c] = std::max(v[c], floor_value[c]);
+  }
+}
+
 // The nodes of the shared ray quadrature (ray_integration_nodes in
 // functions.glsl) for the view ray of row (y, z), with what does not depend
 // on the sun.
@@ -350,20 +383,41 @@ struct ViewRay {
   RayNodes nodes;
   std::array<float, MAX_RAY_NODES> r_t{};
   std::array<float, MAX_RAY_NODES> mu_t{};
+  // Of the multiple scattering's rays in thick atmospheres: the radius rows
+  // the source function is read from at each node (source_function_lookup:
+  // rows z0 - 1 .. z0 + 2 with these weights; z0 = -1 when not used).
+  std::array<int, MAX_RAY_NODES> source_row{};
+  std::array<vec4, MAX_RAY_NODES> source_weight{};
 };
 
 // `source`: the weights of source_integration_nodes (the multiple
 // scattering, which integrates the source function), else those of
 // ray_integration_nodes (the single scattering).
-ViewRay make_view_ray(const AtmosphereParams& a, int y, int z, int intervals, bool source) {
+// `row_coordinate`: source_row_coordinate() of every radius row, for the
+// source rows of thick atmospheres (empty: not wanted).
+ViewRay make_view_ray(const AtmosphereParams& a, int y, int z, int intervals, bool source,
+                      const std::vector<float>& row_coordinate = {}) {
   ViewRay ray;
   float mu_s, nu;
   r_mu_mu_s_nu_from_scattering_texel(a, vec3(0.0f, float(y), float(z)), ray.r, ray.mu, mu_s, nu, ray.ground);
   ray.nodes = source ? source_integration_nodes(a, ray.r, ray.mu, ray.ground, intervals)
                      : ray_integration_nodes(a, ray.r, ray.mu, ray.ground, intervals);
+  const int rows = a.scattering_r_size;
   for (int i = 0; i < ray.nodes.count; ++i) {
-    ray.r_t[size_t(i)] = clamp_radius(a, radius_along_ray(ray.r, ray.mu, ray.nodes.t[i]));
-    ray.mu_t[size_t(i)] = clamp_cosine(mu_along_ray(ray.r, ray.mu, ray.nodes.t[i], ray.r_t[size_t(i)]));
+    const float r_t = clamp_radius(a, radius_along_ray(ray.r, ray.mu, ray.nodes.t[i]));
+    ray.r_t[size_t(i)] = r_t;
+    ray.mu_t[size_t(i)] = clamp_cosine(mu_along_ray(ray.r, ray.mu, ray.nodes.t[i], r_t));
+    ray.source_row[size_t(i)] = -1;
+    if (row_coordinate.empty()) continue;
+    // As source_function_lookup() does.
+    int z0;
+    float f;
+    source_row_tap(a, scattering_u_r(a, r_t), z0, f);
+    if (z0 < 0 || z0 >= rows - 1) continue;
+    auto c = [&](int row) { return row >= 0 && row < rows ? row_coordinate[size_t(row)] : 0.0f; };
+    ray.source_row[size_t(i)] = z0;
+    ray.source_weight[size_t(i)] =
+        source_row_weights(a, z0, f, source_r_coordinate(a, r_t), c(z0 - 1), c(z0), c(z0 + 1), c(z0 + 2));
   }
   return ray;
 }
@@ -808,11 +862,14 @@ std::shared_ptr<const OrderGeometry> make_order_geometry(const AtmosphereParams&
   auto g = std::make_shared<OrderGeometry>();
   g->density = make_density_geometry(a);
   g->rays.resize(size_t(a.scattering_mu_size) * size_t(a.scattering_r_size));
+  std::vector<float> row_coordinate;
+  if (a.scattering_mu_log_weight > 0.0f)
+    for (int z = 0; z < a.scattering_r_size; ++z) row_coordinate.push_back(source_row_coordinate(a, z));
   tbb::parallel_for(tbb::blocked_range<int>(0, a.scattering_mu_size * a.scattering_r_size, 16),
                     [&](const tbb::blocked_range<int>& range) {
                       for (int i = range.begin(); i != range.end(); ++i)
                         g->rays[size_t(i)] = make_view_ray(a, i % a.scattering_mu_size, i / a.scattering_mu_size,
-                                                           multiple_scattering_intervals(a), true);
+                                                           multiple_scattering_intervals(a), true, row_coordinate);
                     });
   return g;
 }
@@ -1057,7 +1114,7 @@ Table3D compute_multiple_scattering_table(const AtmosphereParams& a, const Table
 // nu tile comes from a fine table (MuSCoordinate), and the lookups in the two
 // nu tiles around nu share it (the tiles are mu_s_size texels apart).
 void compute_multiple_scattering_table(const AtmosphereParams& a, const OrderGeometry& geometry, const Table3D& density,
-                                       const StepProgress& progress, Table3D& result) {
+                                       const StepProgress& progress, Table3D& result, bool clamp_undershoot) {
   const int width = a.scattering_nu_size * a.scattering_mu_s_size;
   const int mu_s_size = a.scattering_mu_s_size;
   resize_table(result, width, a.scattering_mu_size, a.scattering_r_size);
@@ -1081,8 +1138,12 @@ void compute_multiple_scattering_table(const AtmosphereParams& a, const OrderGeo
     std::vector<v4f> row, sum(static_cast<size_t>(width), splat(0.0f));
     for (int i = 0; i < ray.nodes.count; ++i) {
       const float r_t = ray.r_t[size_t(i)];
-      interpolate_mu_r_row(density, scattering_u_mu(a, r_t, ray.mu_t[size_t(i)], ray.ground),
-                           scattering_u_r(a, r_t), mu_s_size + 1, row);
+      const float u_mu = scattering_u_mu(a, r_t, ray.mu_t[size_t(i)], ray.ground);
+      if (ray.source_row[size_t(i)] >= 0)
+        interpolate_source_rows(density, u_mu, ray.source_row[size_t(i)], ray.source_weight[size_t(i)],
+                                clamp_undershoot, mu_s_size + 1, row);
+      else
+        interpolate_mu_r_row(density, u_mu, scattering_u_r(a, r_t), mu_s_size + 1, row);
       const v4f weight = to_v4f(ray.nodes.weight[i]);
       const float along_mu_s = ray.r / r_t, along_nu = ray.nodes.t[i] / r_t;
       const v4f* values = row.data();

@@ -100,8 +100,13 @@ void compute_scattering_density_table(const AtmosphereParams& atmosphere, const 
                                       const Table3D& single_aerosol, const Table3D& multiple_scattering,
                                       const Table2D& irradiance, int order, const StepProgress& progress,
                                       Table3D& out, bool clamp_ringing = true);
+// `clamp_undershoot`: the source read between radius rows of a thick
+// atmosphere is kept above the smaller of the two rows around each node
+// (source_function_lookup in functions.glsl); false for the signed fields of
+// the tail solver, whose operator must stay linear.
 void compute_multiple_scattering_table(const AtmosphereParams& atmosphere, const OrderGeometry& geometry,
-                                       const Table3D& scattering_density, const StepProgress& progress, Table3D& out);
+                                       const Table3D& scattering_density, const StepProgress& progress, Table3D& out,
+                                       bool clamp_undershoot = true);
 
 // The light scattered more than K times, T = Σ_{n > K} v_n, where v_n is
 // order n (its radiance M_n and the sky irradiance E_{n-1} whose ground
