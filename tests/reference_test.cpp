@@ -30,12 +30,15 @@ namespace detail = atmos::reference_detail;
 
 constexpr double kPi = 3.14159265358979323846;
 
-Atmosphere earth() {
-  std::ifstream in(std::string(ATMOS_SOURCE_DIR) + "/data/planets/earth.json", std::ios::binary);
+// A planet file of data/planets, read from the source tree.
+Atmosphere planet_file(const std::string& name) {
+  std::ifstream in(std::string(ATMOS_SOURCE_DIR) + "/data/planets/" + name + ".json", std::ios::binary);
   std::stringstream ss;
   ss << in.rdbuf();
-  return atmos::parse_atmosphere(ss.str(), "earth.json");
+  return atmos::parse_atmosphere(ss.str(), name + ".json");
 }
+
+Atmosphere earth() { return planet_file("earth"); }
 
 // Unit vector at zenith angle `zenith_deg` from +z, azimuth `azimuth_deg` from +x.
 dvec3 direction(double zenith_deg, double azimuth_deg) {
@@ -1053,14 +1056,7 @@ TEST(PlaneParallelReference, SlabMatchesMonteCarlo) {
 // (all of it through the top over a white one), to 1e-4 (the thin layers'
 // first-order start and the quadratures) in Venus's 47 optical depths.
 TEST(PlaneParallelReference, ConservesEnergyInAThickCloud) {
-  Atmosphere venus = atmos::parse_atmosphere(
-      [] {
-        std::ifstream in(std::string(ATMOS_SOURCE_DIR) + "/data/planets/venus.json", std::ios::binary);
-        std::stringstream ss;
-        ss << in.rdbuf();
-        return ss.str();
-      }(),
-      "venus.json");
+  Atmosphere venus = planet_file("venus");
   for (atmos::Constituent& c : venus.constituents) c.absorption = atmos::Spectrum::constant(0.0);
   for (double albedo : {0.0, 1.0}) {
     venus.ground_albedo = atmos::Spectrum::constant(albedo);

@@ -17,6 +17,7 @@
 #include <memory>
 #include <vector>
 
+#include "physics/quadrature.hpp"
 #include "physics/shader_cpp.hpp"
 
 namespace atmos::precompute {
@@ -133,8 +134,8 @@ ScatteringTail solve_scattering_tail(const AtmosphereParams& atmosphere, const O
 // normalised).
 std::vector<double> legendre_moments(const std::function<double(double)>& phase, int max_degree);
 
-// Nodes and weights of the n-point Gauss-Legendre rule on [a, b].
-void gauss_legendre(int n, double a, double b, std::vector<double>& nodes, std::vector<double>& weights);
+// The n-point Gauss-Legendre rule on [a, b] (physics/quadrature.hpp).
+using physics::gauss_legendre;
 
 // Degree of the spherical-harmonic expansion of the scattering density.
 inline constexpr int kDensityMaxDegree = 28;

@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "atmos/reference.hpp"
+#include "physics/quadrature.hpp"
 
 namespace atmos {
 namespace {
@@ -49,32 +50,7 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
-
-// Gauss-Legendre nodes and weights on [a, b] (Newton on P_n from the
-// Tricomi initial guesses). The table code has its own (steps.cpp): the
-// references share nothing with it but the planet description.
-void gauss_legendre(int n, double a, double b, std::vector<double>& x, std::vector<double>& w) {
-  x.assign(size_t(n), 0.0);
-  w.assign(size_t(n), 0.0);
-  for (int i = 0; i < n; ++i) {
-    double z = std::cos(kPi * (i + 0.75) / (n + 0.5));
-    double derivative = 1.0;
-    for (int iteration = 0; iteration < 100; ++iteration) {
-      double p0 = 1.0, p1 = 0.0;
-      for (int k = 1; k <= n; ++k) {
-        const double p2 = p1;
-        p1 = p0;
-        p0 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p2) / k;
-      }
-      derivative = n * (z * p0 - p1) / (z * z - 1.0);
-      const double step = p0 / derivative;
-      z -= step;
-      if (std::abs(step) < 1e-15) break;
-    }
-    x[size_t(i)] = 0.5 * (a + b) - 0.5 * (b - a) * z;
-    w[size_t(i)] = (b - a) / ((1.0 - z * z) * derivative * derivative);
-  }
-}
+using physics::gauss_legendre;
 
 // The reflection and transmission of a layer (or a stack of layers) for the
 // azimuthal mean: R_top for light incident from above, R_bottom from below,
@@ -89,17 +65,20 @@ struct Layer {
 };
 
 // The beam's part of `a` over `b`: the diffuse light d (down) and u (up) at
-// the interface, `down` = (I - R_bottom(a) R_top(b))^-1.
-void add_beam(const Layer& a, const Layer& b, const MatrixXd& down, Layer& ab) {
+// the interface, `down` = (I - R_bottom(a) R_top(b))^-1. Returns d.
+VectorXd add_beam(const Layer& a, const Layer& b, const MatrixXd& down, Layer& ab) {
   const VectorXd d = down * (a.beam_down + a.e * a.r_bottom * b.beam_up);
   const VectorXd u = a.e * b.beam_up + b.r_top * d;
   ab.beam_up = a.beam_up + a.t_up * u;
   ab.beam_down = a.e * b.beam_down + b.t_down * d;
   ab.e = a.e * b.e;
+  return d;
 }
 
-// `a` over `b` (adding, Hansen & Travis 1974 eqs. 93-96 in this notation).
-Layer add(const Layer& a, const Layer& b) {
+// `a` over `b` (adding, Hansen & Travis 1974 eqs. 93-96 in this notation);
+// `interface_down`, if given, receives the diffuse radiance going down
+// between them due to the beam.
+Layer add(const Layer& a, const Layer& b, VectorXd* interface_down = nullptr) {
   const int n = int(a.r_top.rows());
   const MatrixXd identity = MatrixXd::Identity(n, n);
   // Light going down through a meets b, and bounces between them.
@@ -110,7 +89,8 @@ Layer add(const Layer& a, const Layer& b) {
   ab.t_down = b.t_down * down * a.t_down;
   ab.r_bottom = b.r_bottom + b.t_down * a.r_bottom * up * b.t_up;
   ab.t_up = a.t_up * up * b.t_up;
-  add_beam(a, b, down, ab);
+  const VectorXd d = add_beam(a, b, down, ab);
+  if (interface_down) *interface_down = d;
   return ab;
 }
 
@@ -223,13 +203,9 @@ std::vector<Slice> make_slices(const Atmosphere& a, double wavelength_nm, const 
   std::vector<Slice> slices;
   Slice current;
   std::vector<double> current_scattering(count, 0.0);
-  double current_absorption = 0.0, current_thickness = 0.0;
+  double current_scattering_total = 0.0, current_absorption = 0.0, current_thickness = 0.0;
   auto close = [&]() {
-    const double total_scattering = [&] {
-      double s = 0.0;
-      for (double v : current_scattering) s += v;
-      return s;
-    }();
+    const double total_scattering = current_scattering_total;
     current.optical_depth = total_scattering + current_absorption;
     current.omega = current.optical_depth > 0.0 ? total_scattering / current.optical_depth : 0.0;
     current.phase_weight.assign(count, 0.0);
@@ -238,6 +214,7 @@ std::vector<Slice> make_slices(const Atmosphere& a, double wavelength_nm, const 
     slices.push_back(current);
     current = Slice();
     std::fill(current_scattering.begin(), current_scattering.end(), 0.0);
+    current_scattering_total = 0.0;
     current_absorption = 0.0;
     current_thickness = 0.0;
   };
@@ -252,16 +229,13 @@ std::vector<Slice> make_slices(const Atmosphere& a, double wavelength_nm, const 
       scattered += per[c];
       absorbed += absorption[c] * rho * dh;
     }
-    const double depth_so_far = current_absorption + [&] {
-      double s = 0.0;
-      for (double v : current_scattering) s += v;
-      return s;
-    }();
+    const double depth_so_far = current_scattering_total + current_absorption;
     if (current_thickness > 0.0 &&
         (depth_so_far + scattered + absorbed > options.max_layer_optical_depth ||
          current_thickness + dh > options.max_layer_thickness_m * (1.0 + 1e-9)))
       close();
     for (size_t c = 0; c < count; ++c) current_scattering[c] += per[c];
+    current_scattering_total += scattered;
     current_absorption += absorbed;
     current_thickness += dh;
   }
@@ -330,11 +304,10 @@ PlaneParallelFluxes reference_plane_parallel_fluxes(const Atmosphere& atmosphere
     ground.beam_up = VectorXd::Constant(n, albedo * mu_s / kPi);
     ground.beam_down = VectorXd::Zero(n);
     ground.e = 0.0;
-    // Down at the ground: the stack's beam and diffuse light, with the
-    // bounces between the ground and the atmosphere.
-    const MatrixXd down = (MatrixXd::Identity(n, n) - stack.r_bottom * ground.r_top).partialPivLu().inverse();
-    const VectorXd d = down * (stack.beam_down + stack.e * stack.r_bottom * ground.beam_up);
-    const Layer whole = add(stack, ground);
+    // d: the diffuse light down at the ground, with the bounces between the
+    // ground and the atmosphere.
+    VectorXd d;
+    const Layer whole = add(stack, ground, &d);
     const double sun = atmosphere.solar_irradiance.at(lambda);
     double diffuse = 0.0, upward = 0.0;
     for (int i = 0; i < n; ++i) {
