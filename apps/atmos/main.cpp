@@ -88,7 +88,7 @@ struct TableOptions {
     app.add_option("--planet", planet, "Preset name (" + preset_list() + ") or planet JSON file")->capture_default_str();
     app.add_option("--orders", orders,
                    "Scattering orders: K >= 1, or auto (until the orders left would add < 0.1 % of the light, "
-                   "on the ground too; at most 64, then the rest solved at once)")
+                   "on the ground too; at most 64; where the orders foretell that cap, the rest is solved at once from order 16)")
         ->capture_default_str();
     app.add_option("--wavelengths", wavelengths,
                    "Working wavelengths N in [3, 48]: 3 = fast mode (680, 550, 440 nm), more = spectral over "

@@ -34,24 +34,28 @@ struct TableSizes {
 // far, in every channel, both over the whole scattering table and in the sky
 // light on the ground, and so would the rest of the series where the orders
 // decay geometrically (the ratio of the last two orders foretells it); at
-// most `scattering_orders`, the cap, in that case.
+// most `scattering_orders`, the cap, in that case. With the tail solver
+// (solve_tail, below) a series that the same ratio foretells to reach the
+// cap unconverged is handed to the solver from order 16 instead (Venus,
+// Titan, 10x and 100x Earth): the same light, in fewer steps.
 struct PrecomputeOptions {
   TableSizes sizes;
   int scattering_orders = 4;  // K >= 1: light scattered (or reflected by the ground) at most K times
   bool auto_orders = false;
   double auto_orders_tolerance = 1e-3;
-  // With auto orders, when the cap is reached before the tolerance (an
-  // optically thick, nearly conservative atmosphere such as Venus, where the
-  // light that reaches the ground has been scattered hundreds of times and
-  // each order adds almost as much as the one before): the light of all
-  // further orders is solved for at once instead of being left out — GMRES
+  // With auto orders, when the cap is reached before the tolerance, or from
+  // order 16 when the orders foretell that it will be (an optically thick,
+  // nearly conservative atmosphere such as Venus, where the light that
+  // reaches the ground has been scattered hundreds of times and each order
+  // adds almost as much as the one before): the light of all further orders
+  // is solved for at once instead of being left out or summed — GMRES
   // with deflated restarts on the transport equation of the remaining light
   // (src/precompute/tail.cpp), until the residual of every wavelength is
   // below `tail_tolerance` of the first missing order, in at most
   // `tail_iterations` steps of about one order's cost each, keeping up to 31
-  // tables of the scattering table's size (Venus at the default sizes: 114
-  // steps with 3 wavelengths, up to 179 with 15, the light of the orders
-  // after 64 being 0.57 of all of it; a tail that reaches the cap is kept,
+  // tables of the scattering table's size (Venus at the default sizes: 16
+  // orders, then 105 steps with 3 wavelengths, the light of the orders
+  // after 16 being 0.70 of all of it; a tail that reaches the cap is kept,
   // with its residual in Tables::convergence).
   // Tables::convergence then ends with an entry marked `tail`. Fixed orders
   // (auto_orders false) never solve the tail: K orders mean light scattered
@@ -105,7 +109,8 @@ struct OrderContribution {
   double added = 0.0;     // what this order adds
   double relative = 0.0;  // added / everything up to and including this order
   // The last entry, when PrecomputeOptions::solve_tail summed the orders
-  // after the cap: `order` is the first of them (cap + 1), `added` their
+  // after the explicit ones: `order` is the first of them (the last explicit
+  // order + 1; the largest over the wavelength triples), `added` their
   // light, `relative` its share of all the light, `iterations` the solver's
   // steps and `residual` its largest relative residual.
   bool tail = false;

@@ -55,7 +55,9 @@ constexpr char kMagic[8] = {'A', 'T', 'M', 'O', 'S', 'T', 'B', 'L'};
 // 13: optically thick atmospheres read the source function between radius
 //    rows with cubic Hermite weights (functions.glsl source_function_lookup,
 //    precomputed per view ray node in steps.cpp).
-constexpr std::uint32_t kFormatVersion = 13;
+// 14: auto orders hand a series that would reach the cap unconverged to the
+//    tail solver from order 16 (precompute.cpp kEarliestTailHandoff).
+constexpr std::uint32_t kFormatVersion = 14;
 constexpr std::size_t kConvergenceEntryBytes = 4 + 4 + 3 * 8;
 
 struct Fnv1a {

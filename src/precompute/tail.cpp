@@ -51,7 +51,9 @@
 // those Venus tables (98 before their r axis followed the optical depth;
 // up to 179 since the source is read between radius rows with cubic
 // weights, which keeps more light in every order, so the tail holds 0.57 of
-// all the light and its slowest modes decay more slowly).
+// all the light and its slowest modes decay more slowly; 105 with 3
+// wavelengths and up to 169 with 15 since the orders hand over from order
+// 16, precompute.cpp kEarliestTailHandoff).
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
