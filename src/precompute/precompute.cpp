@@ -127,8 +127,7 @@ bool series_converged(const glm::dvec3& added, const glm::dvec3& previous, const
 
 // Whether the series of series_converged() would still be short of its
 // criterion after `orders_left` more orders, foreseen with the ratio q =
-// added / previous of its last two orders: after m more orders the rest adds
-// added q^(m + 1) / (1 - q). The forecast may err either way (the ratio of
+// added / previous of its last two orders (order m on adds added q^m). The forecast may err either way (the ratio of
 // Venus's orders still grows after order 16; 10x Earth's sky light on the
 // ground, with a tolerance of 1 %, is foreseen to outlast the cap at order
 // 16 but converges at order 55); an error costs time, not light: the
@@ -138,8 +137,9 @@ bool series_outlasts(double added, double previous, double total, double toleran
   if (previous <= 0.0 || added <= 0.0) return false;
   const double q = added / previous;
   if (q >= 1.0) return true;
-  const double bound = tolerance * std::abs(total);
-  return added * std::pow(q, orders_left + 1) / (1.0 - q) > bound;
+  // The order `orders_left` on, and the one before it, by the same ratio.
+  const double later = added * std::pow(q, orders_left);
+  return !series_converged(later, later / q, total, tolerance);
 }
 
 bool series_outlasts(const glm::dvec3& added, const glm::dvec3& previous, const glm::dvec3& total, double tolerance,
@@ -430,7 +430,12 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
           series_converged(channels_added, channels_previous, channels_total, options.auto_orders_tolerance);
       const bool ground_converged =
           series_converged(ground_added, ground_previous, ground_total, options.auto_orders_tolerance);
-      const glm::dvec3 channels_before = channels_previous, ground_before = ground_previous;
+      // Hand the rest to the tail solver now (kEarliestTailHandoff)?
+      const bool hand_off =
+          may_solve_tail && order == kEarliestTailHandoff && order < K &&
+          (series_outlasts(channels_added, channels_previous, channels_total, options.auto_orders_tolerance,
+                           K - order) ||
+           series_outlasts(ground_added, ground_previous, ground_total, options.auto_orders_tolerance, K - order));
       channels_previous = channels_added;
       ground_previous = ground_added;
       const double total = glm::dot(to_luminance, channels_total);
@@ -444,10 +449,7 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
         converged = true;
         break;
       }
-      if (may_solve_tail && order == kEarliestTailHandoff && order < K &&
-          (series_outlasts(channels_added, channels_before, channels_total, options.auto_orders_tolerance,
-                           K - order) ||
-           series_outlasts(ground_added, ground_before, ground_total, options.auto_orders_tolerance, K - order))) {
+      if (hand_off) {
         cost_done += cost_order * (K - order);
         last_order = order;
         break;
