@@ -3,9 +3,11 @@
 // 600 orders computed one by one with the steps of the precomputation.
 //
 // Venus is where the solver matters: in its cloud deck (optical depth 30,
-// single-scattering albedo 0.9995) over 17 (550 nm) to 42 (440 nm) optical
-// depths of CO2, each order adds 0.994 (680 nm), 0.996 (550 nm) and 0.9975
-// (440 nm) of the light of the order before (these tables, whose mu axis is
+// single-scattering albedo 0.99933, 0.99643 at 440 nm) over 17 (550 nm) to
+// 42 (440 nm) optical depths of CO2, each order adds 0.995 (680 nm), 0.997
+// (550 nm) and 0.998 (440 nm) of the light of the order before, measured at
+// order 600 (2026-11-27; 0.994, 0.996 and 0.9975 with the cloud's earlier
+// placeholder albedos, 0.9995 from 500 nm; these tables, whose mu axis is
 // warped and whose r axis follows the optical depth; 0.9925, 0.995 and
 // 0.9975 with Bruneton's r axis, 0.984, 0.989 and 0.996 before the mu warp,
 // which lost light at the cloud top), and the light that reaches the
@@ -131,14 +133,15 @@ TEST(ConvergenceAccuracy, VenusTailEqualsSixHundredOrders) {
   // blue is checked by the residual of the solved tail below instead.
   // Since the source is read between radius rows with cubic weights
   // (functions.glsl source_function_lookup; 2026-11-26), the orders lose
-  // less light and the series converges more slowly. Measured: red within
-  // 5.0e-5 (ground) and 1.8e-5 (light), 117 solver steps; green -2.0 % and
-  // -8.2e-4, but its remainder is now 51 % of the ground light and 15 % of
-  // the light, and its ground's ratio (0.99710) is further from its light's
-  // (0.99686): that difference alone moves the remainder by 8 %, 4 % of the
+  // less light and the series converges more slowly. Measured (2026-11-27,
+  // the cloud albedo fitted to Venus's spherical albedo): red within 4.1e-5
+  // (ground) and 1.4e-5 (light), 114 solver steps; green -1.9 % and
+  // -7.3e-4, but its remainder is 48 % of the ground light and 14 % of
+  // the light, and its ground's ratio (0.99700) is further from its light's
+  // (0.99676): that difference alone moves the remainder by 8 %, 4 % of the
   // ground light. Bounds: red as before; green 3e-2 and 1.5e-3. The blue's ground
-  // light takes longer still to arrive: its orders' ratio is 1.0024 at order
-  // 600, still rising, while their light decays (0.996 from order 250 on);
+  // light takes longer still to arrive: its orders' ratio is 1.0022 at order
+  // 600, still rising, while their light decays (0.998 at order 600);
   // the old linear interpolation in u_r put too much source just above the
   // ground and brought the light down sooner (1.55 of the plane-parallel
   // reference's ground light at default sizes, tests/venus_accuracy.cpp).
@@ -157,9 +160,9 @@ TEST(ConvergenceAccuracy, VenusTailEqualsSixHundredOrders) {
   // computed with the steps above: the residual |v_17 + A T - T| / |v_17|
   // per channel, over the radiance texels and the ground's irradiance,
   // computed here, outside the solver, in double from the float tables.
-  // Measured: 3.0e-5, 3.5e-5, 3.0e-5 at 680, 550, 440 nm, 85 steps (the
-  // solver's own recurrence says 6.8e-8, 1.1e-6, 8.6e-6: what is left is
-  // the rounding of the float tables). Bound: 1e-4.
+  // Measured (2026-11-27): 3.7e-5, 3.7e-5, 3.0e-5 at 680, 550, 440 nm, 114
+  // steps (the solver's own recurrence says 4.7e-9, 2.5e-7, 9.8e-6: what is
+  // left is the rounding of the float tables). Bound: 1e-4.
   const ScatteringTail tail = solve_scattering_tail(a, *geometry, transmittance, radiance_17, irradiance_17, 1e-5,
                                                     300, 30, 10, nullptr);
   const Table3D unused;

@@ -112,8 +112,8 @@ TEST(Presets, DerivedQuantities) {
 // less light than the one before (no divergence), and at order 16 both are
 // foreseen to reach the CLI's cap of 64 orders unconverged, so the rest of
 // their series goes to the tail solver from there (precompute.cpp,
-// kEarliestTailHandoff; measured 2026-11-26 with these small tables: Venus's
-// 16th order adds 1.1 % of the light, the tail 62 % in 117 steps; Titan's
+// kEarliestTailHandoff; measured 2026-11-27 with these small tables: Venus's
+// 16th order adds 1.1 % of the light, the tail 61 % in 114 steps; Titan's
 // 16th 0.46 %, the tail 3.6 % in 11 steps). Titan's orders are slow on its
 // ground: each adds 0.9 of what the one before added to the sky light
 // there (with the criterion on all the light alone, it stopped after 29
@@ -182,7 +182,7 @@ TEST(Presets, VenusAndTitanConvergeWithAutoOrders) {
 // (measured with the default tables: within 2.2 %; with these small
 // tables, since the source is read between radius rows with cubic weights,
 // functions.glsl source_function_lookup, and the blue sky light rises more
-// steeply over the first kilometre: 1.0444 at 1 km, 440 nm, bound 5 %). Auto orders: with a
+// steeply over the first kilometre: 1.0435 at 1 km, 440 nm, bound 5 %). Auto orders: with a
 // few orders only, the light has not yet diffused down and the profile is
 // far steeper (with 8 orders the 440 nm sky light at 10 km is 27 times what
 // 128 rows give).

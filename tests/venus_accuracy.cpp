@@ -2,18 +2,29 @@
 //
 // docs/preset-sources.md 1.2.3 gives 1.5-2.6 % of the sunlight on the ground
 // (Venera 8, Pioneer Venus, Titov et al. 2007). The reference itself, on the
-// preset as it is, gives more: 5.1 % at 550 nm with the sun 40° up (K = 2000
-// interactions, which runs at K = 1000 and 4000 found converged within
-// their 12 % noise; the mean of four seeds of 16000 paths), so reaching the
-// measured band is a question for the preset
-// (its cloud single-scattering albedo of 0.9995 above 500 nm is a
-// placeholder, docs/preset-sources.md 1.2.4), not for the tables. The tables
-// are compared with the reference.
+// preset, gives more: 5.1 % at 550 nm with the sun 40° up before the cloud's
+// single-scattering albedo was fitted to Venus's measured spherical albedo
+// (K = 2000 interactions, which runs at K = 1000 and 4000 found converged
+// within their 12 % noise; the mean of four seeds of 16000 paths), 5.05 %
+// (this test's run) after it (0.99933 at 550 nm instead of the placeholder
+// 0.9995; docs/preset-sources.md 1.2.4, SphericalAlbedoIsTheMeasuredOne
+// below). So the preset reflects what Venus reflects in V and B, and still
+// puts twice the measured light on its ground; those measurements are
+// broadband (0.4-1.0 um and more), where the near-infrared bands of CO2 and
+// H2O absorb and the preset does not (UNVERIFIED as the whole explanation).
+// That is a question for the preset, not for the tables. The tables are
+// compared with the reference.
 //
 // The tables (default sizes, auto orders and the solved tail) against the
 // reference, on the ground (550 nm with the sun 40° and 70° up, 680 nm at
 // 40°) and for the light reflected to space (the upward flux at 99 km,
-// 550 nm, sun 40° up). Measured (2026-11-26, since the source function is
+// 550 nm, sun 40° up). Measured 2026-11-27, with the cloud albedo fitted
+// (it absorbs a little more than the placeholder), this test's reference
+// run: ground 550 nm, sun 40°, 4.63e-2 of the sunlight, 0.92 of 5.05e-2
+// (+- 5 %); sun 70°, 5.67e-2, 0.96 of 5.91e-2; 680 nm, 7.32e-2, 0.98 of
+// 7.43e-2; reflected 0.887, 0.98 of 0.908 (balanced orders: 4.60e-2,
+// 5.62e-2, 7.26e-2, 0.877). The figures below are from before the fit.
+// Measured (2026-11-26, since the source function is
 // read between radius rows with cubic weights, functions.glsl
 // source_function_lookup), this test's reference runs first, then the mean
 // of 3-4 seeds (16000 paths each; 8000, 4000 and 1000 for the reflected
@@ -77,6 +88,7 @@
 #include "atmos/reference.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "physics/quadrature.hpp"
 #include "upward_flux.hpp"
 
 namespace {
@@ -188,12 +200,15 @@ TEST(VenusAccuracy, GroundLightAgainstTheReference) {
 // 5.08e-2 +- 2.5 % of four seeds; 680 nm 7.95e-2 against 7.77e-2; reflected
 // 0.912 against 0.906 +- 2 %) and on a slab solved both ways
 // (reference_test.cpp, PlaneParallelReference).
-// Measured (2026-11-26, default sizes), tables / reference at 680 / 550 /
-// 440 nm:
-//  - sun 40°: ground 0.956 / 1.003 / 1.102, nadir radiance 0.992 / 0.993 /
-//    0.990, flux 0.980 / 0.981 / 0.977;
-//  - sun 70°: ground 0.955 / 0.992 / 1.076, nadir radiance 1.011 / 1.011 /
-//    1.007, flux 1.004 / 1.004 / 0.999.
+// Measured (2026-11-27, default sizes, the cloud albedo fitted to Venus's
+// spherical albedo), tables / reference at 680 / 550 / 440 nm:
+//  - sun 40°: ground 0.961 / 1.010 / 1.120, nadir radiance 0.991 / 0.992 /
+//    0.987, flux 0.981 / 0.983 / 0.977;
+//  - sun 70°: ground 0.957 / 0.995 / 1.090, nadir radiance 1.013 / 1.012 /
+//    1.007, flux 1.003 / 1.004 / 0.997.
+// (With the placeholder albedo, 2026-11-26: sun 40° ground 0.956 / 1.003 /
+// 1.102, sun 70° 0.955 / 0.992 / 1.076; the rest within 0.003. The
+// experiments below are from before the fit.)
 // Before the source function was interpolated with cubic weights between
 // radius rows (functions.glsl source_function_lookup): sun 40° ground
 // 0.949 / 1.033 / 1.552, nadir radiance 0.904 / 0.903 / 0.908, flux 0.890 /
@@ -214,7 +229,12 @@ TEST(VenusAccuracy, GroundLightAgainstTheReference) {
 // cubic: unchanged; a smooth optical-depth coordinate for the cubic 1.181;
 // the first interval's ground-facing nodes extrapolated from rows 1-2
 // 1.130. The whole Venus over a black ground: the same ratios as over its
-// 0.1 albedo (2026-11-26, scratch experiments, not kept).
+// 0.1 albedo (2026-11-26, scratch experiments, not kept). Air alone, 64
+// radius texels (2026-11-27): 64 mu_s texels instead of 32 give 1.002 /
+// 1.013 / 1.055 (Bruneton's mu_s axis leaves the sun between 40° and 90° up
+// 2.1 texels of 32), an axis linear in mu_s 1.000 / 1.010 / 1.048 (not
+// kept: it spends the sunset's texels), 16 nu texels 1.010 / 1.025 / 1.073
+// (unchanged).
 // Tolerances: the ground within [0.92, 1.08] at 680 and 550 nm and [0.92,
 // 1.15] at 440 nm (42 optical depths of air: the rows near the ground are
 // 2-6 of them apart there); the nadir radiance within 3 %; the flux within
@@ -281,7 +301,9 @@ TEST(VenusAccuracy, FluxesAgainstThePlaneParallelReference) {
 // the square root of the altitude): the ground 1.329e-3 and 4.392e-3, 0.91
 // of the reference (0.94 of the 16000-path run above), the sky 5.04e-3,
 // 1.03. Ground 4 km away / ground 100 m away 3.30; / sky 0.87 (reference
-// 0.98).
+// 0.98). With the cloud albedo fitted to Venus's spherical albedo
+// (2026-11-27): the ground 1.266e-3 and 4.186e-3, 0.91 of the reference's
+// 4.59e-3, the sky 4.80e-3, 1.03 of 4.66e-3.
 // Tolerances: the ground 4 km away at least twice as bright as 100 m away
 // and within [0.75, 1.2] of the sky; both against the reference within
 // [0.9, 1.5] (before: 0.13 for the ground; the ground's 0.91 now is close
@@ -334,6 +356,52 @@ TEST(VenusAccuracy, GroundSeenFromLowCameras) {
   for (int i : {1, 2}) {
     EXPECT_GT(table_values[i], 0.9 * reference_values[i]) << views[i].name;
     EXPECT_LT(table_values[i], 1.5 * reference_values[i]) << views[i].name;
+  }
+}
+
+// The preset's cloud single-scattering albedo is fitted (data/planets/
+// venus.json, docs/preset-sources.md 1.2.4) so that the plane-parallel
+// reference gives Venus's measured spherical albedos: 0.90 in V (Mallama,
+// Wang & Howard 2006) and 0.781 in B (from B-V = 0.81 against the Sun's
+// 0.656), taken at 550 and 440 nm. This checks the fit (the reference within
+// 0.005 of both: it fails if the preset's cloud, air or ground change
+// without a new fit) and how bright the tables make the planet: their
+// spherical albedo, from the flux leaving the top 1 m below it over the same
+// 8 sun zenith cosines, 2 ∫ A(mu_s) mu_s dmu_s with A the plane albedo.
+// Measured (2026-11-27, default sizes): reference 0.9000 (550 nm), 0.7811
+// (440 nm) and 0.8783 (680 nm); tables 1.005, 0.999 and 1.004 of it
+// (closer than their flux with the sun 40° up, 0.98 of the reference's in
+// FluxesAgainstThePlaneParallelReference; why they agree better over all
+// sun angles was not analysed). Tolerances: the tables within 5 % of the
+// measured values.
+TEST(VenusAccuracy, SphericalAlbedoIsTheMeasuredOne) {
+  const atmos::Atmosphere venus = atmos::load_atmosphere("venus");
+  const atmos::Tables t = venus_tables(venus, venus_options());
+  const atmos::SkyModel model(venus, t);
+  std::vector<double> mu_s, weight;
+  atmos::physics::gauss_legendre(8, 0.0, 1.0, mu_s, weight);
+  const glm::dvec3 top = atmos::observer_position(venus, venus.top_radius_m - venus.bottom_radius_m - 1.0);
+  glm::dvec3 reference(0.0), tables(0.0);
+  for (size_t k = 0; k < mu_s.size(); ++k) {
+    const atmos::PlaneParallelFluxes pp = atmos::reference_plane_parallel_fluxes(venus, mu_s[k]);
+    const glm::dvec3 sun(std::sqrt(1.0 - mu_s[k] * mu_s[k]), 0.0, mu_s[k]);
+    const glm::dvec3 up = atmos_test::upward_flux(model, top, sun, 64, 24);
+    for (int c = 0; c < 3; ++c) {
+      const double e_sun = venus.solar_irradiance.at(venus.wavelengths_nm[size_t(c)]);
+      // upward / e_sun = A(mu_s) mu_s.
+      reference[c] += 2.0 * weight[k] * pp.upward_top[size_t(c)] / e_sun;
+      tables[c] += 2.0 * weight[k] * up[c] / e_sun;
+    }
+  }
+  const double measured[3] = {0.0, 0.90, 0.90 * std::pow(10.0, -0.4 * (0.81 - 0.656))};
+  for (int c = 0; c < 3; ++c) {
+    std::printf("venus, %g nm: spherical albedo %.4f (plane-parallel reference), %.4f (tables, %.3f of it)",
+                venus.wavelengths_nm[size_t(c)], reference[c], tables[c], tables[c] / reference[c]);
+    if (c > 0) std::printf(", measured %.3f", measured[c]);
+    std::printf("\n");
+    if (c == 0) continue;
+    EXPECT_NEAR(reference[c], measured[c], 0.005) << venus.wavelengths_nm[size_t(c)] << " nm";
+    EXPECT_NEAR(tables[c] / measured[c], 1.0, 0.05) << venus.wavelengths_nm[size_t(c)] << " nm";
   }
 }
 
