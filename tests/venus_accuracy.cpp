@@ -376,6 +376,8 @@ TEST(VenusAccuracy, GroundSeenFromLowCameras) {
 // measured values.
 TEST(VenusAccuracy, SphericalAlbedoIsTheMeasuredOne) {
   const atmos::Atmosphere venus = atmos::load_atmosphere("venus");
+  // The channels below are the preset's working wavelengths: R, V, B.
+  ASSERT_EQ(venus.wavelengths_nm, (std::vector<double>{680.0, 550.0, 440.0}));
   const atmos::Tables t = venus_tables(venus, venus_options());
   const atmos::SkyModel model(venus, t);
   std::vector<double> mu_s, weight;

@@ -127,10 +127,11 @@ bool series_converged(const glm::dvec3& added, const glm::dvec3& previous, const
 
 // Whether the series of series_converged() would still be short of its
 // criterion after `orders_left` more orders, foreseen with the ratio q =
-// added / previous of its last two orders (order m on adds added q^m). The forecast may err either way (the ratio of
-// Venus's orders still grows after order 16; 10x Earth's sky light on the
-// ground, with a tolerance of 1 %, is foreseen to outlast the cap at order
-// 16 but converges at order 55); an error costs time, not light: the
+// added / previous of its last two orders (order m on adds added q^m). The
+// forecast may err either way (the ratio of Venus's orders still grows after
+// order 16; 10x Earth's sky light on the ground, with a tolerance of 1 %, is
+// foreseen to outlast the cap at order 16 but converges at order 55); an
+// error costs time, not light: the
 // solver sums the same series (tests/spectral_test.cpp: 16 orders and the
 // tail give 10x Earth the light of its 55 orders within 2e-4).
 bool series_outlasts(double added, double previous, double total, double tolerance, int orders_left) {
