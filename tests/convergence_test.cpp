@@ -219,26 +219,30 @@ TEST(Convergence, TailSolverRestartsAgree) {
                                                    order - 1);
     compute_multiple_scattering_table(a, *geometry, density, nullptr, radiance);
   }
+  const double tolerance = 1e-6;
   auto solve = [&](int iterations, int restart, int deflation) {
     const ScatteringTail t =
-        solve_scattering_tail(a, *geometry, transmittance, radiance, irradiance, 1e-5, iterations, restart, deflation,
-                              nullptr);
+        solve_scattering_tail(a, *geometry, transmittance, radiance, irradiance, tolerance, iterations, restart,
+                              deflation, nullptr);
     std::printf("restart %d, deflation %d: %d steps, residual %.1e %.1e %.1e\n", restart, deflation, t.iterations,
                 t.relative_residual.x, t.relative_residual.y, t.relative_residual.z);
     return t;
   };
-  const ScatteringTail deflated = solve(200, 30, 10);
-  const ScatteringTail plain = solve(200, 30, 0);
+  const ScatteringTail deflated = solve(400, 30, 10);
+  const ScatteringTail plain = solve(400, 30, 0);
   for (const ScatteringTail* t : {&deflated, &plain}) EXPECT_LE(std::max({t->relative_residual.x,
                                                                             t->relative_residual.y,
-                                                                            t->relative_residual.z}), 1e-5);
-  // Measured: 85 steps deflated, 132 plain (82 and 106 before the r axis
-  // followed the optical depth, functions.glsl scattering_x_r_from_rho_fraction).
+                                                                            t->relative_residual.z}), tolerance);
+  // Measured (2026-11-27): 140 steps deflated, 189 plain (197 in the
+  // baseline x86-64 code of the sanitizer build).
   EXPECT_LT(deflated.iterations, plain.iterations);
   // The same tail: the ground's sky light and the light of the table, per
-  // channel: measured 2e-7, 3e-6 and 1e-4 apart (red, green, blue). Bound
-  // 5e-4: a residual of 1e-5 may leave up to 1e-5 / (1 - 0.9975) = 4e-3 in
-  // the slowest mode, but both runs see the same modes.
+  // channel. Two solutions agree only as well as their residuals allow: a
+  // residual r may leave up to r / (1 - 0.9975) in the slowest mode. With
+  // the 1e-5 of precompute_tables the blue ground light of the two was
+  // 4.6e-4 apart (5.0e-4 in the baseline x86-64 code, the sanitizer build),
+  // so the test solves to 1e-6: measured at most 3e-8, 3e-7 and 3.3e-5
+  // apart (red, green, blue; 1e-5 in the blue with x86-64-v3). Bound 1e-4.
   auto sums = [](const ScatteringTail& t) {
     glm::dvec3 ground(0.0), light(0.0);
     for (int x = 0; x < t.irradiance.width; ++x) ground += glm::dvec3(t.irradiance.texels[size_t(x)]);
@@ -250,8 +254,8 @@ TEST(Convergence, TailSolverRestartsAgree) {
   for (int c = 0; c < 3; ++c) {
     std::printf("channel %d: ground %+.1e, light %+.1e\n", c, ground_d[c] / ground_p[c] - 1.0,
                 light_d[c] / light_p[c] - 1.0);
-    EXPECT_NEAR(ground_d[c], ground_p[c], 5e-4 * ground_p[c]) << c;
-    EXPECT_NEAR(light_d[c], light_p[c], 5e-4 * light_p[c]) << c;
+    EXPECT_NEAR(ground_d[c], ground_p[c], 1e-4 * ground_p[c]) << c;
+    EXPECT_NEAR(light_d[c], light_p[c], 1e-4 * light_p[c]) << c;
   }
   // Cut short, and with degenerate sizes: finite, and the residual below 1.
   for (const auto& [iterations, restart, deflation] :

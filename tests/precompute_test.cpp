@@ -347,6 +347,42 @@ TEST_F(EarthSteps, MultipleScatteringFastPathEqualsTheSharedDefinition) {
   expect_multiple_scattering_matches_the_shared_definition(params_, *density1_, *multiple2_, 1e-7f, 9);
 }
 
+// The vectorised loops of the steps work on blocks of 8 texels of a row
+// (nu x mu_s columns) and of 8 output mu (the scattering density), padded at
+// the end: tables whose sizes are not multiples of 8 (15 columns, 10 mu rows)
+// must give every texel what the shared definitions give.
+TEST(OddTableSizes, FastPathsEqualTheSharedDefinitionsInEveryTexel) {
+  atmos::TableSizes sizes = small_sizes();
+  sizes.scattering_nu = 3;
+  sizes.scattering_mu_s = 5;
+  sizes.scattering_mu = 10;
+  sizes.scattering_r = 4;
+  const AtmosphereParams p = make_atmosphere_params(atmos::load_atmosphere("earth"), sizes, 0);
+  const Table2D transmittance = compute_transmittance_table(p);
+  Table3D rayleigh, aerosol;
+  compute_single_scattering_tables(p, transmittance, rayleigh, aerosol, nullptr);
+  ASSERT_EQ(rayleigh.width, 15);
+  const Table3D empty(rayleigh.width, rayleigh.height, rayleigh.depth);
+  const Table3D density =
+      compute_scattering_density_table(p, transmittance, rayleigh, aerosol, empty, Table2D(), 1, nullptr);
+  const Table3D multiple = compute_multiple_scattering_table(p, density, nullptr);
+  for (int z = 0; z < rayleigh.depth; ++z)
+    for (int y = 0; y < rayleigh.height; ++y)
+      for (int x = 0; x < rayleigh.width; ++x) {
+        float r, mu, mu_s, nu;
+        bool ground;
+        r_mu_mu_s_nu_from_scattering_texel(p, vec3(float(x), float(y), float(z)), r, mu, mu_s, nu, ground);
+        vec3 single_rayleigh, single_aerosol;
+        compute_single_scattering(p, transmittance.sampler(), r, mu, mu_s, nu, ground, single_rayleigh,
+                                  single_aerosol);
+        EXPECT_LT(relative(rayleigh.at(x, y, z), single_rayleigh, 1e-6f), 1e-4) << x << " " << y << " " << z;
+        EXPECT_LT(relative(aerosol.at(x, y, z), single_aerosol, 1e-6f), 1e-4) << x << " " << y << " " << z;
+        const vec3 direct = compute_multiple_scattering(p, density.sampler(), r, mu, mu_s, nu, ground);
+        EXPECT_LT(relative(multiple.at(x, y, z), direct, 1e-7f), 2e-3) << x << " " << y << " " << z;
+      }
+  expect_density_matches_the_sphere_quadrature(p, transmittance, rayleigh, aerosol, empty, Table2D(), 1, density, 13);
+}
+
 // Optically thick atmospheres read the source function between radius rows
 // with cubic Hermite weights (source_function_lookup in functions.glsl). The
 // CPU fast path precomputes them per view ray node; it must give what the

@@ -9,8 +9,9 @@
 // texel; tests check all of them against the straightforward forms in
 // functions.glsl. What the orders of a wavelength triple share (their view
 // rays' nodes, the density's quadrature) is computed once (OrderGeometry), and
-// the inner loops run on vectors of 4 floats (the three channels, or four
-// texels or points of the solar disc at a time).
+// the inner loops run on vectors of 4 floats (a texel's three channels) or
+// 8 (eight texels, view directions, harmonics or points of two solar discs
+// at a time), compiled for x86-64-v3 and the baseline (steps.cpp).
 #pragma once
 
 #include <functional>
