@@ -91,8 +91,8 @@ using v4i = int __attribute__((vector_size(16)));
 // Eight lanes: one AVX register in the x86-64-v3 copy of the kernels, two SSE
 // registers (the same instructions as two v4f) in the baseline copy. They
 // only pass between functions that are inlined (ATMOS_KERNEL_INLINE), so the
-// calling convention GCC warns about (-Wpsabi: passed in memory without AVX)
-// never applies.
+// calling convention GCC warns about (-Wpsabi: returned in memory without
+// AVX) never applies; parameters are references, which GCC does not note.
 #pragma GCC diagnostic ignored "-Wpsabi"
 using v8f = float __attribute__((vector_size(32)));
 using v8i = int __attribute__((vector_size(32)));
@@ -106,23 +106,23 @@ ATMOS_KERNEL_INLINE v8f load8(const float* p) {
   std::memcpy(&v, p, sizeof(v));
   return v;
 }
-ATMOS_KERNEL_INLINE void store8(float* p, v8f v) { std::memcpy(p, &v, sizeof(v)); }
+ATMOS_KERNEL_INLINE void store8(float* p, const v8f& v) { std::memcpy(p, &v, sizeof(v)); }
 // Per-lane max, min and clamp, as loops over the lanes: GCC vectorises these
 // for either copy (maxps / vmaxps), while its conditional ?: on eight lanes
 // becomes a branch per lane when AVX is not available (GCC 12: the baseline
 // copy of the sun transmittance ran at half the speed of the SSE code before).
-ATMOS_KERNEL_INLINE v8f max8(v8f a, float b) {
+ATMOS_KERNEL_INLINE v8f max8(const v8f& a, float b) {
   v8f r;
   for (int k = 0; k < 8; ++k) r[k] = a[k] < b ? b : a[k];
   return r;
 }
-ATMOS_KERNEL_INLINE v8f min8(v8f a, float b) {
+ATMOS_KERNEL_INLINE v8f min8(const v8f& a, float b) {
   v8f r;
   for (int k = 0; k < 8; ++k) r[k] = a[k] > b ? b : a[k];
   return r;
 }
-ATMOS_KERNEL_INLINE v8f clamp8(v8f x, float low, float high) { return min8(max8(x, low), high); }
-ATMOS_KERNEL_INLINE v8i min8(v8i a, int b) {
+ATMOS_KERNEL_INLINE v8f clamp8(const v8f& x, float low, float high) { return min8(max8(x, low), high); }
+ATMOS_KERNEL_INLINE v8i min8(const v8i& a, int b) {
   v8i r;
   for (int k = 0; k < 8; ++k) r[k] = a[k] > b ? b : a[k];
   return r;
@@ -151,7 +151,7 @@ class MuSCoordinate {
     return u_[size_t(i)] + (u_[size_t(i) + 1] - u_[size_t(i)]) * f;
   }
   // The same for eight cosines.
-  ATMOS_KERNEL_INLINE v8f operator()(v8f mu_s) const {
+  ATMOS_KERNEL_INLINE v8f operator()(const v8f& mu_s) const {
     v8f x = mu_s - low_;
     x = max8(x, 0.0f) * scale_;
     const v8i i = min8(__builtin_convertvector(x, v8i), kSamples - 1);
@@ -206,9 +206,8 @@ class GroundIrradiance {
 // nothing). The single scattering takes the exponential of the interpolated
 // optical depth once per texel, ray node and point of the solar disc, three
 // channels each: as three calls to expf it was a third of that step.
-ATMOS_KERNEL_INLINE v8f exp8(v8f x) {
-  const v8f argument = x;
-  x = clamp8(x, -87.3365447f, 88.3762626f);
+ATMOS_KERNEL_INLINE v8f exp8(const v8f& argument) {
+  v8f x = clamp8(argument, -87.3365447f, 88.3762626f);
   // n = floor(x / ln 2 + 1/2)
   const v8f fx = x * 1.44269504088896341f + 0.5f;
   v8f n = __builtin_convertvector(__builtin_convertvector(fx, v8i), v8f);
@@ -228,7 +227,7 @@ ATMOS_KERNEL_INLINE v8f exp8(v8f x) {
 }
 
 // sqrt per lane (-fno-math-errno: one vector square root).
-ATMOS_KERNEL_INLINE v8f sqrt8(v8f x) {
+ATMOS_KERNEL_INLINE v8f sqrt8(const v8f& x) {
   v8f r;
   for (int k = 0; k < 8; ++k) r[k] = std::sqrt(x[k]);
   return r;
@@ -382,7 +381,7 @@ class SunTransmittanceAtRadius {
 
   // exp(-τ) at eight zenith cosines mu (lanes), τ interpolated in the row as
   // texture() does; t[c] holds channel c.
-  ATMOS_KERNEL_INLINE void at8(v8f mu, std::array<v8f, 3>& t) const {
+  ATMOS_KERNEL_INLINE void at8(const v8f& mu, std::array<v8f, 3>& t) const {
     const v8f r_mu = r_ * mu;
     v8f discriminant = r_mu * r_mu + top_minus_r_times_top_plus_r_;
     discriminant = max8(discriminant, 0.0f);
