@@ -88,7 +88,6 @@ TexelColumns make_texel_columns(const AtmosphereParams& a) {
 }
 
 using v4f = float __attribute__((vector_size(16)));  // GCC/Clang vector extension: SSE on x86-64
-using v4i = int __attribute__((vector_size(16)));
 // Eight lanes: one AVX register in the x86-64-v3 copy of the kernels, two SSE
 // registers (the same instructions as two v4f) in the baseline copy. They
 // only pass between functions that are inlined (ATMOS_KERNEL_INLINE), so the
