@@ -211,7 +211,11 @@ ATMOS_KERNEL_INLINE v8f exp8(const v8f& argument) {
   // n = floor(x / ln 2 + 1/2)
   const v8f fx = x * 1.44269504088896341f + 0.5f;
   v8f n = __builtin_convertvector(__builtin_convertvector(fx, v8i), v8f);
-  for (int k = 0; k < 8; ++k) n[k] = n[k] > fx[k] ? n[k] - 1.0f : n[k];
+  // Truncation rounded a negative fx up: one less there. The comparison's
+  // lanes are -1 (true) or 0, added as floats: a vector compare and add, where
+  // the same select written as a loop over the lanes became a scalar loop
+  // through memory (GCC 12), whose stores the polynomial then waited for.
+  n += __builtin_convertvector(n > fx, v8f);
   x = x - n * 0.693359375f + n * 2.12194440e-4f;
   v8f y = splat8(1.9875691500e-4f);
   y = y * x + 1.3981999507e-3f;
