@@ -1309,8 +1309,8 @@ INLINE vec4 source_mu_s_weights(IN(AtmosphereParams) atmosphere, float t) {
   return mix(vec4(0.0f, 1.0f - t, t, 0.0f), cubic, atmosphere.scattering_mu_log_weight);
 }
 
-// Whether the cubic applies to the interval between mu_s columns i and i + 1:
-// a thick atmosphere, and columns i - 1 and i + 2 exist.
+// Whether the column interval i (between columns i and i + 1) of a table of
+// `columns` mu_s columns has the columns i - 1 and i + 2 that the cubic reads.
 INLINE bool source_mu_s_cubic(IN(AtmosphereParams) atmosphere, int i) {
   return atmosphere.scattering_mu_log_weight > 0.0f && i >= 1 && i + 2 <= atmosphere.scattering_mu_s_size - 1;
 }
