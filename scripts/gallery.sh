@@ -39,7 +39,7 @@ done
 # sunset's exposure saturates it).
 (cd "$out/mars" && "$atmos" render --planet mars --wavelengths 15 --orders auto --altitude 2 --look 270,6 --fov 60 \
   --sun-azimuth 270 --sun-elevation 3 --exposure 13 --tonemap filmic --size 960x540 -o blue-sunset.png)
-# Under Venus' clouds: the surface sky at EV 8 (0.89-0.975 of the
+# Under Venus' clouds: the surface sky at EV 8 (0.96-1.01 of the
 # references' light on the ground at 550 nm: see README, Planets).
 (cd "$out/venus" && "$atmos" render --planet venus --wavelengths 15 --orders auto --sun-elevation 40 --look 180,10 \
   --exposure 8 -o surface.png -o surface.exr)

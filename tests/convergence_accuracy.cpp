@@ -145,9 +145,6 @@ TEST(ConvergenceAccuracy, VenusTailEqualsSixHundredOrders) {
   // the old linear interpolation in u_r put too much source just above the
   // ground and brought the light down sooner (1.55 of the plane-parallel
   // reference's ground light at default sizes, tests/venus_accuracy.cpp).
-  // Since the source is read along mu_s with cubic weights (functions.glsl
-  // source_mu_s_lookup; 2026-11-27): red -2.6e-5 and -6.3e-7, green -1.8 %
-  // and -6.0e-4, 97 solver steps; the blue's ratio at order 600 1.0021.
   for (int c = 0; c < 3; ++c) {
     const double ground = explicit_ground[c] + remainder[c];
     const double total_light = light[c] + light_remainder[c];
@@ -165,8 +162,7 @@ TEST(ConvergenceAccuracy, VenusTailEqualsSixHundredOrders) {
   // computed here, outside the solver, in double from the float tables.
   // Measured (2026-11-27): 3.7e-5, 3.7e-5, 3.0e-5 at 680, 550, 440 nm, 114
   // steps (the solver's own recurrence says 4.7e-9, 2.5e-7, 9.8e-6: what is
-  // left is the rounding of the float tables); with the cubic mu_s weights
-  // 3.6e-5, 4.2e-5, 2.9e-5 in 97 steps. Bound: 1e-4.
+  // left is the rounding of the float tables). Bound: 1e-4.
   const ScatteringTail tail = solve_scattering_tail(a, *geometry, transmittance, radiance_17, irradiance_17, 1e-5,
                                                     300, 30, 10, nullptr);
   const Table3D unused;

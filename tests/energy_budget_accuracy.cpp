@@ -401,9 +401,7 @@ std::vector<OrderBudget>* VenusBudget::budgets_ = nullptr;
 // The density step keeps the light of each order from order 3 on (measured:
 // within 0.06 %), and the transport keeps each order's light within a
 // thousandth from order 8 on (measured: +0.013, -0.020, -0.037, -0.046,
-// -0.051 % lost of orders 8-12; since the source is also read along mu_s
-// with cubic weights, 2026-11-27, source_mu_s_lookup: +0.016, -0.016,
-// -0.032, -0.041, -0.045 %; with the linear interpolation between rows
+// -0.051 % lost of orders 8-12; with the linear interpolation between rows
 // before 2026-11-26 it lost 0.23 % of order 8 and 0.17 % of order 12). The
 // bounds: the density step within 0.2 %, the transport within 0.1 %.
 TEST_F(VenusBudget, OrdersKeepTheirLightWithinAThousandthInTheTransport) {
@@ -413,8 +411,7 @@ TEST_F(VenusBudget, OrdersKeepTheirLightWithinAThousandthInTheTransport) {
 
 // With 64 radius rows instead of 32 the transport keeps the light of orders
 // 6-10 within 0.2 % too (measured: it loses 0.139, 0.085, 0.054, 0.035 and
-// 0.023 %; with the cubic mu_s weights 0.138, 0.084, 0.054, 0.035 and
-// 0.024 %; with the linear interpolation, 0.098 % of order 10 instead of
+// 0.023 %; with the linear interpolation, 0.098 % of order 10 instead of
 // 0.188 % with 32 rows).
 TEST_F(VenusBudget, TransportKeepsTheLightWithMoreRadiusRowsToo) {
   atmos::TableSizes fine;

@@ -439,43 +439,6 @@ TEST(DenseAtmosphere, SourceRowWeightsReproduceLinearSources) {
   EXPECT_EQ(thin, vec4(0.0f, 0.75f, 0.25f, 0.0f));
 }
 
-// The mu_s weights of the thick-atmosphere source (source_mu_s_weights):
-// they add up to 1, reproduce quadratics in the column coordinate exactly (so a
-// uniform or linear source is transported unchanged), end on the columns
-// themselves, are texture()'s linear weights for thin atmospheres and in the
-// end intervals, and undershoot an exponential fall of rho = 1 per column by
-// about 2.5 % where linear weights overshoot it by 13 %.
-TEST(DenseAtmosphere, SourceMuSWeightsAreCubic) {
-  const AtmosphereParams p = make_atmosphere_params(atmos::load_atmosphere("venus"), atmos::TableSizes{}, 0);
-  ASSERT_EQ(p.scattering_mu_log_weight, 1.0f);
-  for (float t : {0.0f, 0.25f, 0.5f, 0.9f, 1.0f}) {
-    const vec4 w = source_mu_s_weights(p, t);
-    EXPECT_NEAR(w.x + w.y + w.z + w.w, 1.0f, 1e-6f) << t;
-    // Columns at x = -1, 0, 1, 2; the value at x = t.
-    for (int power = 1; power <= 2; ++power) {
-      auto f = [&](float x) { return std::pow(x + 1.5f, float(power)); };
-      EXPECT_NEAR(w.x * f(-1.0f) + w.y * f(0.0f) + w.z * f(1.0f) + w.w * f(2.0f), f(t), 1e-4f * f(2.0f))
-          << t << " " << power;
-    }
-  }
-  EXPECT_EQ(source_mu_s_weights(p, 0.0f), vec4(0.0f, 1.0f, 0.0f, 0.0f));
-  EXPECT_EQ(source_mu_s_weights(p, 1.0f), vec4(0.0f, 0.0f, 1.0f, 0.0f));
-  const vec4 half = source_mu_s_weights(p, 0.5f);
-  const float exact = std::exp(0.5f);
-  const float cubic = half.x * std::exp(-1.0f) + half.y + half.z * std::exp(1.0f) + half.w * std::exp(2.0f);
-  EXPECT_NEAR(cubic / exact, 0.975f, 0.002f);
-  EXPECT_NEAR(0.5f * (1.0f + std::exp(1.0f)) / exact, 1.128f, 0.001f);  // linear
-  // Only inner intervals, and only in thick atmospheres.
-  const int n = p.scattering_mu_s_size;
-  EXPECT_FALSE(source_mu_s_cubic(p, 0));
-  EXPECT_TRUE(source_mu_s_cubic(p, 1));
-  EXPECT_TRUE(source_mu_s_cubic(p, n - 3));
-  EXPECT_FALSE(source_mu_s_cubic(p, n - 2));
-  const AtmosphereParams earth = make_atmosphere_params(atmos::load_atmosphere("earth"), atmos::TableSizes{}, 0);
-  EXPECT_FALSE(source_mu_s_cubic(earth, n / 2));
-  EXPECT_EQ(source_mu_s_weights(earth, 0.25f), vec4(0.0f, 0.75f, 0.25f, 0.0f));
-}
-
 void expect_finite(const std::vector<vec3>& texels, const char* name) {
   for (const auto& t : texels)
     ASSERT_TRUE(std::isfinite(t.x) && std::isfinite(t.y) && std::isfinite(t.z) && t.x >= 0 && t.y >= 0 && t.z >= 0)

@@ -1275,61 +1275,6 @@ INLINE vec3 source_floor(vec3 bracket0, vec3 bracket1) {
   return lower * vec3(greaterThan(upper, SOURCE_FLOOR_RATIO * lower));
 }
 
-// Along mu_s, the source of optically thick atmospheres is read from four
-// texel columns with Catmull-Rom weights instead of texture()'s two linear
-// ones. Where the sun sets, the source falls by a factor of several from one
-// mu_s column to the next (Venus, 550 nm: about 3.6 per degree of sun
-// elevation at -3°, columns about 1° apart there), and the chord between two
-// columns lies above such a convex fall: by cosh(rho / 2) - 1 for a source
-// exp(rho x) in the column coordinate x, 13 % at rho = 1. Each order's
-// transport reads the previous order there, so in a nearly conservative
-// atmosphere, whose light takes hundreds of orders to diffuse into the
-// night, the excess compounds. Measured on Venus (three wavelengths, the sky
-// light on the ground at 550 nm, 2026-11-27) against a table of 256
-// columns: with linear weights, 32 columns gave 1.04 / 1.07 / 1.38 / 3.3 /
-// 7.2 / 17 times its light with the sun at 20 / 5 / 0 / -2 / -3 / -4°, 64
-// columns 1.015 / 1.03 / 1.15 / 2.0 / 3.4 / 5.9, 128 columns 1.005 / 1.01 /
-// 1.04 / 1.35 / 1.7 / 2.2 — converging slowly, so the 256-column table is
-// still too bright at dusk itself. With these weights, 32 columns: 1.000 /
-// 0.997 / 0.98 / 0.88 / 0.69 / 0.38, and nothing left from -6° (about 1e-5 of
-// the light at noon there in the 256-column table): negative lobes next to
-// the steep fall, clamped in each explicit order.
-// Catmull-Rom is exact for quadratics and off by -2.5 % at rho = 1 (it
-// undershoots: the four weights add up to 1 but two are negative); its
-// weights are fixed, so the tail solver's operator stays linear. Blended with
-// the linear weights by the thickness weight scattering_mu_log_weight (0:
-// texture() exactly, thin atmospheres unchanged); linear in the first and
-// the last two intervals, which have no column beyond them. Weights of
-// columns i - 1 .. i + 2 at fraction t between columns i and i + 1.
-INLINE vec4 source_mu_s_weights(IN(AtmosphereParams) atmosphere, float t) {
-  float t2 = t * t;
-  float t3 = t2 * t;
-  vec4 cubic = vec4(-0.5f * t3 + t2 - 0.5f * t, 1.5f * t3 - 2.5f * t2 + 1.0f, -1.5f * t3 + 2.0f * t2 + 0.5f * t,
-                    0.5f * t3 - 0.5f * t2);
-  return mix(vec4(0.0f, 1.0f - t, t, 0.0f), cubic, atmosphere.scattering_mu_log_weight);
-}
-
-// Whether the column interval i (between columns i and i + 1) of a table of
-// `columns` mu_s columns has the columns i - 1 and i + 2 that the cubic reads.
-INLINE bool source_mu_s_cubic(IN(AtmosphereParams) atmosphere, int i) {
-  return atmosphere.scattering_mu_log_weight > 0.0f && i >= 1 && i + 2 <= atmosphere.scattering_mu_s_size - 1;
-}
-
-// scattering_lookup_uvwz() with source_mu_s_weights along mu_s.
-INLINE vec3 source_mu_s_lookup(IN(AtmosphereParams) atmosphere, IN(sampler3D) density_texture, vec4 uvwz, float nu) {
-  int n = atmosphere.scattering_mu_s_size;
-  float x = uvwz.y * float(n) - 0.5f;
-  int i = int(floor(x));
-  if (!source_mu_s_cubic(atmosphere, i)) return scattering_lookup_uvwz(atmosphere, density_texture, uvwz, nu);
-  vec4 weights = source_mu_s_weights(atmosphere, x - float(i));
-  vec3 result = vec3(0.0f);
-  for (int j = 0; j < 4; ++j)
-    result += weights[j] * scattering_lookup_uvwz(atmosphere, density_texture,
-                                                  vec4(uvwz.x, (float(i - 1 + j) + 0.5f) / float(n), uvwz.z, uvwz.w),
-                                                  nu);
-  return result;
-}
-
 // The source function of `density_texture` at (r, mu, mu_s, nu) as the
 // multiple scattering of the explicit orders reads it (see above). The CPU
 // precomputation computes the same weights once per view ray node
@@ -1341,7 +1286,7 @@ INLINE vec3 source_function_lookup(IN(AtmosphereParams) atmosphere, IN(sampler3D
   float f;
   source_row_tap(atmosphere, uvwz.w, z0, f);
   if (atmosphere.scattering_mu_log_weight == 0.0f || z0 < 0 || z0 >= atmosphere.scattering_r_size - 1)
-    return source_mu_s_lookup(atmosphere, density_texture, uvwz, nu);
+    return scattering_lookup_uvwz(atmosphere, density_texture, uvwz, nu);
   float c_prev = z0 > 0 ? source_row_coordinate(atmosphere, z0 - 1) : 0.0f;
   float c_next = z0 + 2 < atmosphere.scattering_r_size ? source_row_coordinate(atmosphere, z0 + 2) : 0.0f;
   vec4 weights = source_row_weights(atmosphere, z0, f, source_r_coordinate(atmosphere, r), c_prev,
@@ -1350,8 +1295,8 @@ INLINE vec3 source_function_lookup(IN(AtmosphereParams) atmosphere, IN(sampler3D
   vec3 result = vec3(0.0f);
   vec3 bracket[2];
   for (int j = 0; j < 4; ++j) {
-    vec3 value = source_mu_s_lookup(atmosphere, density_texture,
-                                    vec4(uvwz.x, uvwz.y, uvwz.z, scattering_row_u_r(atmosphere, z0 - 1 + j)), nu);
+    vec3 value = scattering_lookup_uvwz(atmosphere, density_texture,
+                                        vec4(uvwz.x, uvwz.y, uvwz.z, scattering_row_u_r(atmosphere, z0 - 1 + j)), nu);
     if (j == 1 || j == 2) bracket[j - 1] = value;
     if (weights[j] != 0.0f) result += weights[j] * value;
   }

@@ -1248,9 +1248,6 @@ void compute_multiple_scattering_table(const AtmosphereParams& a, const OrderGeo
   const TexelColumns columns = make_texel_columns(a);
   // The texel coordinate within a nu tile, in [0, mu_s_size - 1].
   const MuSCoordinate texel_of_mu_s(a, float(mu_s_size - 1));
-  // Optically thick: the source is read along mu_s with cubic weights where
-  // it can be (source_mu_s_lookup in functions.glsl).
-  const bool thick = a.scattering_mu_log_weight > 0.0f;
   // The texels in blocks of 8 (vectors of 8 lanes for the per-texel
   // coordinates); the last block is padded with columns of mu_s = nu = 1 in
   // the first nu tile, whose sums stay in `sum` (never stored).
@@ -1296,14 +1293,6 @@ void compute_multiple_scattering_table(const AtmosphereParams& a, const OrderGeo
           const size_t x = size_t(b * 8 + lane);
           const v4f* lower = values + tile_start[x] + k[lane];
           const v4f* upper = lower + mu_s_size;
-          if (thick && source_mu_s_cubic(a, k[lane])) {
-            // Optically thick: four mu_s columns (source_mu_s_lookup).
-            const vec4 w = source_mu_s_weights(a, f[lane]);
-            const v4f below = lower[-1] * w.x + lower[0] * w.y + lower[1] * w.z + lower[2] * w.w;
-            const v4f above = upper[-1] * w.x + upper[0] * w.y + upper[1] * w.z + upper[2] * w.w;
-            sum[x] += weight * (below * (1.0f - l[lane]) + above * l[lane]);
-            continue;
-          }
           const v4f value = lower[0] * w00[lane] + lower[1] * w10[lane] + upper[0] * w01[lane] + upper[1] * w11[lane];
           sum[x] += weight * value;
         }
