@@ -14,7 +14,7 @@ mkdir -p "$out/earth" "$out/mars" "$out/venus" "$out/titan"
 # 0.1 % (Earth 14, Mars 11; Titan and Venus are foreseen to reach the cap of 64
 # and solve the rest at once from order 16). About 14 minutes on 2 cores with
 # an empty table cache (2026-11-26), most of it Titan's and Venus's
-# precomputation (Venus alone about 7 minutes; cached afterwards).
+# precomputation (Venus alone 4-7 minutes; cached afterwards).
 for planet in earth mars titan venus; do
   (cd "$out/$planet" && "$atmos" render --planet "$planet" --wavelengths 15 --orders auto)
 done
