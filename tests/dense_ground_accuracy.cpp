@@ -8,21 +8,16 @@
 // is 1e-11 of it.
 //
 // What it guards: the tables must converge to the reference as their radius
-// texels are refined. Before the multiple scattering's nodes in thick
-// atmospheres were uniform in optical depth over the first optical depths
-// of each view ray (functions.glsl, source_integration_nodes) they did not:
-// 0.84 of the Monte Carlo reference with 32 radius texels and 0.74 with 64
-// (0.71 with 128, extrapolated) — the source function grows towards the
-// sunlit top of a ray looking up, where the old nodes were sparse. Then
-// (2026-11-24, against the 20000-path Monte Carlo run): 1.16 with 32, 1.04
-// with 64 and 1.015 with 128 texels, the excess at 32 texels being the
-// linear interpolation between radius texels (in u_r, which near the
-// ground follows the square root of the altitude) of a sky light that
-// rises steeply from the ground.
-// Measured (2026-11-26, the source read between radius rows with cubic
-// weights, functions.glsl source_function_lookup): 1.046 of the
-// plane-parallel reference with 32 radius texels (the default), 0.999 with
-// 64.
+// texels are refined. Two parts of the multiple scattering make them do so
+// in thick atmospheres (functions.glsl): the nodes along each view ray are
+// uniform in optical depth over its first optical depths
+// (source_integration_nodes), because the source function grows towards the
+// sunlit top of a ray looking up; and the source is read between radius rows
+// with cubic weights in the optical depth (source_function_lookup), because
+// near the ground the texture coordinate follows the square root of the
+// altitude, and a source linear in it rises too steeply above the ground.
+// Measured: ~1.05 of the reference with 32 radius texels (the default), 1.00
+// with 64.
 // Tolerances: 64 texels within 3 %, 32 texels within [0.95, 1.10], and 64
 // closer to the reference than 32.
 #include <gtest/gtest.h>
@@ -33,6 +28,7 @@
 #include "atmos/reference.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "figures.hpp"
 
 namespace {
 
@@ -68,6 +64,9 @@ TEST(DenseGroundAccuracy, HundredTimesEarthConvergesToTheReferenceWithRadiusTexe
   std::printf("100x Earth, 680 nm, sun 40 deg: ground / top %.4e (32 radius texels), %.4e (64), %.4e "
               "(plane-parallel reference): %.3f, %.3f\n",
               coarse, fine, truth, coarse / truth, fine / truth);
+  atmos_test::record_figure("ground light / sunlight, plane-parallel reference", truth, "", "");
+  atmos_test::record_figure("ground light, tables / reference, 32 radius texels", coarse / truth, "", "[0.95, 1.10]");
+  atmos_test::record_figure("ground light, tables / reference, 64 radius texels", fine / truth, "", "[0.97, 1.03]");
   EXPECT_NEAR(fine / truth, 1.0, 0.03);
   EXPECT_GT(coarse, 0.95 * truth);
   EXPECT_LT(coarse, 1.10 * truth);

@@ -1,11 +1,10 @@
-// The energy budget of the precomputation, one scattering order at a time
-// (issue 3). tests/energy_accuracy.cpp measures the end result: a
-// conservative Venus over a white ground sends 0.90 of the sunlight back to
-// space where the brute-force reference sends ~0.98. This file finds where
-// the rest goes, with no reference at all: in a medium that only scatters,
-// over a black ground, every watt that order n emits must be either removed
-// from its light by the medium again (and so emitted by order n + 1) or leave
-// the atmosphere through its top or into the ground.
+// The energy budget of the precomputation, one scattering order at a time.
+// tests/energy_accuracy.cpp measures the end result against the reference
+// (a conservative Venus over a white ground); this file finds where an
+// order's light goes, with no reference at all: in a medium that only
+// scatters, over a black ground, every watt that order n emits must be either
+// removed from its light by the medium again (and so emitted by order n + 1)
+// or leave the atmosphere through its top or into the ground.
 //
 // For order n, integrated over the whole atmosphere (all radii, all sun
 // zenith cosines down to the tables' mu_s_min, all directions):
@@ -14,132 +13,26 @@
 //    n = 1: the sunlight the medium scatters, ∫ beta_s T_sun E_sun dV);
 //  - removed: ∫ beta_ext ∫ L_n dw dV, with L_n the radiance of the order
 //    from the tables (incident_radiance in functions.glsl);
-//  - escaped: the flux of L_n out through the top and into the ground.
+//  - escaped: the flux of L_n out through the top (looking down below the
+//    horizon and, through the limb, between the horizon and 90°) and into
+//    the ground.
 // Two steps can lose or create light: the density step (order n's removed
 // light against order n + 1's emitted light) and the transport, the
 // multiple scattering step (emitted - removed - escaped).
 //
-// Since 2026-11-26 the multiple scattering step reads the source function
-// between radius rows with cubic weights in optical depth
-// (functions.glsl source_function_lookup). Measured then (this file's
-// quadrature, which reads the tables linearly in r, so what it calls the
-// transport's loss now includes the difference between the two
-// interpolations): the transport loses 2.1 / 1.5 / 0.8 % of orders 2 / 3 /
-// 4, 0.013 % of order 8 and then creates a little, 0.05 % of order 12;
-// with 64 radius rows it loses 0.14 % of order 6 and 0.023 % of order 10.
-// End to end (energy_accuracy.cpp) the white-ground Venus now returns
-// 1.006 of the sunlight against the reference's 0.98: the orders are
-// nearly balanced, slightly on the side of creating light. Everything below
-// about losses of 0.2 % per order, row by row or shell by shell, measured
-// the linear interpolation that the cubic replaced.
-//
-// Measured, Venus with nothing absorbing at 550 nm, default sizes (linear
-// interpolation between rows, before 2026-11-26):
-//  - the density step keeps the light within 0.06 % from order 3 on; from
-//    order 1 to 2 it adds 4.1 % (the 8 nu tiles cannot hold the forward
-//    lobe of order 2: 0.2 % with 16 tiles);
-//  - the transport loses 3.2, 1.7, 0.9 % of orders 2, 3, 4, then 0.19 % of
-//    order 10 and 0.17 % of order 12 (and, measured before the light that
-//    leaves through the limb was counted, see below: 0.15 % of order 20 and
-//    0.12 % of order 30; orders 1-30 together 5 % of the light that enters;
-//    energy_accuracy.cpp's white-ground Venus misses about a tenth in the
-//    end).
-// Until 2026-11-24 the light escaping at the top was counted looking down
-// below the horizon only, which leaves out the light that leaves through the
-// limb (looking down between the horizon and 90°): that overstated the
-// transport's loss by 0.32 % of order 2 and 0.06 % of order 10 (0.245 %
-// instead of 0.188 %). The numbers of orders beyond 12, of 48 rows and of
-// the white ground below were taken that way and are too high by about as
-// much.
-// Where: split into the shells between radius rows (a variant of this code,
-// not kept), the budget of order 12 balances in the gas and fails in the
-// cloud, where the rows are 2-3.4 optical depths apart (47-70 km): light is
-// missing in the shells around the peak of the order's light (59-70 km,
-// +0.2 % of it per shell) and created in the shells below and above it
-// (-0.1 %); that is the linear interpolation in r of a source function that
-// curves over a row spacing.
-// With 64 rows instead of 32 the transport loses 0.10 % of order 10 (0.07 %
-// of order 30, without the limb), and the white-ground Venus of energy_accuracy.cpp
-// returns 0.94 of the sunlight at 550 nm. With 48 rows it returns 0.88,
-// although its orders 1-10 lose less than with 32 (0.23 % of order 10;
-// together 2.2 % of the light in, against 3.2 % with 32 and 0.6 % with 64);
-// why is not understood (the budget of the later orders below was taken
-// with 32 rows only). 128 rows were not measured. Twice the mu or mu_s
-// texels change the losses by less than 2 %; 16 nu tiles instead of 8 lower
-// them by 10-30 % at orders 2-5 and not at all from order 10 on.
-// Two higher-order interpolations in r were tried in the transport and made
-// the white-ground Venus worse, not better (550 nm): Catmull-Rom on the rows
-// (0.47 of the sunlight returned), and a Catmull-Rom profile of each
-// (nu, mu_s) column times the linear interpolation of the rest (0.85). Why
-// is not understood either. (A Hermite cubic in the optical depth, with a
-// floor where the source changes tenfold between rows, is what the tables
-// use since 2026-11-26, see above: 1.006. Those two attempts' code is gone;
-// Catmull-Rom in u_r, tried again the same day, gave Venus's reflected
-// light within 1 % of the plane-parallel reference, so the 0.47 was
-// presumably a defect of that implementation.)
-// Row by row (measured by the last test below, until 2026-11-26): the transport is linear in the source,
-// so it keeps every source's light exactly if and only if it keeps the light
-// of each radius row's own basis function, a unit isotropic source on that
-// row that falls linearly (in the r texture coordinate) to 0 at the rows
-// next to it. Measured, one transport step: the rows of the cloud deck
-// (48-66 km) lose up to 1.4 % of their light or create up to 0.7 %, the
-// sign alternating from row to row; the two rows around the cloud base (39 and 46 km, where
-// the extinction grows by orders of magnitude within one shell) create
-// 16.6 % and lose 11.1 %; smooth sources lose 0.04-0.22 % of theirs
-// (uniform, a sine over the first 40 optical depths, e^(-tau/5)). (The
-// ground row, -10 %, and the two top rows, -8 and +28 % of a source in 0.01
-// optical depths, are at the ends of this quadrature and hold almost no
-// light; below the cloud, the row at 33 km creates 3.9 %, the gas rows under
-// it keep their light within 2 %.) So the
-// loss is a defect of the discrete transport, row by row, not of a source
-// that curves. Correcting it was tried (2026-11-25, not kept): one factor
-// per row and channel, computed once from the operator alone (the transport
-// of each row's basis function, its light removed and escaped by a
-// quadrature of 8 Gauss nodes per shell), scaling the density rows in the
-// multiple scattering step. The rows then keep their light within 0.1 %
-// (the cloud base within 1 %) and the smooth sources within 0.003-0.012 %,
-// but now creating light, and over a white ground the series, which loses
-// only a few ten-thousandths per order there, turned that into gain: out /
-// in 1.02 / 1.25 / 0.91 (680 / 550 / 440 nm) instead of 0.900 / 0.898 /
-// 0.895 (energy_accuracy.cpp, re-read the same day). A correction
-// of the slowest orders has to be exact to about 1e-4 of their light.
-// Combined with a balance of the solved tail, it closed the budget (tried
-// the same day, not kept yet): the row factors only in the explicit orders
-// (and order K + 1, the tail's right-hand side), not in the tail solver's
-// operator, and the tail (orders > K, its radiance and its ground
-// irradiance beyond order K's) scaled by one factor per channel so that
-// what order K + 1 emits (∫ beta_ext S dV dω of its density) equals what the
-// tail's light loses to absorption (extinct - scattered) and lets out
-// through the top and, net of the ground's reflection, into the ground, the
-// ground's reflection of order K's irradiance counted as given (both by
-// OrderEnergyBalance's quadrature). The tail factors came out at 1.05-1.07 over
-// the white ground and 1.05-1.09 on the real Venus. Measured, default
-// sizes: the white-ground Venus returned 0.983 / 0.983 / 0.984 (the
-// reference 0.98 +- 0.01; the tail balance alone 0.916, the row factors
-// alone 0.91-1.25); the real Venus (tests/venus_accuracy.cpp, against the
-// reference means) reflected 0.98 of the reference's light to space instead
-// of 0.90, but its ground got 1.13-1.15 instead of 0.97-0.98 (row factors
-// alone 1.04-1.06 and 0.96 reflected; the tail balance alone 1.06 and
-// 0.92). So the lossy transport had hidden an excess of light through the
-// cloud to the ground, of the kind Bruneton's r axis showed (1.14-1.20).
-// That excess is not the reference's truncation (the same seed with K =
-// 8000 instead of 2000 gives 0.45 % more light on the ground), nor the
-// cloud base's factors (left at 1 below 47 km: 1.12-1.15), nor the mu axis
-// (256 texels: 1.11-1.15); 64 radius rows gave 1.10-1.17 (reflected 0.99),
-// 16 nu tiles 1.10-1.12 (reflected 0.96).
-// The same budget over a white ground (a variant of this code, not kept),
-// 150 explicit orders: almost no light reaches the ground before order 70,
-// the irradiance table then gives the ground 0.26 % more than the flux of
-// the radiance it comes from, and the transport keeps losing 0.05 % of
-// order 150. Orders 1-150 lose 7.6 % of the light that enters; order 150
-// still carries a fifth of order 1's light, and the geometric rest of the
-// series (0.4 % less per order) loses about 2 % more. That is about the
-// whole deficit of energy_accuracy.cpp's white-ground Venus (0.895 of the
-// sunlight returned above the subsolar point, against ~0.98).
-// The energy balance of the orders (src/precompute/energy_balance.cpp,
-// PrecomputeOptions::balance_orders) rescales each order's source so that
-// the orders keep this budget; the last test below checks it against this
-// file's quadrature.
+// Why a thousandth per order matters: Venus's cloud scatters light hundreds
+// of times, so a step that loses 0.2 % of every order (as a linear
+// interpolation in r of a source that curves over a row spacing does in the
+// cloud, where the radius rows are 2-3.4 optical depths apart) returns about
+// a tenth less light to space in the end. The multiple scattering step reads
+// the source between radius rows with cubic weights in the optical depth
+// (functions.glsl source_function_lookup). This file's quadrature reads the
+// tables linearly in r, so what it calls the transport's loss includes the
+// difference between the two interpolations: a few per cent in the first
+// orders (2.1 / 1.5 / 0.8 % of orders 2 / 3 / 4), whose source changes most
+// between rows, and hundredths of a per cent from order 8 on. The density
+// step adds ~4 % from order 1 to 2 (its 8 nu tiles cannot hold the forward
+// lobe of order 2) and keeps the light within 0.06 % from order 3 on.
 //
 // The quadrature of this test is not the tables': radii by the midpoint rule
 // in a coordinate that is half optical depth, half altitude (200 nodes);
@@ -165,6 +58,7 @@
 #include "physics/parameters.hpp"
 #include "precompute/energy_balance.hpp"
 #include "precompute/steps.hpp"
+#include "figures.hpp"
 
 namespace {
 
@@ -370,6 +264,12 @@ std::vector<OrderBudget> order_budgets(const atmos::Atmosphere& atmosphere, cons
       std::printf(", the density step adds %+.4f %%, both %+.4f %%", 100.0 * b.density_gain(),
                   100.0 * b.order_gain());
     std::printf("\n");
+    atmos_test::record_figure("transport loss, order " + std::to_string(n), 100.0 * b.transport_loss(), "%", "");
+    if (n < orders) {
+      atmos_test::record_figure("density step gain, order " + std::to_string(n), 100.0 * b.density_gain(), "%",
+                                "");
+      atmos_test::record_figure("order gain, order " + std::to_string(n), 100.0 * b.order_gain(), "%", "");
+    }
   }
   return budgets;
 }
@@ -400,19 +300,16 @@ std::vector<OrderBudget>* VenusBudget::budgets_ = nullptr;
 
 // The density step keeps the light of each order from order 3 on (measured:
 // within 0.06 %), and the transport keeps each order's light within a
-// thousandth from order 8 on (measured: +0.013, -0.020, -0.037, -0.046,
-// -0.051 % lost of orders 8-12; with the linear interpolation between rows
-// before 2026-11-26 it lost 0.23 % of order 8 and 0.17 % of order 12). The
-// bounds: the density step within 0.2 %, the transport within 0.1 %.
+// thousandth from order 8 on (measured: within 0.06 %). The bounds: the
+// density step within 0.2 %, the transport within 0.1 %.
 TEST_F(VenusBudget, OrdersKeepTheirLightWithinAThousandthInTheTransport) {
   for (int n = 3; n < 12; ++n) EXPECT_NEAR(order(n).density_gain(), 0.0, 0.002) << n;
   for (int n = 8; n <= 12; ++n) EXPECT_NEAR(order(n).transport_loss(), 0.0, 0.001) << n;
 }
 
 // With 64 radius rows instead of 32 the transport keeps the light of orders
-// 6-10 within 0.2 % too (measured: it loses 0.139, 0.085, 0.054, 0.035 and
-// 0.023 %; with the linear interpolation, 0.098 % of order 10 instead of
-// 0.188 % with 32 rows).
+// 6-10 within 0.2 % too (measured: it loses 0.14 % of order 6, falling to
+// 0.02 % of order 10).
 TEST_F(VenusBudget, TransportKeepsTheLightWithMoreRadiusRowsToo) {
   atmos::TableSizes fine;
   fine.scattering_r = 2 * fine.scattering_r;
@@ -479,17 +376,14 @@ std::vector<double> transport_losses(const AtmosphereParams& a, const OrderGeome
   return losses;
 }
 
-// Smooth sources transported once (see the header), at the default sizes
-// and 550 nm. Measured: uniform +0.068 %, a sine over the first 40 optical
-// depths -0.013 %, exp(-tau / 5) +0.58 % lost (with the linear
-// interpolation between rows before 2026-11-26: 0.068, 0.037, 0.22 %; the
-// quadrature here reads the tables linearly in r, which the steep
-// exponential's cubic source is not). Bounds: within [-0.1, 1] %. The
-// transport of each radius row's own unit source, which this test measured
-// for the linear interpolation's hat functions (up to 1.4 % lost or created
-// in the cloud deck, 11-17 % at the cloud base), has no meaning for the
-// cubic weights: an isolated row's source is where the floor of
-// source_function_lookup acts.
+// Smooth sources transported once, at the default sizes and 550 nm: a
+// uniform one, a sine over the first 40 optical depths and exp(-tau / 5).
+// The transport is linear in the source, so these bound what it does to any
+// smooth source. Measured: within 0.07 % for the first two, 0.6 % lost for
+// the steep exponential (the quadrature here reads the tables linearly in r,
+// which the exponential's cubic source is not). Bounds: within [-0.1, 1] %.
+// An isolated radius row's unit source is not a meaningful test of the cubic
+// weights: it is where the floor of source_function_lookup acts.
 TEST(VenusRowTransport, SmoothSourcesKeepTheirLightWithinAPercent) {
   const AtmosphereParams a = physics::make_atmosphere_params(conservative_venus(), atmos::TableSizes{}, 0);
   const BudgetQuadrature q(a);
@@ -516,6 +410,8 @@ TEST(VenusRowTransport, SmoothSourcesKeepTheirLightWithinAPercent) {
   const char* names[] = {"uniform", "sine over 40 optical depths", "exp(-tau / 5)"};
   for (int c = 0; c < 3; ++c) {
     std::printf("%s source: the transport loses %+.3f %%\n", names[c], 100.0 * smooth[size_t(c)]);
+    atmos_test::record_figure(std::string("transport loss, ") + names[c] + " source", 100.0 * smooth[size_t(c)], "%",
+                              "[-0.1, 1] %");
     EXPECT_GT(smooth[size_t(c)], -1e-3) << names[c];
     EXPECT_LT(smooth[size_t(c)], 1e-2) << names[c];
   }

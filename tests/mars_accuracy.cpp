@@ -10,10 +10,7 @@
 //   sun 60°:  6.6 % /  9.2 %  (18 %)
 //   sun 10°: 20.7 % /  8.4 %  (31 %)
 //   sun  2°: 26.7 % / 10.4 %  (39 %)
-// Before (one delta-M truncation in the density only, with the single
-// scattering's sharp aureole in its expansion, nu tiles uniform in nu):
-// 22/42 %, 99/131 %, 109/123 % (up to 7x the reference). What is left is the
-// delta-M approximation itself: the light scattered into the truncated
+// What is left is the delta-M approximation itself (Wiscombe 1977): the light scattered into the truncated
 // forward peak is carried on in its direction. On the sun's side by day the
 // tables are 5-15 % too dark (the light forward-scattered along the view
 // ray after its scattering towards it, which precompute.cpp leaves out), and
@@ -35,6 +32,7 @@
 #include "atmos/reference.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "figures.hpp"
 
 namespace {
 
@@ -86,6 +84,15 @@ MarsSkyError mars_sky_error(const atmos::Atmosphere& mars, const atmos::SkyModel
               sun_elevation, 100 * out.near_rms, 100 * out.far_rms, 100 * out.worst,
               out.table_at_sun.z / out.table_at_sun.x, out.reference_at_sun.z / out.reference_at_sun.x);
   std::fflush(stdout);
+  char sun_text[32];
+  std::snprintf(sun_text, sizeof sun_text, "sun %g deg", sun_elevation);
+  atmos_test::record_figure(std::string("RMS within 20 deg of the sun, ") + sun_text, 100.0 * out.near_rms, "%", "");
+  atmos_test::record_figure(std::string("RMS beyond 20 deg of the sun, ") + sun_text, 100.0 * out.far_rms, "%", "");
+  atmos_test::record_figure(std::string("max, ") + sun_text, 100.0 * out.worst, "%", "");
+  atmos_test::record_figure(std::string("blue / red 2 deg above the sun, tables, ") + sun_text,
+                            out.table_at_sun.z / out.table_at_sun.x, "", "");
+  atmos_test::record_figure(std::string("blue / red 2 deg above the sun, reference, ") + sun_text,
+                            out.reference_at_sun.z / out.reference_at_sun.x, "", "");
   return out;
 }
 
