@@ -49,12 +49,12 @@ TEST(Presets, EarthAndMarsThesisLoadWithTheirValues) {
   // nm are 1.895 and 1.862).
   EXPECT_NEAR(earth.solar_irradiance.at(550.0), 1.8727, 0.0005);
 
-  // The seed thesis Mars (the physically derived dusty Mars is "mars", see presets_test.cpp).
+  // Collienne 2013's Mars (the physically derived dusty Mars is "mars", see presets_test.cpp).
   const atmos::Atmosphere mars = atmos::load_atmosphere("mars-thesis");
   EXPECT_EQ(mars.name, "mars-thesis");
   EXPECT_DOUBLE_EQ(mars.bottom_radius_m, 3386e3);
   EXPECT_DOUBLE_EQ(mars.top_radius_m, 3518e3);
-  // Seed 000 §5: betaR = (0.019918, 0.01357, 0.00575) per km at (680, 550, 440) nm.
+  // Collienne 2013, §5: betaR = (0.019918, 0.01357, 0.00575) per km at (680, 550, 440) nm.
   EXPECT_NEAR(mars.constituents[0].scattering.at(680.0), 0.019918e-3, 1e-12);
   EXPECT_NEAR(mars.constituents[0].scattering.at(550.0), 0.01357e-3, 1e-12);
   EXPECT_NEAR(mars.constituents[0].scattering.at(440.0), 0.00575e-3, 1e-12);
@@ -79,7 +79,7 @@ TEST(PlanetFile, UserFilesLoadLikePresets) {
   EXPECT_EQ(b.name, "mars");
 }
 
-// Coefficients from physical inputs (issue 3, seed 004 eq. 1-2): Rayleigh
+// Coefficients from physical inputs (Elek & Kmoch 2010, eq. 1-2): Rayleigh
 // from the refractive index and number density reproduces the Earth preset's
 // air at 550 nm (computed there from the same n, N and King factor); an
 // absorber from its cross section; an aerosol from Ångström's law.

@@ -1,6 +1,6 @@
 // The Earth of the accuracy tests' calibrated bounds: the `earth` preset with
 // the thin aerosol of Bruneton & Neyret 2008 instead of the OPAC continental
-// one (the preset before session 7): scattering 4e-6 m^-1 at the ground,
+// one: scattering 4e-6 m^-1 at the ground,
 // single-scattering albedo 0.9, scale height 1.2 km, Cornette-Shanks g 0.8,
 // optical depth 0.005 against 0.151. The slow suites measure both: the
 // algorithms' accuracy on a clear sky, where their bounds were set, and the

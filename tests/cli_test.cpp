@@ -208,7 +208,7 @@ TEST(Cli, SampleWritesCsvWithDocumentedColumns) {
   EXPECT_NE(bad.err.find("stdin:2"), std::string::npos) << bad.err;
 }
 
-// Spectral mode from the command line (issue 3): the sample columns are the
+// Spectral mode from the command line: the sample columns are the
 // colour ones (the tables hold colour, not per-wavelength radiance), the
 // reference agrees with the tables, precompute reports the convergence of
 // auto orders, and the solar and density options apply.

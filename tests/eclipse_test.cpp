@@ -121,9 +121,8 @@ TEST_F(EclipseGpu, TotalityDarkensTheSkyAndLeavesAHorizonRing) {
 }
 
 // At the centre of the umbra no direct sunlight is left: the ground is lit
-// by less than the sky light of the uneclipsed day (issue 5's test:
-// irradiance at the umbra centre during totality is at most the sky-light
-// level). Seen straight down from 2 m, the ground's radiance is its
+// by less than the sky light of the uneclipsed day (the irradiance at the
+// umbra centre during totality is at most the sky-light level). Seen straight down from 2 m, the ground's radiance is its
 // irradiance times albedo / pi; the uneclipsed ground's, scaled by the sky's
 // share of the irradiance (SkyModel), is the sky-light level.
 TEST_F(EclipseGpu, TheGroundInTotalityGetsLessThanTheSkyLight) {

@@ -389,11 +389,11 @@ void measure_density_truncation(const json& phase, const char* label, double rms
   EXPECT_LT(worst, max_bound) << label;
 }
 
-// Measured (green channel, 48 texels), delta-M (steps.cpp) vs the plain
-// truncation at degree 28 before it:
+// Measured (green channel, 48 texels), delta-M (steps.cpp) against a plain
+// truncation of the expansion at degree 28:
 //                              delta-M                plain truncation
 //   HG g 0.69                  RMS 0.24 %, max 1.0 %  RMS 0.24 %, max 1.0 %
-//   DHG of the brief (green:   RMS 0.48 %, max 1.5 %  RMS 3.1 %, max 12 %
+//   the DHG lobe below (green: RMS 0.48 %, max 1.5 %  RMS 3.1 %, max 12 %
 //     g 0.90, w 0.795)
 //   HG g 0.93                  RMS 3.9 %, max 18 %    RMS 87 %, max 506 %
 // Degree 28 cannot resolve a 4° lobe (p_l = g^l: 0.93^28 = 0.13); delta-M
@@ -483,10 +483,7 @@ NearSunResult near_sun_error(const atmos::Atmosphere& tables_atmosphere, const a
 // kDeltaScaledMaxG): the light scattered more than once keeps no narrow
 // forward peak (the part of the sunlight scattered into the peak before
 // reaching the point is in the single scattering, see precompute.cpp).
-// Before the scaling (nu uniform in nu, the density's delta-M truncation
-// only): 5.7 / 12.7 % and 15.5 / 34 %, by scattering_nu 4 / 16 / 64:
-// 26.9 / 17.8 / 5.7 % RMS. Bounds: 13 % RMS, 34 % max, and the fixed phase
-// at least 1.5x worse.
+// Bounds: 13 % RMS, 34 % max, and the fixed phase at least 1.5x worse.
 // Near the sun, a phase function that changes this much with wavelength
 // needs many nu samples; with the default 8 expect errors of ~20 % there.
 TEST(PhaseSpectrumAccuracy, SkyNearTheSunMatchesTheSpectralReference) {
@@ -611,11 +608,10 @@ AwayFromSunResult away_from_sun_error(const atmos::Atmosphere& a, const atmos::T
 // transmittance to the sun), which the reference counts as order 2. What is
 // left: the views 3° above the horizon are 20-47 % too bright (the scaled
 // medium keeps the light forward-scattered along a long grazing view ray on
-// the ray), the others 1-15 % too dark. Before the scaling (the density's
-// delta-M truncation only, nu tiles uniform in nu) this case was better,
-// 3.5 % RMS, but the Mars dust, whose aerosol dominates its sky, was off by
-// 42-131 % RMS (tests/mars_accuracy.cpp): the expansion of the single
-// scattering's sharp aureole rang into the density far from the sun.
+// the ray), the others 1-15 % too dark. Scaling only the density's
+// expansion would fit this case better, but not the Mars dust, whose aerosol
+// dominates its sky (tests/mars_accuracy.cpp): the expansion of the single
+// scattering's sharp aureole rings into the density far from the sun.
 // Bounds: all orders 19 % RMS, orders 2-4 27 % RMS, max 55 %.
 TEST(PhaseSpectrum, PeakedLobeMultipleScatteringMatchesTheReference) {
   atmos::TableSizes sizes = small_sizes();

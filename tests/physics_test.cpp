@@ -37,7 +37,7 @@ TEST(PhaseFunctions, IntegrateToOneOverTheSphere) {
 }
 
 TEST(PhaseFunctions, CornetteShanksWithZeroGIsRayleigh) {
-  // Seed 000, after eq. 3.5: "If g = 0, this function is equal to Rayleigh-Scattering".
+  // Collienne 2013, after eq. 3.5: with g = 0 the function equals Rayleigh's.
   for (float nu = -1.0f; nu <= 1.0f; nu += 0.125f)
     EXPECT_NEAR(cornette_shanks_phase_function(0.0f, nu), rayleigh_phase_function(nu), 1e-7f);
 }

@@ -58,8 +58,8 @@ TEST(PostToneMap, ZeroMapsToZero) {
 }
 
 // Non-decreasing over 1e-5 .. 1e4 (exposed units, 200 samples per decade).
-// The one exception is documented in tone_mapping.glsl: seed 000's Reinhard
-// variant steps down by 3.4e-5 where eq. 4.25 hands over to eq. 4.26.
+// The one exception is documented in tone_mapping.glsl: Collienne 2013's
+// Reinhard variant steps down by 3.4e-5 where eq. 4.25 hands over to eq. 4.26.
 TEST(PostToneMap, Monotonic) {
   for (int op : kOperators) {
     float previous = 0.0f;
@@ -97,11 +97,11 @@ TEST(PostToneMap, SaturatesAsDocumented) {
 }
 
 TEST(PostToneMap, SeedFormulasReproduceHandComputedValues) {
-  // exp (seed 002 §1.11): 1 - e^-1 = 0.6321206; sRGB-encoded:
+  // exp (Boody n.d., §1.11): 1 - e^-1 = 0.6321206; sRGB-encoded:
   // 1.055 * 0.6321206^(1/2.4) - 0.055 = 0.8164700.
   EXPECT_NEAR(post::tone_map_channel(1.0f, post::TONE_MAP_EXP), 0.6321206f, 1e-6f);
   EXPECT_NEAR(post::display_encoded_channel(1.0f, post::TONE_MAP_EXP), 0.8164700f, 2e-6f);
-  // Reinhard (seed 000 eq. 4.25), x = 1 < 1.413: 0.38317^(1/2.2) = 0.6465952;
+  // Reinhard (Collienne 2013, eq. 4.25), x = 1 < 1.413: 0.38317^(1/2.2) = 0.6465952;
   // x = 0.5: (0.5 * 0.38317)^(1/2.2) = 0.4718464.
   EXPECT_NEAR(post::tone_map_channel(1.0f, post::TONE_MAP_REINHARD), 0.6465952f, 2e-6f);
   EXPECT_NEAR(post::tone_map_channel(0.5f, post::TONE_MAP_REINHARD), 0.4718464f, 2e-6f);
@@ -109,7 +109,7 @@ TEST(PostToneMap, SeedFormulasReproduceHandComputedValues) {
   // is in the formula), so display_encoded is the same number.
   EXPECT_NEAR(post::tone_map_channel(2.0f, post::TONE_MAP_REINHARD), 0.8646647f, 1e-6f);
   EXPECT_NEAR(post::display_encoded_channel(2.0f, post::TONE_MAP_REINHARD), 0.8646647f, 1e-6f);
-  // Filmic (seed 000 eq. 4.29), x = 1: 1 (6.2 + 0.5) / (1 (6.2 + 1.7) + 0.06) =
+  // Filmic (Collienne 2013, eq. 4.29), x = 1: 1 (6.2 + 0.5) / (1 (6.2 + 1.7) + 0.06) =
   // 6.7 / 7.96 = 0.8417085; x = 0.1: 0.1 * 1.12 / (0.1 * 2.32 + 0.06) =
   // 0.112 / 0.292 = 0.3835616. Its display-linear value is the 2.2 power.
   EXPECT_NEAR(post::tone_map_channel(1.0f, post::TONE_MAP_FILMIC), 0.8417085f, 1e-6f);
@@ -123,7 +123,7 @@ TEST(PostToneMap, SeedFormulasReproduceHandComputedValues) {
   EXPECT_NEAR(post::exposure_from_ev100(0.0f), 1.0f / 1.2f, 1e-7f);
   EXPECT_NEAR(1.0f / post::exposure_from_ev100(13.0f), 9830.4f, 1e-2f);
   EXPECT_NEAR(post::ev100_from_exposure(post::exposure_from_ev100(7.25f)), 7.25f, 1e-5f);
-  // Seed 000 eq. 4.28 with the default key 1 / (2^2.2 - 1) = 0.27818:
+  // Collienne 2013, eq. 4.28 with the default key 1 / (2^2.2 - 1) = 0.27818:
   // l_avg = 1000 cd/m² -> EV = log2(1000 / (1.2 * 0.27818)) = 11.548659.
   EXPECT_NEAR(post::DEFAULT_EXPOSURE_KEY, 1.0 / (std::pow(2.0, 2.2) - 1.0), 1e-5);
   EXPECT_NEAR(post::exposure_target_ev(1000.0f, post::DEFAULT_EXPOSURE_KEY, 0.0f, -10.0f, 30.0f), 11.548659f, 1e-4f);
@@ -286,7 +286,7 @@ TEST_F(PostGpu, ExpOperatorReproducesWritePng) {
 }
 
 // The log-average luminance of the test images, in double on the CPU
-// (Reinhard et al. 2002 eq. 1 with seed 000 eq. 4.27 per pixel).
+// (Reinhard et al. 2002, eq. 1, with Collienne 2013, eq. 4.27 per pixel).
 double log_average(const Image& image) {
   double sum = 0.0;
   const size_t n = size_t(image.width) * size_t(image.height);

@@ -115,9 +115,10 @@ TEST_F(EarthSteps, TransmittanceTableMatchesDirectIntegration) {
 // Short segments near the ground of a dense atmosphere: looking down from
 // 2 m above Venus's ground, and along a level ray 10 m up. The difference of
 // two table values, each an optical depth of hundreds along the grazing ray
-// from the ground point to the top, made the transmittance of a 10-300 m
-// path jump between 0.7 and 1 (functions.glsl, use_direct_optical_depth);
-// now within 0.1 % of the trapezoidal integral (4000 steps), and smooth.
+// from the ground point to the top, would make the transmittance of a 10-300
+// m path jump between 0.7 and 1; such segments are integrated directly
+// (functions.glsl, use_direct_optical_depth), within 0.1 % of the
+// trapezoidal integral (4000 steps), and smooth.
 TEST(DenseAtmosphere, TransmittanceOfShortSegmentsNearTheGround) {
   const AtmosphereParams p = make_atmosphere_params(atmos::load_atmosphere("venus"), atmos::TableSizes{}, 0);
   const Table2D table = compute_transmittance_table(p);
@@ -160,7 +161,7 @@ TEST(DenseAtmosphere, TransmittanceOfShortSegmentsNearTheGround) {
 // the ground saturates with its length, and the dense aerosol makes it grow
 // with the height the ray starts from (+9 % from 2 m to 105 m along 4 km).
 // The plain lookup (interpolation in rho between row 0, zero for every ray to
-// the ground, and row 1) gave 0.17-0.2 of the integral 4 km away from 2 m,
+// the ground, and row 1) gives 0.17-0.2 of the integral 4 km away from 2 m,
 // and up to 5 times too much 3 m away. Measured with the method:
 // at most 5.2 % further from the integral than the table itself is on row 1
 // for the same distance (its own error, interpolating in mu and mu_s, is up

@@ -112,22 +112,16 @@ TEST(Presets, DerivedQuantities) {
 // less light than the one before (no divergence), and at order 16 both are
 // foreseen to reach the CLI's cap of 64 orders unconverged, so the rest of
 // their series goes to the tail solver from there (precompute.cpp,
-// kEarliestTailHandoff; measured 2026-11-27 with these small tables: Venus's
-// 16th order adds 1.1 % of the light, the tail 61 % in 114 steps; Titan's
-// 16th 0.46 %, the tail 3.6 % in 11 steps). Titan's orders are slow on its
+// kEarliestTailHandoff; with these small tables Venus's 16th order adds
+// about 1 % of the light and the tail more than half of it, Titan's 16th
+// about 0.5 % and the tail a few per cent). Titan's orders are slow on its
 // ground: each adds 0.9 of what the one before added to the sky light
-// there (with the criterion on all the light alone, it stopped after 29
-// orders with these tables, though by the ratio of its orders the ground
-// still lacked about 6 % of its sky light at the default sizes). Before the
-// hand-off both ran the 64 orders: Titan's 64th added 1.7e-5 of the light
-// and the tail 1.4e-4 in 6 steps; Venus's 64th 0.36 %, the tail 50 % in
-// 120 steps.
+// there, which is why the convergence criterion watches the ground's sky
+// light as well as all the light.
 // Venus (Rayleigh optical depth 17 at 550 nm and 42 at 440 nm under a cloud
 // of optical depth 30, nearly conservative) needs 16 radius samples in the
 // scattering tables (with 8 an order adds more light than the one before,
-// which precompute_tables reports as an error; before the source was read
-// between radius rows with cubic weights, 16 and 24 did too; measured
-// 2026-11-26 with these small sizes). These small tables check that the
+// which precompute_tables reports as an error). These small tables check that the
 // solver converges, not the light (tests/venus_accuracy.cpp;
 // tests/convergence_accuracy.cpp checks 16 orders and the tail against 600
 // orders).
@@ -180,9 +174,8 @@ TEST(Presets, VenusAndTitanConvergeWithAutoOrders) {
 // optically thick atmosphere crowd near the ground (irradiance_x_r), so 16
 // of them must agree with 128 within a few per cent from 200 m to 10 km
 // (measured with the default tables: within 2.2 %; with these small
-// tables, since the source is read between radius rows with cubic weights,
-// functions.glsl source_function_lookup, and the blue sky light rises more
-// steeply over the first kilometre: 1.0435 at 1 km, 440 nm, bound 5 %). Auto orders: with a
+// tables, whose blue sky light rises more steeply over the first kilometre,
+// up to 4.4 % at 1 km, 440 nm; bound 5 %). Auto orders: with a
 // few orders only, the light has not yet diffused down and the profile is
 // far steeper (with 8 orders the 440 nm sky light at 10 km is 27 times what
 // 128 rows give).

@@ -1,4 +1,4 @@
-// Spectral precomputation (issue 3, seed 004 §4.4): the colour conversion,
+// Spectral precomputation (Elek & Kmoch 2010, §4.4): the colour conversion,
 // tables at N wavelengths folded into one sRGB texture set, the spectral
 // transmittance at run time, and what spectral rendering changes in the sky.
 #include <gtest/gtest.h>
@@ -180,7 +180,7 @@ atmos::Atmosphere* SpectralSky::atmospheres_[2] = {};
 atmos::Tables* SpectralSky::tables_[2] = {};
 atmos::SkyModel* SpectralSky::models_[2] = {};
 
-// Seed 004 Fig. 6: the spectral sky towards the setting sun is less
+// Elek & Kmoch 2010, Fig. 6: the spectral sky towards the setting sun is less
 // saturated than three samples make it. (Measured with default tables: xy
 // distance from D65 0.113 vs 0.128 with the sun at 2°, 0.058 vs 0.086 at
 // -2°. The blue sky away from the sun is slightly MORE saturated spectrally
@@ -233,7 +233,7 @@ TEST_F(SpectralSky, OzoneMakesTheTwilightZenithBluer) {
   EXPECT_GT(with.z / with.x, 1.1 * without.z / without.x);
 }
 
-// Denser atmospheres (seed 004 Fig. 4): 10x and 100x Earth need many
+// Denser atmospheres (Elek & Kmoch 2010, Fig. 4): 10x and 100x Earth need many
 // orders. Auto orders without the tail solver stop when the rest of the
 // series is below the tolerance (10x Earth: 55 orders with these tables at
 // a tolerance of 1 %, the sky light on the ground and the blue converging
@@ -242,9 +242,9 @@ TEST_F(SpectralSky, OzoneMakesTheTwilightZenithBluer) {
 // (precompute.cpp, kEarliestTailHandoff), which gives 10x Earth the light
 // of its 55 orders to within the tolerance. The convergence is reported per
 // order and decreasing (each order adds less light than the one before, as
-// it must where light escapes and is absorbed), and the tables stay finite.
-// (Before the quadrature nodes followed the visible extinction, 30x Earth
-// gained energy at every order.)
+// it must where light escapes and is absorbed), and the tables stay finite
+// (quadrature nodes that do not follow the extinction the start of an
+// optically thick ray still sees would create energy at every order).
 TEST(Spectral, DenseAtmosphereConvergesWithAutoOrders) {
   atmos::PrecomputeOptions options;
   options.sizes = small_sizes();
