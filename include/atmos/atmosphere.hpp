@@ -60,9 +60,9 @@ struct DensityProfile {
 // spectrum: the phase may change with wavelength (dust scatters blue light
 // into a narrower forward lobe than red, which makes the Martian blue
 // aureole). A constant is Spectrum::constant.
-//  - rayleigh: 3/(16π)(1 + ν²), seed 000 eq. 3.2 (no parameters).
+//  - rayleigh: 3/(16π)(1 + ν²), Collienne 2013, eq. 3.2 (no parameters).
 //  - henyey_greenstein: HG(g) = (1 - g²) / (4π (1 + g² - 2gν)^{3/2}).
-//  - cornette_shanks: seed 000 eq. 3.5 (Cornette & Shanks 1992).
+//  - cornette_shanks: Collienne 2013, eq. 3.5 (Cornette & Shanks 1992).
 //  - double_henyey_greenstein: w HG(g) + (1 - w) HG(g_back) (Kattawar 1975),
 //    w = forward_weight; a forward lobe (g > 0) and a backward one (g_back < 0).
 struct PhaseFunction {
@@ -114,11 +114,11 @@ struct Atmosphere {
 // three-wavelength mode (680, 550, 440 nm: tables hold radiance at those
 // wavelengths); more give a spectral precomputation at `count` wavelengths
 // evenly spaced over 360–830 nm, converted to colour through the CIE 1931
-// observer (seed 004 §4.4).
+// observer (Elek & Kmoch 2010, §4.4).
 std::vector<double> spectral_wavelengths(int count);
 
 // Multiplies the number density of every constituent by `factor` (> 0): the
-// same planet with a thinner or denser atmosphere (seed 004 Fig. 4).
+// same planet with a thinner or denser atmosphere (Elek & Kmoch 2010, Fig. 4).
 void scale_density(Atmosphere& atmosphere, double factor);
 
 // The extraterrestrial solar spectrum of ASTM E490-00a at 1 au

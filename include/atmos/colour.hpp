@@ -28,7 +28,7 @@ glm::dvec3 cie_1931_color_matching(double wavelength_nm);
 // (constant beyond the outer samples), integrated over 360–830 nm against the
 // matching functions times 683 lm/W, and converted with the sRGB
 // (IEC 61966-2-1) matrix. The conversion of a spectrum, not of three
-// arbitrary samples of it (seed 004 §4.4).
+// arbitrary samples of it (Elek & Kmoch 2010, §4.4).
 std::vector<glm::dvec3> spectral_to_srgb_weights(const std::vector<double>& wavelengths_nm);
 
 // The same for three wavelengths, as a matrix: linear sRGB = M * radiance.
@@ -37,7 +37,7 @@ glm::mat3 radiance_to_srgb_matrix(const std::array<double, 3>& wavelengths_nm);
 // CIE 1931 XYZ (Y in cd/m²) from linear sRGB on the cd/m² scale.
 glm::dvec3 srgb_to_xyz(const glm::dvec3& rgb);
 
-// Luminance (cd/m²) of a linear sRGB colour on the cd/m² scale (seed 000 eq. 4.27).
+// Luminance (cd/m²) of a linear sRGB colour on the cd/m² scale (Collienne 2013, eq. 4.27).
 inline double srgb_luminance(const glm::dvec3& rgb) { return 0.2126 * rgb.x + 0.7152 * rgb.y + 0.0722 * rgb.z; }
 
 }  // namespace atmos

@@ -1,5 +1,5 @@
 // atmos — the engine plugin: the atmosphere as a post-process over any
-// renderer's colour and depth buffers (seed 000 §4.2–4.5).
+// renderer's colour and depth buffers (Collienne 2013, §4.2–4.5).
 //
 // An engine renders its planet as usual (terrain, objects, its own lighting)
 // into an HDR colour texture and a depth texture, then calls
@@ -78,7 +78,7 @@ enum class DepthEncoding {
 
 // What the engine's colour texture holds for surfaces.
 enum class SurfaceMode {
-  // Lit colour (seed 000 §4.5): the pass attenuates it and adds in-scatter.
+  // Lit colour (Collienne 2013, §4.5): the pass attenuates it and adds in-scatter.
   lit_colour,
   // The pass lights the surfaces itself from a G-buffer (albedo + normal)
   // with the sun and sky irradiance of the tables (and the shadow map's

@@ -1,6 +1,6 @@
 // atmos — camera-like output: bloom, exposure (manual or automatic with eye
-// adaptation) and tone mapping of an HDR image on the GPU (seed 000 §4.6,
-// seed 002 §1.11). For the engine plugin's output (AtmospherePass::render)
+// adaptation) and tone mapping of an HDR image on the GPU (Collienne 2013,
+// §4.6; Boody n.d., §1.11). For the engine plugin's output (AtmospherePass::render)
 // or any HDR texture; the CLI uses it for `atmos render --tonemap/--bloom/
 // --auto-exposure`.
 //
@@ -16,7 +16,7 @@
 //
 // Units. The input holds linear sRGB (the plugin's and the renderer's
 // colour space); a texel times nits_per_unit is in cd/m² (luminance by
-// seed 000 eq. 4.27). Exposure is an exposure value at ISO 100 (EV100) with
+// Collienne 2013, eq. 4.27). Exposure is an exposure value at ISO 100 (EV100) with
 // the definition of write_png (image.hpp): a pixel of L cd/m² is exposed to
 // x = L / L_sat, L_sat = 1.2 * 2^EV cd/m². The formulas are in
 // src/post/tone_mapping.glsl, compiled both for the GPU and the CPU.
@@ -38,13 +38,13 @@ namespace atmos {
 // Tone-mapping operators. Each maps an exposed value x per channel to a
 // display value in [0, 1]:
 enum class ToneMapping {
-  // 1 - exp(-x) (seed 002 §1.11, seed 004): what write_png does; tends to 1.
+  // 1 - exp(-x) (Boody n.d., §1.11; Elek & Kmoch 2010): what write_png does; tends to 1.
   exp,
-  // Bruneton's variant of Reinhard (seed 000 eq. 4.25-4.26):
+  // Bruneton's variant of Reinhard (Collienne 2013, eq. 4.25-4.26):
   // (0.38317 x)^(1/2.2) for x < 1.413, 1 - exp(-x) above; tends to 1. Includes
   // the display gamma (2.2).
   reinhard,
-  // Hejl / Burgess-Dawson (seed 000 eq. 4.29):
+  // Hejl / Burgess-Dawson (Collienne 2013, eq. 4.29):
   // x (6.2 x + 0.5) / (x (6.2 x + 1.7) + 0.06); tends to 1. Includes the
   // display gamma (2.2).
   filmic,
@@ -71,8 +71,8 @@ struct BloomSettings {
 };
 
 // Exposure from the frame itself: the log-average luminance l_avg of the
-// input (seed 000 eq. 4.27 per pixel, averaged as exp(mean(log(1e-4 + l))))
-// is exposed to `key` (seed 000 eq. 4.28), EV_target = log2(l_avg /
+// input (Collienne 2013, eq. 4.27 per pixel, averaged as
+// exp(mean(log(1e-4 + l)))) is exposed to `key` (eq. 4.28), EV_target = log2(l_avg /
 // (1.2 key)) - compensation_ev clamped to [min_ev, max_ev], and the exposure
 // follows EV_target with exp(-dt / tau) per frame: tau = brightening_tau_s
 // when the scene got brighter, darkening_tau_s when it got darker. The first
@@ -82,7 +82,7 @@ struct BloomSettings {
 // the first frame after construction or reset() at its own): docs/post.md.
 struct AutoExposureSettings {
   bool enabled = false;       // false: PostSettings::exposure_ev
-  double key = 0.27818;       // exposed log-average luminance, 1 / (2^2.2 - 1) (seed 000 eq. 4.28); > 0
+  double key = 0.27818;       // exposed log-average luminance, 1 / (2^2.2 - 1) (Collienne 2013, eq. 4.28); > 0
   double compensation_ev = 0;  // EV added to the image's brightness (+1: twice as bright)
   double min_ev = -6.0;       // EV100 range the exposure is clamped to (starlit ... beyond sunlit snow)
   double max_ev = 18.0;

@@ -1,4 +1,4 @@
-// atmos — bloom (seed 000 §4.6.1), GLSL only: bright pass, centred mip
+// atmos — bloom (Collienne 2013, §4.6.1), GLSL only: bright pass, centred mip
 // pyramid, separable Gaussian per level, upsample-and-mix from the coarsest
 // level. Pasted after tone_mapping.glsl and post_common.comp.glsl with one of
 // STAGE_BRIGHT, STAGE_DOWNSAMPLE, STAGE_BLUR_X, STAGE_BLUR_Y defined
@@ -59,7 +59,7 @@ void store_block(writeonly image2D destination, ivec2 first, Rows rows) {
 // (weight 1 each), each pixel's bright part computed once per block.
 //
 // With WITH_REDUCTION defined the same reads give the auto exposure's
-// reduction (seed 000 §4.6.3, exposure.comp.glsl): each invocation also
+// reduction (Collienne 2013, §4.6.3, exposure.comp.glsl): each invocation also
 // writes the sum of the log luminances of its own 4 x 4 pixels, 2 first + (0..3)
 // (f = 1..4 of its 5 x 5; f = 0 is the neighbour's), to PartialSums. This
 // saves the reduction's own read of the full-resolution image, but the

@@ -1,10 +1,10 @@
-// atmos — automatic exposure (seed 000 §4.6.3), GLSL only: the log-average
-// luminance of the frame by a two-pass reduction, then the temporal
+// atmos — automatic exposure (Collienne 2013, §4.6.3), GLSL only: the
+// log-average luminance of the frame by a two-pass reduction, then the temporal
 // adaptation. Pasted after tone_mapping.glsl and post_common.comp.glsl, with
 // STAGE_REDUCE or STAGE_ADAPT defined.
 //
-// Seed 000 takes the plain average colour from the last mip level; the log
-// average (Reinhard et al. 2002 eq. 1) of the eq. 4.27 luminance is used
+// Collienne 2013 takes the plain average colour from the last mip level; the
+// log average (Reinhard et al. 2002, eq. 1) of the eq. 4.27 luminance is used
 // instead so that the sun's few ~1e9 cd/m² pixels do not set the exposure of
 // a ~1e4 cd/m² sky on their own.
 
@@ -40,7 +40,7 @@ void main() {
 #ifdef STAGE_ADAPT
 // One work group adds the strips' sums (a tree over 256 invocations: the
 // only barriers of the chain, in one work group), then one invocation turns the mean
-// log luminance into the target EV (seed 000 eq. 4.28) and adapts.
+// log luminance into the target EV (Collienne 2013, eq. 4.28) and adapts.
 layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;
 layout(location = 0) uniform int partial_count;
 layout(location = 1) uniform float pixel_count;

@@ -91,9 +91,9 @@ gpu::AssembledSource compute_source(const std::string& defines, const char* stag
 
 // "float[n + 1](k_0, ..., k_n)": the Gaussian of `sigma` texels truncated at
 // `radius` taps each side, normalised so that its 2 radius + 1 taps sum to 1.
-// The weights come from Turkowski's incremental Gaussian (seed 000 §4.6.1,
-// tone_mapping.glsl: one exp, then products), evaluated once here with the
-// shared code instead of in every invocation.
+// The weights come from Turkowski's incremental Gaussian (Turkowski 2007;
+// Collienne 2013, §4.6.1; tone_mapping.glsl: one exp, then products),
+// evaluated once here with the shared code instead of in every invocation.
 std::string bloom_kernel(float sigma, int radius) {
   std::vector<double> g;
   glm::vec3 state = post::incremental_gaussian_start(sigma);

@@ -45,7 +45,7 @@ void main() {
       vec3 scene = texelFetch(source, min(p, size - 1), 0).rgb * nits_per_unit;
 #if BLOOM
       // A fraction `strength` of the bright part leaves the pixel and the same
-      // fraction of the blurred bright parts arrives (seed 000 §4.6.1).
+      // fraction of the blurred bright parts arrives (Collienne 2013, §4.6.1).
       vec3 up = by == 0 ? upsampled_even(glare[bx][0]) : upsampled_odd(glare[bx][0], glare[bx][1]);
       scene += bloom_strength * (up - bright_part(scene, bloom_exposure, bloom_threshold));
 #endif

@@ -6,20 +6,20 @@
 // the compute shaders of PostProcess by post/post_process.cpp. Everything the
 // tests check on the CPU is what the GPU runs.
 //
-// Units. "Scene" values are linear sRGB on the cd/m² scale (luminance =
-// eq. 4.27 of seed 000 in cd/m²). "Exposed" values are scene values times the
+// Units. "Scene" values are linear sRGB on the cd/m² scale (their luminance,
+// Collienne 2013, eq. 4.27, in cd/m²). "Exposed" values are scene values times the
 // exposure E = 1 / L_sat (L_sat in cd/m², see exposure_from_ev100). Display
 // values are in [0, 1]: "display-linear" (proportional to the light the
 // display emits) or "encoded" (what goes into an 8-bit image).
 
 // Tone-mapping operators (PostProcess settings use the same numbers).
-const int TONE_MAP_EXP = 0;       // 1 - exp(-E I): seed 002 §1.11, seed 004; write_png
-const int TONE_MAP_REINHARD = 1;  // Bruneton's Reinhard variant: seed 000 eq. 4.25-4.26
-const int TONE_MAP_FILMIC = 2;    // Hejl / Burgess-Dawson: seed 000 eq. 4.29
+const int TONE_MAP_EXP = 0;       // 1 - exp(-E I): Boody n.d., §1.11; Elek & Kmoch 2010; write_png
+const int TONE_MAP_REINHARD = 1;  // Bruneton's Reinhard variant: Collienne 2013, eq. 4.25-4.26
+const int TONE_MAP_FILMIC = 2;    // Hejl / Burgess-Dawson: Collienne 2013, eq. 4.29
 const int TONE_MAP_ACES = 3;      // Narkowicz's fit of the ACES RRT + ODT
 const int TONE_MAP_LINEAR = 4;    // E I unchanged (clamped to [0, 1] in 8-bit output only)
 
-// Relative luminance of linear sRGB, seed 000 eq. 4.27 (the Y row of the
+// Relative luminance of linear sRGB, Collienne 2013, eq. 4.27 (the Y row of the
 // sRGB -> XYZ matrix, IEC 61966-2-1).
 INLINE float relative_luminance(vec3 rgb) { return 0.2126f * rgb.x + 0.7152f * rgb.y + 0.0722f * rgb.z; }
 
@@ -34,18 +34,18 @@ INLINE float ev100_from_exposure(float exposure) { return log2(1.0f / (1.2f * ex
 
 // --- Tone-mapping curves, per channel of an exposed value x = E I ----------
 
-// Seed 002 §1.11 (and seed 004): display-linear 1 - exp(-x). 0 -> 0,
+// Boody n.d., §1.11 (and Elek & Kmoch 2010): display-linear 1 - exp(-x). 0 -> 0,
 // increasing, tends to 1 (never reaches it).
 INLINE float tone_map_exp_channel(float x) { return 1.0f - exp(-max(x, 0.0f)); }
 
-// Seed 000 eq. 4.25-4.26 (Bruneton & Neyret 2008's variant of Reinhard et al.
+// Collienne 2013, eq. 4.25-4.26 (Bruneton & Neyret 2008's variant of Reinhard et al.
 // 2002): below the switch x < 1.413 the power law (0.38317 x)^(1/2.2)
 // (eq. 4.25), above it 1 - exp(-x) (eq. 4.26). The thesis text as extracted
 // prints the switch as "1.1413" and the exponent on 0.38317 alone; the two
 // branches meet (to 3.4e-5) only at x = 1.413 with the exponent on the
 // product, which is also Bruneton's code. The power branch includes the
 // display's 2.2 gamma ("the x^2.2 factor of display gamma is also noticeable
-// in the tonemapping by Reinhard", seed 000 §4.6.3): the result is an
+// in the tonemapping by Reinhard", Collienne 2013, §4.6.3): the result is an
 // ENCODED display value. At the switch the curve steps down by 3.4e-5 (0.009
 // of an 8-bit step); otherwise it increases and tends to 1.
 const float REINHARD_SWITCH = 1.413f;
@@ -54,9 +54,9 @@ INLINE float tone_map_reinhard_channel(float x) {
   return x < REINHARD_SWITCH ? pow(0.38317f * x, 1.0f / 2.2f) : 1.0f - exp(-x);
 }
 
-// Seed 000 eq. 4.29, Hejl and Burgess-Dawson's filmic curve (as published by
-// Hable, filmicgames.com/archives/75, without its 0.004 black offset, which
-// the seed omits): x (6.2 x + 0.5) / (x (6.2 x + 1.7) + 0.06). Includes the
+// Collienne 2013, eq. 4.29: Hejl and Burgess-Dawson's filmic curve (as
+// published by Hable 2010, filmicgames.com/archives/75, without its 0.004
+// black offset, which Collienne 2013 omits): x (6.2 x + 0.5) / (x (6.2 x + 1.7) + 0.06). Includes the
 // display's 2.2 gamma: an ENCODED display value. 0 -> 0, increasing
 // (derivative numerator 7.44 x² + 0.744 x + 0.03 > 0), tends to 1 from below
 // (1 - f = (1.2 x + 0.06) / (...) > 0).
@@ -65,8 +65,8 @@ INLINE float tone_map_filmic_channel(float x) {
   return (x * (6.2f * x + 0.5f)) / (x * (6.2f * x + 1.7f) + 0.06f);
 }
 
-// K. Narkowicz, "ACES Filmic Tone Mapping Curve" (2016-01-06,
-// knarkowicz.wordpress.com): a rational fit (max error 0.0138) of the ACES
+// Narkowicz 2016, "ACES Filmic Tone Mapping Curve"
+// (knarkowicz.wordpress.com): a rational fit (max error 0.0138) of the ACES
 // RRT + ODT for a linear display, its input pre-exposed by 0.6.
 // x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14), clamped to [0, 1]:
 // display-LINEAR. 0 -> 0, increasing (derivative numerator
@@ -96,9 +96,9 @@ INLINE float srgb_encode(float linear) {
 }
 
 // The 8-bit display value of one channel of an exposed value x: the
-// operator's own encoding for reinhard and filmic (the formulas of seed 000,
+// operator's own encoding for reinhard and filmic (Collienne 2013's formulas,
 // written for a 2.2-gamma display), the sRGB OETF of the display-linear value
-// otherwise (seed 002 §1.11 uses a 2.2 gamma; sRGB is the standard that
+// otherwise (Boody n.d., §1.11, uses a 2.2 gamma; sRGB is the standard that
 // write_png has always used). In [0, 1].
 INLINE float display_encoded_channel(float x, int op) {
   float t = tone_map_channel(x, op);
@@ -124,7 +124,7 @@ INLINE vec3 display_linear(vec3 exposed, int op) {
               display_linear_channel(exposed.z, op));
 }
 
-// --- Automatic exposure (seed 000 §4.6.3) ---------------------------------
+// --- Automatic exposure (Collienne 2013, §4.6.3) -------------------------
 
 // Luminance below which the log average stops following a pixel (cd/m²;
 // about the darkest of scotopic vision): Reinhard et al. 2002's delta, which
@@ -133,12 +133,12 @@ const float LOG_AVERAGE_DELTA = 1e-4f;
 
 INLINE float log_luminance(vec3 scene_rgb) { return log(LOG_AVERAGE_DELTA + max(relative_luminance(scene_rgb), 0.0f)); }
 
-// The key of seed 000 eq. 4.28: epsilon = (1 / l) (1 / (2^2.2 - 1)) maps the
+// The key of Collienne 2013 (eq. 4.28): epsilon = (1 / l) (1 / (2^2.2 - 1)) maps the
 // average luminance l to the exposed value 1 / (2^2.2 - 1) = 0.27818.
 const float DEFAULT_EXPOSURE_KEY = 0.27818f;
 
 // The exposure value that maps the scene's log-average luminance
-// l_avg = exp(mean(log(delta + l))) (cd/m²; seed 000 eq. 4.27 per pixel,
+// l_avg = exp(mean(log(delta + l))) (cd/m²; Collienne 2013, eq. 4.27 per pixel,
 // averaged in the log domain as Reinhard et al. 2002 eq. 1, which keeps the
 // sun from setting the exposure alone) to the exposed value `key`
 // (eq. 4.28: E = key / l_avg), shifted by `compensation_ev` (positive:
@@ -150,7 +150,7 @@ INLINE float exposure_target_ev(float log_average_luminance, float key, float co
   return clamp(ev, ev_min, ev_max);
 }
 
-// One step of temporal adaptation (seed 000 §4.6.3, "dynamic exposure"): the
+// One step of temporal adaptation (Collienne 2013, §4.6.3, "dynamic exposure"): the
 // exposure value relaxes exponentially towards the target,
 //   EV' = target + (EV - target) exp(-dt / tau),
 // with tau = brightening_tau_s when the scene got brighter than the current
@@ -165,19 +165,20 @@ INLINE float adapted_ev(float current_ev, float target_ev, float dt_s, float bri
   return target_ev + (current_ev - target_ev) * keep;
 }
 
-// --- Bloom (seed 000 §4.6.1) -----------------------------------------------
+// --- Bloom (Collienne 2013, §4.6.1) --------------------------------------
 
 // The part of a pixel that blooms: the scene colour scaled by the fraction of
 // its exposed luminance above `threshold` (exposed units; 0: the whole
 // pixel), so that the hue is kept and the bright pass is continuous. The rest
-// of the pixel stays sharp. (Seed 000 §4.6.1 raises the colours to the 4th
+// of the pixel stays sharp. (Collienne 2013, §4.6.1, raises the colours to the 4th
 // power instead, which creates light; here the bloom only moves light.)
 INLINE vec3 bright_part(vec3 scene_rgb, float exposure, float threshold) {
   float l = max(relative_luminance(scene_rgb), 0.0f) * exposure;
   return l > threshold ? max(scene_rgb, vec3(0.0f)) * ((l - threshold) / l) : vec3(0.0f);
 }
 
-// Turkowski's incremental Gaussian (GPU Gems 3 ch. 40; seed 000 §4.6.1): the
+// Turkowski's incremental Gaussian (Turkowski 2007, GPU Gems 3 ch. 40;
+// Collienne 2013, §4.6.1): the
 // weights g(k) = exp(-k² / (2 sigma²)) / (sqrt(2 pi) sigma) for k = 0, 1, 2,
 // ... without an exp per tap. The ratio g(k+1) / g(k) = exp(-(2k+1) /
 // (2 sigma²)) is itself multiplied by the constant exp(-1 / sigma²) from one
