@@ -52,7 +52,7 @@ inline void record_figure(const std::string& name, double value, const std::stri
   const std::string test = info    ? std::string(info->test_suite_name()) + "." + info->name()
                            : suite ? std::string(suite->name()) + ".*"
                                    : std::string("-");
-  std::printf("figure: %s = %.6g %s (bound: %s)\n", name.c_str(), value, unit.c_str(),
+  std::printf("figure: %s = %.6g%s%s (bound: %s)\n", name.c_str(), value, unit.empty() ? "" : " ", unit.c_str(),
               bound.empty() ? "none" : bound.c_str());
   std::fflush(stdout);
 
