@@ -252,8 +252,8 @@ class AerialPerspective : public ::testing::Test {
     atmos_test::record_figure(std::string("volume max, ") + config, 100.0 * result.volume.worst, "%", "");
     atmos_test::record_figure(std::string("volume max beyond 3 sigma, ") + config,
                               100.0 * std::max(0.0, result.volume.worst_excess), "%", excess_bound);
-    atmos_test::record_figure(std::string("volume max |dT|, ") + config, result.volume.worst_transmittance, "",
-                              "<= 0.012");
+    atmos_test::record_figure(std::string("volume max transmittance error, ") + config,
+                              result.volume.worst_transmittance, "", "<= 0.012");
     atmos_test::record_figure(std::string("exact RMS, ") + config, 100.0 * result.exact.rms(), "%", "");
     atmos_test::record_figure(std::string("reference noise RMS, ") + config, 100.0 * result.noise_only.rms(), "%",
                               "");
@@ -362,7 +362,7 @@ TEST_F(AerialPerspective, VolumeMatchesReference) {
               100.0 * exact_all.rms(), 100.0 * exact_all.worst, exact_all.worst_transmittance);
   atmos_test::record_figure("volume RMS, all", 100.0 * volume_all.rms(), "%", "");
   atmos_test::record_figure("volume max, all", 100.0 * volume_all.worst, "%", "");
-  atmos_test::record_figure("volume max |dT|, all", volume_all.worst_transmittance, "", "<= 0.012");
+  atmos_test::record_figure("volume max transmittance error, all", volume_all.worst_transmittance, "", "<= 0.012");
   atmos_test::record_figure("exact RMS, all", 100.0 * exact_all.rms(), "%", "");
   atmos_test::record_figure("exact max, all", 100.0 * exact_all.worst, "%", "");
 }
