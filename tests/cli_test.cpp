@@ -154,17 +154,6 @@ TEST(Cli, PrecomputeReportsSizesTimesAndDetectsACorruptCache) {
   EXPECT_NE(r.err.find("rejected"), std::string::npos) << r.err;
 }
 
-// --balance-orders reaches the precomputation: Venus's small tables are too
-// coarse for it (order 2 would have to be scaled by 0.6), which is said,
-// not papered over. Earth is not balanced, and its tables are unchanged
-// (tests/energy_balance_test.cpp).
-TEST(Cli, BalancedOrdersRefuseTablesTooCoarseForTheAtmosphere) {
-  expect_runtime_error("precompute --planet venus --orders 3 --balance-orders --no-cache" + kSmall,
-                       "cannot represent");
-  const CliRun r = atmos_cli("precompute --orders 2 --balance-orders --no-cache" + kSmall);
-  EXPECT_EQ(r.code, 0) << r.err;
-}
-
 std::vector<std::vector<double>> parse_csv(const std::string& text, std::string& header, std::string& trailer) {
   std::vector<std::vector<double>> rows;
   std::stringstream ss(text);

@@ -82,7 +82,6 @@ struct TableOptions {
   int wavelengths = 0;  // 0: the planet file's
   double density_scale = 1.0;
   std::string solar;  // empty: the planet file's
-  bool balance_orders = false;
 
   void add(CLI::App& app) {
     app.add_option("--planet", planet, "Preset name (" + preset_list() + ") or planet JSON file")->capture_default_str();
@@ -99,9 +98,6 @@ struct TableOptions {
     app.add_option("--tables", tables, "Table sizes: default (256x64, 64x16, 8x32x128x32) or small (for tests)")
         ->check(CLI::IsMember({"default", "small"}))
         ->capture_default_str();
-    app.add_flag("--balance-orders", balance_orders,
-                 "Experimental: in optically thick atmospheres (Venus, 100x Earth) rescale each scattering order "
-                 "to re-emit the light the one before lost to the medium (no effect on the others)");
     app.add_option("--cache-dir", cache_dir, "Table cache directory (default $ATMOS_CACHE_DIR or ~/.cache/atmos)");
     app.add_flag("--no-cache", no_cache, "Always precompute; neither read nor write the cache");
   }
@@ -153,7 +149,6 @@ struct TableOptions {
       o.scattering_orders = parse_orders();
     }
     if (tables == "small") o.sizes = atmos::TableSizes{64, 16, 32, 8, 4, 16, 32, 8};
-    o.balance_orders = balance_orders;
     return o;
   }
 };

@@ -63,22 +63,6 @@ struct PrecomputeOptions {
   bool solve_tail = true;
   double tail_tolerance = 1e-5;
   int tail_iterations = 200;
-  // Experimental, off by default: in optically thick atmospheres (Venus,
-  // 100x Earth: where the tables' radius rows follow the optical depth),
-  // each explicit order's source is scaled so that the order re-emits the
-  // light the medium removed from the one before, found from what that order
-  // emitted and the flux it let out at the top and into the ground
-  // (src/precompute/energy_balance.cpp). It was made for the light that the
-  // linear interpolation between radius rows lost; since the source is read
-  // between rows with cubic weights (functions.glsl source_function_lookup)
-  // the orders nearly keep their light, and the balance takes the white-
-  // ground Venus from 1.006 to 0.986 of the sunlight (the brute-force
-  // reference: 0.98) but lowers the real Venus: reflected light 0.96 of the
-  // reference instead of 0.98, the light on the ground 0.90-0.96 of it
-  // instead of 0.92-0.98 (tests/venus_accuracy.cpp). Costs about as much as
-  // the multiple scattering step. No effect on other atmospheres. Throws
-  // Error if the tables are too coarse for it (a factor beyond [0.8, 1.25]).
-  bool balance_orders = false;
   // Called from the calling thread with the name of the running step and the
   // fraction of the whole precomputation done, in [0, 1].
   std::function<void(const std::string& step, double fraction)> progress;

@@ -110,7 +110,6 @@ std::string tables_cache_key(const Atmosphere& a, const PrecomputeOptions& optio
   write_sizes(h, options.sizes);
   h.value(std::int32_t(options.scattering_orders));
   h.value(options.auto_orders);
-  if (options.balance_orders) h.value(options.balance_orders);  // keeps the keys of the tables without it
   if (options.auto_orders) {
     h.value(options.auto_orders_tolerance);
     h.value(options.solve_tail);

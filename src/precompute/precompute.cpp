@@ -16,7 +16,6 @@
 #include "atmos/colour.hpp"
 #include "atmos/tables.hpp"
 #include "physics/parameters.hpp"
-#include "precompute/energy_balance.hpp"
 #include "precompute/steps.hpp"
 
 namespace atmos {
@@ -360,23 +359,6 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
     };
     bool converged = false;
     int last_order = K;  // the last explicit order (before the tail)
-    // The energy balance of the orders in optically thick atmospheres, if
-    // asked for (energy_balance.cpp): what the medium removes from order n,
-    // and the density of order n + 1 rescaled to re-emit it. The explicit
-    // orders only: with the factor of the last order frozen in the tail
-    // solver's operator, GMRES no longer converged on Venus over a white
-    // ground (residual 6e-2 after 100 steps instead of 9e-4, and the sum
-    // meaningless): light trapped between the ground and the cloud decays
-    // by about 1e-3 per order, and a factor of 1.0008 fitted to order 64's
-    // light is not that mode's.
-    std::unique_ptr<OrderEnergyBalance> balance;
-    if (options.balance_orders && balances_orders(ms) && K >= 2)
-      timed("energy_balance", 0.0, [&](auto&&) {
-        balance = std::make_unique<OrderEnergyBalance>(ms);
-        balance->set_single_scattering_emission(ms_transmittance);
-        balance->measure_order(ms_transmittance, ms_single_rayleigh, ms_single_aerosol, ms_single_rayleigh,
-                               indirect_irradiance, 1);
-      });
 
     for (int order = 2; order <= K; ++order) {
       timed("scattering_density", cost_order * 0.45, [&](auto&& progress) {
@@ -384,7 +366,6 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
         compute_scattering_density_table(ms, *geometry, ms_transmittance, ms_single_rayleigh, ms_single_aerosol,
                                          delta_multiple, delta_irradiance, order - 1, progress, density);
       });
-      if (balance) timed("energy_balance", 0.0, [&](auto&&) { balance->balance_density(density); });
       timed("indirect_irradiance", cost_order * 0.05, [&](auto&&) {
         delta_irradiance = compute_indirect_irradiance_table(ms, ms_transmittance, ms_single_rayleigh,
                                                              ms_single_aerosol, delta_multiple, order - 1);
@@ -402,11 +383,6 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
         for (vec3& v : delta_multiple.texels) v = max(v, vec3(0.0f));
         add_to_multiple(delta_multiple);
       });
-      if (balance)
-        timed("energy_balance", 0.0, [&](auto&&) {
-          balance->measure_order(ms_transmittance, ms_single_rayleigh, ms_single_aerosol, delta_multiple,
-                                 delta_irradiance, order);
-        });
       const glm::dvec3 channels_added = channel_sums(a, delta_multiple, 0);
       const double added = glm::dot(to_luminance, channels_added);
       // Each order of a physical atmosphere adds less light than the one
@@ -466,7 +442,6 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
         if (!geometry) geometry = make_order_geometry(ms);
         compute_scattering_density_table(ms, *geometry, ms_transmittance, ms_single_rayleigh, ms_single_aerosol,
                                          delta_multiple, delta_irradiance, last_order, nullptr, density);
-        if (balance) balance->balance_density(density);
         const Table2D next_irradiance = compute_indirect_irradiance_table(ms, ms_transmittance, ms_single_rayleigh,
                                                                           ms_single_aerosol, delta_multiple, last_order);
         Table3D next_radiance;
