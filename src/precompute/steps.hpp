@@ -11,7 +11,7 @@
 // rays' nodes, the density's quadrature) is computed once (OrderGeometry), and
 // the inner loops run on vectors of 4 floats (a texel's three channels) or
 // 8 (eight texels, view directions, harmonics or points of two solar discs
-// at a time), compiled for x86-64-v3 and the baseline (steps.cpp).
+// at a time; precompute/simd.hpp), compiled for x86-64-v3 and the baseline.
 #pragma once
 
 #include <functional>
