@@ -1,17 +1,17 @@
 // The tail of the series of scattering orders, solved for at once.
 //
-// Successive orders (seed 004 §4.2, Bruneton & Neyret 2008 §4) compute the
-// light scattered exactly n times from the light scattered n - 1 times: a
-// linear operator A (scattering density, then its integral along the view
-// rays, and the sky irradiance on the ground for its reflection) applied over
-// and over, v_{n+1} = A v_n. Their sum is the solution of the transport
-// equation, (I - A) S = v_2: the orders are its Neumann series, i.e. a power
-// iteration, which converges like ρ^n, ρ the spectral radius of A. In an
-// optically thick, nearly conservative atmosphere ρ is close to 1 — light
-// diffuses through the deep layers for hundreds of orders (Venus: the ratio
-// of successive orders is 0.995 in the green and 0.9975 in the blue; the
-// light that reaches the ground has been scattered hundreds of times) — and
-// summing orders to convergence costs hundreds of orders.
+// Successive orders (Bruneton & Neyret 2008, §4; Elek & Kmoch 2010, §4.2)
+// compute the light scattered exactly n times from the light scattered
+// n - 1 times: a linear operator A (scattering density, then its integral
+// along the view rays, and the sky irradiance on the ground for its
+// reflection) applied over and over, v_{n+1} = A v_n. Their sum is the
+// solution of the transport equation, (I - A) S = v_2: the orders are its
+// Neumann series, i.e. a power iteration, which converges like ρ^n, ρ the
+// spectral radius of A. In an optically thick, nearly conservative
+// atmosphere ρ is close to 1 (on Venus the ratio of successive orders is
+// about 0.995 in the green: the light that reaches the ground has been
+// scattered hundreds of times), and summing the orders to convergence costs
+// hundreds of orders.
 //
 // Krylov methods solve the same linear system in far fewer applications of
 // A: GMRES (Saad & Schultz 1986) picks, among all combinations of the fields
@@ -19,13 +19,10 @@
 // i.e. the best polynomial in A of degree k instead of the truncated series
 // 1 + A + ... + A^k. For a spectrum of A in [0, ρ] its error falls like
 // ((√κ - 1) / (√κ + 1))^k with κ = 1 / (1 - ρ), against ρ^k for the orders:
-// for ρ = 0.98, by 10^-3 in ~25 applications instead of ~340. This is what
-// transport codes do for the same slow "source iteration" (see the review of
-// Adams & Larsen 2002, Progress in Nuclear Energy 40). Measured on Venus
-// (tests/convergence_accuracy.cpp, small tables): 16 orders and 82 solver
-// steps give the sum of 600 orders (and of their geometric remainder) to
-// 7e-6 in the red and 1.5e-3 in the green (as good as that remainder's
-// extrapolation), and a residual of 4e-5 recomputed outside the solver.
+// for ρ = 0.98, by 10^-3 in ~25 applications instead of ~340. Transport
+// codes accelerate the same slow "source iteration" this way (Adams &
+// Larsen 2002, Progress in Nuclear Energy 40). tests/convergence_accuracy.cpp
+// checks the solver's sum against 600 explicit orders on Venus.
 //
 // Here it sums the orders after K, T = Σ_{n > K} v_n, which satisfies
 // (I - A) T = v_{K+1}: the K explicit orders stay what they are (light
@@ -38,22 +35,13 @@
 //
 // The Krylov basis holds `restart` fields (tables of the size of a
 // scattering table), and a plain restart forgets what the basis had learnt
-// of the slowest modes, which then have to be found again at every cycle:
-// once the Venus tables stopped losing light at the cloud top
-// (functions.glsl, scattering_u_mu), restarted GMRES(30) reached a residual
-// of only 1.4e-3 in 100 steps at 15 wavelengths and the default sizes
-// (GMRES(20) stalled at 1e-4 on the small tables of the tests). The restart
-// here is deflated (GMRES-DR, Morgan 2002, SIAM J. Sci. Comput. 24, 20): it
-// keeps the approximate eigenvectors (harmonic Ritz vectors) of the
-// `deflation` eigenvalues of I - A nearest 0 together with the residual, so
-// that those modes stay solved for and the next cycle works on the rest of
-// the spectrum. With 10 of 30 fields kept it reaches 1e-5 in 90 steps on
-// those Venus tables (98 before their r axis followed the optical depth;
-// up to 179 since the source is read between radius rows with cubic
-// weights, which keeps more light in every order, so the tail holds 0.57 of
-// all the light and its slowest modes decay more slowly; 105 with 3
-// wavelengths and up to 169 with 15 since the orders hand over from order
-// 16, precompute.cpp kEarliestTailHandoff).
+// of the slowest modes, which then have to be found again at every cycle
+// (restarted GMRES stalls on Venus's tables). The restart here is deflated
+// (GMRES-DR, Morgan 2002, SIAM J. Sci. Comput. 24, 20): it keeps the
+// approximate eigenvectors (harmonic Ritz vectors) of the `deflation`
+// eigenvalues of I - A nearest 0 together with the residual, so that those
+// modes stay solved for and the next cycle works on the rest of the
+// spectrum.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
