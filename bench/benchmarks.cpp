@@ -1,16 +1,75 @@
-// Google Benchmark targets: precomputation of the default Earth tables.
-// `atmos bench` prints the per-step figures; these allow repeated runs with
-// statistics (e.g. --benchmark_repetitions=5).
+// Google Benchmark targets over the measurements of `atmos bench`
+// (harness.hpp), for repeated runs with statistics, e.g.
+//   atmos_benchmarks --benchmark_repetitions=5
+// The frame benchmarks report the library's GPU times as manual time (the
+// wall-clock time of the draw on llvmpipe); they share one headless OpenGL
+// context and the default Earth tables, computed once.
 #include <benchmark/benchmark.h>
 
-#include "atmos/tables.hpp"
+#include <memory>
 
-static void BM_PrecomputeEarthDefault(benchmark::State& state) {
+#include "atmos/eclipse.hpp"
+#include "atmos/planet_file.hpp"
+#include "atmos/sky.hpp"
+#include "atmos/tables.hpp"
+#include "harness.hpp"
+
+namespace {
+
+// The default Earth tables and an OpenGL context, built at the first use.
+struct Scene {
+  atmos::Atmosphere atmosphere = atmos::load_atmosphere("earth");
+  atmos::Tables tables = atmos::precompute_tables(atmosphere, atmos::PrecomputeOptions{});
+  std::unique_ptr<atmos::GlContext> context = atmos::GlContext::create_headless();
+};
+
+Scene& scene() {
+  static Scene s;
+  return s;
+}
+
+void BM_PrecomputeEarthDefault(benchmark::State& state) {
   const atmos::Atmosphere earth = atmos::load_atmosphere("earth");
   atmos::PrecomputeOptions options;
   options.scattering_orders = int(state.range(0));
   for (auto _ : state) benchmark::DoNotOptimize(atmos::precompute_tables(earth, options));
 }
 BENCHMARK(BM_PrecomputeEarthDefault)->Arg(4)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+
+// A renderer frame (`atmos bench`'s render.WxH), arguments width and height;
+// the sky-view table's part as a counter.
+void BM_RenderFrame(benchmark::State& state) {
+  Scene& s = scene();
+  atmos::Renderer renderer(s.atmosphere, s.tables);
+  const atmos::Camera camera = atmos_bench::frame_camera(s.atmosphere, int(state.range(0)), int(state.range(1)));
+  const glm::dvec3 sun = atmos::direction_from_azimuth_elevation(150.0, 20.0);
+  (void)atmos_bench::time_frame(renderer, camera, sun);  // warm-up
+  double sky_view_ms = 0.0;
+  for (auto _ : state) {
+    const atmos_bench::FrameTime t = atmos_bench::time_frame(renderer, camera, sun);
+    state.SetIterationTime(t.frame_ms / 1000.0);
+    sky_view_ms += t.sky_view_ms;
+  }
+  state.counters["sky_view_ms"] = benchmark::Counter(sky_view_ms, benchmark::Counter::kAvgIterations);
+}
+BENCHMARK(BM_RenderFrame)->Args({1920, 1080})->Unit(benchmark::kMillisecond)->UseManualTime();
+
+// The engine plugin over the synthetic engine frame (`atmos bench`'s
+// plugin.WxH by day, sun 35° up).
+void BM_PluginFrame(benchmark::State& state) {
+  Scene& s = scene();
+  const int w = int(state.range(0)), h = int(state.range(1));
+  const atmos_bench::PluginScene plugin_scene(s.atmosphere, w, h);
+  atmos::AtmospherePass pass(s.atmosphere, s.tables, atmos::PlanetFrame{});
+  const atmos::FrameInput input = plugin_scene.input(35.0, false);
+  pass.render(input);  // warm-up
+  for (auto _ : state) {
+    pass.render(input);
+    state.SetIterationTime(pass.last_timings().total_ms() / 1000.0);
+  }
+}
+BENCHMARK(BM_PluginFrame)->Args({1920, 1080})->Unit(benchmark::kMillisecond)->UseManualTime();
+
+}  // namespace
 
 BENCHMARK_MAIN();

@@ -1,0 +1,250 @@
+#include "harness.hpp"
+
+#include <epoxy/gl.h>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "atmos/eclipse.hpp"
+#include "atmos/post.hpp"
+#include "atmos/sky.hpp"
+
+namespace atmos_bench {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::string size_suffix(int width, int height) { return "." + std::to_string(width) + "x" + std::to_string(height); }
+
+}  // namespace
+
+std::string format_figure(const Figure& figure) {
+  char value[64];
+  std::snprintf(value, sizeof value, figure.unit == "s" ? "%.3f" : "%.1f", figure.value);
+  return figure.name + "\t" + value + "\t" + figure.unit;
+}
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  return values[values.size() / 2];
+}
+
+atmos::Tables time_precomputation(const atmos::Atmosphere& atmosphere, const atmos::PrecomputeOptions& options,
+                                  const FigureSink& sink) {
+  const auto start = std::chrono::steady_clock::now();
+  atmos::Tables tables = atmos::precompute_tables(atmosphere, options);
+  const double total = seconds_since(start);
+  for (const auto& step : tables.timings) sink({"precompute." + step.name, step.seconds, "s"});
+  sink({"precompute.total", total, "s"});
+  return tables;
+}
+
+atmos::Tables time_spectral_precomputation(const atmos::Atmosphere& atmosphere, const atmos::PrecomputeOptions& options,
+                                           atmos::Atmosphere& spectral_atmosphere, const FigureSink& sink) {
+  spectral_atmosphere = atmosphere;
+  spectral_atmosphere.wavelengths_nm = atmos::spectral_wavelengths(15);
+  atmos::PrecomputeOptions spectral_options = options;
+  spectral_options.scattering_orders = 6;
+  spectral_options.auto_orders = false;
+  const auto start = std::chrono::steady_clock::now();
+  atmos::Tables tables = atmos::precompute_tables(spectral_atmosphere, spectral_options);
+  sink({"precompute.spectral15.orders6", seconds_since(start), "s"});
+  return tables;
+}
+
+atmos::Camera frame_camera(const atmos::Atmosphere& atmosphere, int width, int height) {
+  atmos::Camera c;
+  c.position = atmos::observer_position(atmosphere, 2.0);
+  c.forward = atmos::direction_from_azimuth_elevation(180.0, 10.0);
+  c.up = glm::dvec3(0.0, 0.0, 1.0);
+  c.fov_deg = 60.0;
+  c.projection = atmos::Projection::perspective;
+  c.width = width;
+  c.height = height;
+  return c;
+}
+
+FrameTime time_frame(atmos::Renderer& renderer, const atmos::Camera& camera, const glm::dvec3& sun_direction) {
+  renderer.render(camera, sun_direction);
+  return {renderer.last_frame_ms(), renderer.last_sky_view_ms()};
+}
+
+void time_frames(atmos::Renderer& renderer, const atmos::Camera& camera, const glm::dvec3& sun_direction, int runs,
+                 const std::string& name, const FigureSink& sink) {
+  (void)time_frame(renderer, camera, sun_direction);
+  std::vector<double> frame, sky_view;
+  for (int i = 0; i < runs; ++i) {
+    const FrameTime t = time_frame(renderer, camera, sun_direction);
+    frame.push_back(t.frame_ms);
+    sky_view.push_back(t.sky_view_ms);
+  }
+  sink({name + size_suffix(camera.width, camera.height), median(frame), "ms"});
+  sink({name + ".sky_view", median(sky_view), "ms"});
+}
+
+PluginScene::PluginScene(const atmos::Atmosphere& atmosphere, int w, int h) {
+  const double R = atmosphere.bottom_radius_m;
+  camera_ = glm::dvec3(0.0, 0.0, R + 300.0);
+  const glm::dvec3 forward = glm::normalize(glm::dvec3(0.0, 1.0, -std::tan(glm::radians(3.0))));
+  input_.width = w;
+  input_.height = h;
+  input_.view = glm::lookAt(camera_, camera_ + forward, glm::dvec3(0.0, 0.0, 1.0));
+  input_.projection = glm::perspective(glm::radians(60.0), double(w) / double(h), 0.5, 1e7);
+  input_.timed = true;
+  // The depth of the nearest sphere along each pixel's ray (ray-sphere
+  // intersection), as the engine's depth buffer would hold it.
+  struct Sphere {
+    glm::dvec3 centre;
+    double radius;
+  };
+  const std::vector<Sphere> scene = {{{0.0, 0.0, 0.0}, R},
+                                     {{-3e3, 12e3, R - 4e3}, 5e3},
+                                     {{9e3, 30e3, R - 8e3}, 10e3},
+                                     {{-20e3, 60e3, R - 15e3}, 18e3}};
+  std::vector<float> depth(size_t(w) * size_t(h), 1.0f);
+  const glm::dmat4 view_projection = input_.projection * input_.view;
+  const glm::dmat4 inverse = glm::inverse(view_projection);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const glm::dvec4 p = inverse * glm::dvec4((x + 0.5) / w * 2.0 - 1.0, (y + 0.5) / h * 2.0 - 1.0, -1.0, 1.0);
+      const glm::dvec3 ray = glm::normalize(glm::dvec3(p) / p.w - camera_);
+      double nearest = -1.0;
+      for (const Sphere& sphere : scene) {
+        const glm::dvec3 oc = camera_ - sphere.centre;
+        const double b = glm::dot(oc, ray), c = glm::dot(oc, oc) - sphere.radius * sphere.radius;
+        const double disc = b * b - c;
+        if (disc < 0.0) continue;
+        const double t = -b - std::sqrt(disc);
+        if (t > 0.0 && (nearest < 0.0 || t < nearest)) nearest = t;
+      }
+      if (nearest < 0.0) continue;
+      const glm::dvec4 clip = view_projection * glm::dvec4(camera_ + ray * nearest, 1.0);
+      depth[size_t(y) * size_t(w) + size_t(x)] = float(0.5 * clip.z / clip.w + 0.5);
+    }
+  const std::vector<float> colour(size_t(w) * size_t(h) * 4, 400.0f);
+  GLuint textures[2] = {0, 0};
+  glCreateTextures(GL_TEXTURE_2D, 2, textures);
+  glTextureStorage2D(textures[0], 1, GL_DEPTH_COMPONENT32F, w, h);
+  glTextureSubImage2D(textures[0], 0, 0, 0, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
+  glTextureStorage2D(textures[1], 1, GL_RGBA16F, w, h);
+  glTextureSubImage2D(textures[1], 0, 0, 0, w, h, GL_RGBA, GL_FLOAT, colour.data());
+  textures_[0] = textures[0];
+  textures_[1] = textures[1];
+  input_.depth = textures[0];
+  input_.colour = textures[1];
+}
+
+PluginScene::~PluginScene() {
+  const GLuint textures[2] = {textures_[0], textures_[1]};
+  glDeleteTextures(2, textures);
+}
+
+atmos::FrameInput PluginScene::input(double sun_elevation_deg, bool eclipse) const {
+  atmos::FrameInput input = input_;
+  input.sun_direction = atmos::direction_from_azimuth_elevation(20.0, sun_elevation_deg);
+  if (eclipse) input.moons = {atmos::moon_in_sky(camera_, input.sun_direction, 0.28 * M_PI / 180.0)};
+  return input;
+}
+
+void time_plugin(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, int width, int height,
+                 const FigureSink& sink) {
+  const PluginScene scene(atmosphere, width, height);
+  atmos::AtmospherePass pass(atmosphere, tables, atmos::PlanetFrame{});
+  struct Case {
+    const char* name;
+    double sun_elevation_deg;
+    bool eclipse;
+  };
+  const Case cases[] = {{"plugin", 35.0, false}, {"plugin.sunset", 4.0, false}, {"plugin.eclipse", 35.0, true}};
+  for (const Case& c : cases) {
+    const atmos::FrameInput input = scene.input(c.sun_elevation_deg, c.eclipse);
+    pass.render(input);  // warm-up: compiles this variant
+    std::vector<double> total, sky_view, volume, composite;
+    for (int i = 0; i < 5; ++i) {
+      pass.render(input);
+      const atmos::PassTimings& t = pass.last_timings();
+      total.push_back(t.total_ms());
+      sky_view.push_back(t.sky_view_ms);
+      volume.push_back(t.volume_ms);
+      composite.push_back(t.composite_ms);
+    }
+    const std::string name = c.name;
+    sink({name + size_suffix(width, height), median(total), "ms"});
+    sink({name + ".sky_view", median(sky_view), "ms"});
+    sink({name + ".volume", median(volume), "ms"});
+    sink({name + ".composite", median(composite), "ms"});
+  }
+}
+
+void time_post(atmos::Renderer& renderer, const atmos::Camera& camera, const FigureSink& sink) {
+  const int w = camera.width, h = camera.height;
+  const atmos::Image hdr = renderer.render(camera, atmos::direction_from_azimuth_elevation(180.0, 12.0));
+  GLuint texture = 0;
+  glCreateTextures(GL_TEXTURE_2D, 1, &texture);
+  glTextureStorage2D(texture, 1, GL_RGBA32F, w, h);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  glTextureSubImage2D(texture, 0, 0, 0, w, h, GL_RGB, GL_FLOAT, hdr.rgb.data());
+  std::vector<double> bloom, exposure, tone_map;
+  {
+    atmos::PostProcess post;
+    atmos::PostSettings settings;
+    settings.tone_mapping = atmos::ToneMapping::filmic;
+    settings.bloom.strength = 0.05;
+    settings.auto_exposure.enabled = true;
+    atmos::PostInput input;
+    input.colour = texture;
+    input.width = w;
+    input.height = h;
+    input.dt_s = 1.0 / 60.0;
+    input.timed = true;
+    // The warm-up frame also starts the eye adaptation: in the timed frames
+    // the bloom's bright pass does the exposure's reduction (post.bloom
+    // includes it, post.exposure is the adaptation alone; docs/post.md).
+    post.process(input, settings);
+    for (int i = 0; i < 5; ++i) {
+      post.process(input, settings);
+      bloom.push_back(post.last_timings().bloom_ms);
+      exposure.push_back(post.last_timings().exposure_ms);
+      tone_map.push_back(post.last_timings().tone_map_ms);
+    }
+  }
+  glDeleteTextures(1, &texture);
+  sink({"post.bloom" + size_suffix(w, h), median(bloom), "ms"});
+  sink({"post.exposure" + size_suffix(w, h), median(exposure), "ms"});
+  sink({"post.tonemap" + size_suffix(w, h), median(tone_map), "ms"});
+}
+
+void run_all(const atmos::Atmosphere& atmosphere, const atmos::PrecomputeOptions& options, int width, int height,
+             const FigureSink& sink) {
+  const atmos::Tables tables = time_precomputation(atmosphere, options, sink);
+  atmos::Atmosphere spectral_atmosphere;
+  const atmos::Tables spectral_tables = time_spectral_precomputation(atmosphere, options, spectral_atmosphere, sink);
+
+  // The context outlives the renderers (declared first, destroyed last).
+  const std::unique_ptr<atmos::GlContext> context = atmos::GlContext::create_headless();
+  atmos::Renderer renderer(atmosphere, tables);
+  const atmos::Camera camera = frame_camera(atmosphere, width, height);
+  time_frames(renderer, camera, atmos::direction_from_azimuth_elevation(150.0, 20.0), 5, "render", sink);
+  // A total eclipse seen from the centre of the shadow: the sky-view pass
+  // integrates single scattering along every view ray, eclipsed node by node.
+  const glm::dvec3 eclipse_sun = atmos::direction_from_azimuth_elevation(150.0, 40.0);
+  renderer.set_moons({atmos::moon_in_sky(camera.position, eclipse_sun, 0.27 * M_PI / 180.0)});
+  time_frames(renderer, camera, eclipse_sun, 3, "render.eclipse", sink);
+  renderer.set_moons({});
+  // Twilight with the spectral tables: the sky-view pass integrates the low
+  // sun's single scattering at all 15 wavelengths.
+  atmos::Renderer spectral_renderer(spectral_atmosphere, spectral_tables);
+  time_frames(spectral_renderer, camera, atmos::direction_from_azimuth_elevation(150.0, -3.0), 3,
+              "render.spectral15.twilight", sink);
+  time_plugin(atmosphere, tables, width, height, sink);
+  time_post(renderer, camera, sink);
+}
+
+}  // namespace atmos_bench
