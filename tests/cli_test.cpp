@@ -3,10 +3,12 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -55,7 +57,8 @@ void expect_runtime_error(const std::string& args, const std::string& needle) {
 const std::string kSmall = " --tables small";
 
 TEST(Cli, HelpEverywhere) {
-  for (const char* cmd : {"--help", "render --help", "precompute --help", "sample --help", "bench --help"}) {
+  for (const char* cmd :
+       {"--help", "render --help", "precompute --help", "sample --help", "bench --help", "plot-data --help"}) {
     const CliRun r = atmos_cli(cmd);
     EXPECT_EQ(r.code, 0) << cmd;
     EXPECT_NE(r.out.find("--"), std::string::npos) << cmd;
@@ -88,7 +91,133 @@ TEST(Cli, UsageErrorsAreOneLineWithExitCode2) {
   expect_usage_error("render --moon 10,20,nan" + kSmall, "finite");
   expect_usage_error("render --moon 1,2,0.3 --moon 1,2,0.3 --moon 1,2,0.3 --moon 1,2,0.3 --moon 1,2,0.3" + kSmall,
                      "--moon");
+  expect_usage_error("render --fov 0" + kSmall, "--fov");
+  expect_usage_error("render --fov 180" + kSmall, "--fov");
+  expect_usage_error("render -o sky.jpg" + kSmall, "-o/--output");
+  expect_usage_error("render --altitude 10 --position 7e6,0,0" + kSmall, "--altitude");
+  expect_usage_error("sample --paths 100" + kSmall, "--reference");
+  expect_usage_error("sample --reference --sun-disc" + kSmall, "--reference");
   expect_usage_error("nosuchcommand", "nosuchcommand");
+}
+
+// The help text of option `name` in `help` (CLI11's layout: the option's
+// line, and its description on the next line when the names are long),
+// empty if the option is not listed.
+std::string option_help(const std::string& help, const std::string& name) {
+  std::stringstream ss(help);
+  std::string line, out;
+  bool inside = false;
+  while (std::getline(ss, line)) {
+    if (line.empty()) inside = false;
+    const bool option_line = line.rfind("  -", 0) == 0;
+    if (option_line) {
+      const std::string names = line.substr(2, line.find(' ', 2) - 2);
+      inside = false;
+      std::stringstream ns(names);
+      std::string n;
+      while (std::getline(ns, n, ','))
+        if (n == name || n.rfind(name + "=", 0) == 0) inside = true;
+    }
+    if (inside) out += line + "\n";
+  }
+  return out;
+}
+
+// An option shared by several commands: who takes it, a bad value of it,
+// and the exit code and message that value gives.
+struct SharedOption {
+  std::string name;
+  std::vector<std::string> commands;
+  std::string bad;
+  int code;
+  std::string message;
+};
+
+const std::vector<std::string> kAllCommands = {"render", "precompute", "sample", "bench", "plot-data"};
+const std::vector<std::string> kCachedCommands = {"render", "precompute", "sample", "plot-data"};
+const std::vector<std::string> kViewCommands = {"render", "sample"};
+
+const std::vector<SharedOption>& shared_options() {
+  static const std::vector<SharedOption> options = {
+      {"--planet", kAllCommands, "--planet /no/such/planet.json", 1, "neither a preset"},
+      {"--wavelengths", kAllCommands, "--wavelengths 2", 2, "--wavelengths must be in [3, 48], got 2"},
+      {"--density-scale", kAllCommands, "--density-scale 0", 2, "--density-scale must be in (0, 10000], got 0"},
+      {"--solar", kAllCommands, "--solar blackbody:10", 2, "--solar must be table or blackbody:T"},
+      {"--orders", kAllCommands, "--orders 0", 2, "--orders must be auto or an integer in [1, 100]"},
+      {"--tables", kAllCommands, "--tables huge", 2, "--tables"},
+      {"--cache-dir", kCachedCommands, "--cache-dir cache --no-cache", 2, "--cache-dir"},
+      {"--no-cache", kCachedCommands, "--no-cache --cache-dir cache", 2, "--no-cache"},
+      {"--altitude", kViewCommands, "--altitude -5", 2, "--altitude must be in [0, 1e12] metres, got -5"},
+      {"--position", kViewCommands, "--position 0,0,10", 2, "--position is inside the planet"},
+      {"--sun-elevation", kViewCommands, "--sun-elevation 95", 2, "--sun-elevation must be in [-90, 90] degrees"},
+      {"--sun-azimuth", kViewCommands, "--sun-azimuth inf", 2, "--sun-azimuth must be a finite number"},
+      {"--moon", kViewCommands, "--moon 10,95,0.3", 2, "--moon elevation must be in [-90, 90] degrees, got 95"},
+      {"--size", {"render", "bench"}, "--size banana", 2, "--size expects WxH"},
+  };
+  return options;
+}
+
+// Arguments every command needs besides the option under test.
+std::string required_arguments(const std::string& command) {
+  return command == "plot-data" ? " --out " + (scratch() / "plot-never-written").string() : "";
+}
+
+// A shared option is taken by every command it belongs to, with one help
+// text (--size: one format and range, each command its own default and
+// description) and the same message for the same bad value, given before
+// any slow work (bench precomputes for minutes, sample would read stdin).
+TEST(Cli, SharedOptionsMeanTheSameInEveryCommand) {
+  std::map<std::string, std::string> help;
+  for (const std::string& command : kAllCommands) help[command] = atmos_cli(command + " --help").out;
+  for (const SharedOption& option : shared_options()) {
+    std::string first_help, first_error;
+    for (const std::string& command : kAllCommands) {
+      const std::string text = option_help(help[command], option.name);
+      const bool takes = std::find(option.commands.begin(), option.commands.end(), command) != option.commands.end();
+      EXPECT_EQ(!text.empty(), takes) << command << " " << option.name << "\n" << help[command];
+      if (!takes) {
+        const CliRun r = atmos_cli(command + " " + option.bad + required_arguments(command));
+        EXPECT_EQ(r.code, 2) << command << " " << option.bad << "\n" << r.err;
+        EXPECT_NE(r.err.find("not expected"), std::string::npos) << command << " " << option.bad << "\n" << r.err;
+        continue;
+      }
+      if (option.name != "--size") {
+        if (first_help.empty()) first_help = text;
+        EXPECT_EQ(text, first_help) << command << " " << option.name;
+      }
+      const std::string tables = option.name == "--tables" ? "" : kSmall;
+      const CliRun r = atmos_cli(command + " " + option.bad + required_arguments(command) + tables);
+      EXPECT_EQ(r.code, option.code) << command << " " << option.bad << "\n" << r.err;
+      EXPECT_EQ(lines(r.err), 1) << command << " " << option.bad << "\n" << r.err;
+      EXPECT_NE(r.err.find(option.message), std::string::npos) << command << " " << option.bad << "\n" << r.err;
+      if (first_error.empty()) first_error = r.err;
+      EXPECT_EQ(r.err, first_error) << command << " " << option.bad;
+      EXPECT_TRUE(r.out.empty()) << command << " " << option.bad << ": nothing done before the error\n" << r.out;
+    }
+  }
+  EXPECT_FALSE(fs::exists(scratch() / "plot-never-written"));
+}
+
+// Valid, non-default values of every shared option, each command that takes
+// them at once (bench only through the bad values above: it runs minutes).
+TEST(Cli, EveryCommandRunsWithItsSharedOptions) {
+  const std::string planet = " --planet earth --wavelengths 3 --density-scale 1.5 --solar blackbody:5800 --orders 2" +
+                             kSmall + " --cache-dir " + (scratch() / "shared-cache").string();
+  const std::string view = " --altitude 100 --sun-elevation 20 --sun-azimuth 90 --moon 270,30,0.3 --moon 0,60,0.5";
+  CliRun r = atmos_cli("precompute" + planet);
+  EXPECT_EQ(r.code, 0) << r.err;
+  r = atmos_cli("render --cpu --size 8x8 -o " + (scratch() / "shared.exr").string() + planet + view);
+  EXPECT_EQ(r.code, 0) << r.err;
+  r = atmos_cli("render --cpu --size 8x8 -o " + (scratch() / "shared.exr").string() + planet +
+                " --position 7e6,1e6,2e6 --sun-elevation 20 --moon 270,30,0.3");
+  EXPECT_EQ(r.code, 0) << r.err;
+  r = atmos_cli("sample" + planet + view, "azimuth_deg,elevation_deg\n0,90\n");
+  EXPECT_EQ(r.code, 0) << r.err;
+  r = atmos_cli("sample --position 7e6,1e6,2e6 --sun-elevation 20 --moon 270,30,0.3" + planet,
+                "azimuth_deg,elevation_deg\n0,90\n");
+  EXPECT_EQ(r.code, 0) << r.err;
+  r = atmos_cli("plot-data --out " + (scratch() / "shared-plots").string() + planet);
+  EXPECT_EQ(r.code, 0) << r.err;
 }
 
 TEST(Cli, BadPlanetFilesAreOneLineErrors) {
@@ -330,6 +459,84 @@ TEST(Cli, MoonInFrontOfTheSunDarkensTheSky) {
   EXPECT_LT(eclipse.rgb[centre], 1e-2 * day.rgb[centre]);
   EXPECT_GT(eclipse.rgb[centre], 0.0f);
   EXPECT_NEAR(eclipse_cpu.rgb[centre] / eclipse.rgb[centre], 1.0, 0.01);
+}
+
+// The luminance column of every row of `sample`'s output.
+std::vector<double> sample_luminances(const CliRun& r) {
+  std::string header, trailer;
+  std::vector<double> out;
+  for (const auto& row : parse_csv(r.out, header, trailer)) out.push_back(row.at(2));
+  return out;
+}
+
+// The luminance of a 1x1 CPU render looking along (azimuth, elevation): the
+// ray through the image centre.
+double render_luminance(const std::string& args, double azimuth, double elevation, const std::string& name) {
+  const fs::path out = scratch() / (name + ".exr");
+  const CliRun r = atmos_cli("render --cpu --size 1x1 --look " + std::to_string(azimuth) + "," +
+                             std::to_string(elevation) + args + " -o " + out.string());
+  EXPECT_EQ(r.code, 0) << args << "\n" << r.err;
+  const atmos::Image image = atmos::read_exr(out.string());
+  return pixel(image, 0, 0).luminance();
+}
+
+// `sample --moon` eclipses the light as `render --moon` does: a moon on the
+// sun darkens the sky by orders of magnitude, in both, by the same amount
+// (sample evaluates the functions render_cpu runs, for the direction of the
+// centre of a 1x1 image), from --altitude and from a --position whose local
+// frame is not the north pole's; the reference takes the moons too.
+TEST(Cli, SampleMoonInFrontOfTheSunDarkensTheSkyAsRenderDoes) {
+  const std::string directions = "azimuth_deg,elevation_deg\n180,60\n0,80\n";
+  for (const std::string& place : {std::string(" --altitude 2"), std::string(" --position 3891338,3891338,3210354")}) {
+    const std::string light = place + " --sun-elevation 40 --sun-azimuth 180" + kSmall;
+    const std::string moon = " --moon 180,40,0.3";
+    const CliRun day = atmos_cli("sample" + light, directions);
+    const CliRun eclipse = atmos_cli("sample" + light + moon, directions);
+    ASSERT_EQ(day.code, 0) << day.err;
+    ASSERT_EQ(eclipse.code, 0) << eclipse.err;
+    const std::vector<double> sky = sample_luminances(day), dark = sample_luminances(eclipse);
+    ASSERT_EQ(sky.size(), 2u);
+    ASSERT_EQ(dark.size(), 2u);
+    const double render_sky = render_luminance(light, 180.0, 60.0, "sample-day");
+    const double render_dark = render_luminance(light + moon, 180.0, 60.0, "sample-eclipse");
+    std::printf("%s: sky at (180, 60) %.6g cd/m2 (render %.6g), eclipsed %.6g (render %.6g)\n", place.c_str(), sky[0],
+                render_sky, dark[0], render_dark);
+    for (size_t i = 0; i < 2; ++i) {
+      EXPECT_LT(dark[i], 1e-2 * sky[i]) << place << " row " << i;
+      EXPECT_GT(dark[i], 0.0) << place << " row " << i;
+    }
+    // The same functions in float, rounded differently: 6e-5 of the sky by
+    // day, 8e-4 of the 4e5 times fainter eclipsed one (measured).
+    EXPECT_NEAR(sky[0] / render_sky, 1.0, 1e-3) << place;
+    EXPECT_NEAR(dark[0] / render_dark, 1.0, 5e-3) << place;
+    // With the tables, the horizontal irradiance is not eclipsed: no figure.
+    EXPECT_NE(eclipse.out.find("# horizontal irradiance: not computed"), std::string::npos) << eclipse.out;
+  }
+  const std::string reference = " --reference --paths 2000 --orders 4 --sun-elevation 40 --sun-azimuth 180" + kSmall;
+  const CliRun day = atmos_cli("sample" + reference, directions);
+  const CliRun eclipse = atmos_cli("sample" + reference + " --moon 180,40,0.3", directions);
+  ASSERT_EQ(day.code, 0) << day.err;
+  ASSERT_EQ(eclipse.code, 0) << eclipse.err;
+  const std::vector<double> sky = sample_luminances(day), dark = sample_luminances(eclipse);
+  ASSERT_EQ(dark.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) EXPECT_LT(dark[i], 1e-2 * sky[i]) << "reference, row " << i;
+}
+
+// A bad --moon is a one-line usage error of sample, as of render, before
+// stdin is read.
+TEST(Cli, SampleRejectsBadMoons) {
+  expect_usage_error("sample --moon 10,20" + kSmall, "--moon expects AZ,EL,ANGULAR_RADIUS_DEG");
+  expect_usage_error("sample --moon 10,20,0.3,4" + kSmall, "--moon expects AZ,EL,ANGULAR_RADIUS_DEG");
+  expect_usage_error("sample --moon a,b,c" + kSmall, "--moon expects AZ,EL,ANGULAR_RADIUS_DEG");
+  expect_usage_error("sample --moon 10,95,0.3" + kSmall, "--moon elevation must be in [-90, 90] degrees");
+  expect_usage_error("sample --moon 10,20,0" + kSmall, "--moon angular radius must be in (0, 10] degrees");
+  expect_usage_error("sample --moon 10,20,11" + kSmall, "--moon angular radius must be in (0, 10] degrees");
+  expect_usage_error("sample --moon 10,20,nan" + kSmall, "--moon must be a finite number");
+  expect_usage_error("sample --moon 1,2,0.3 --moon 1,2,0.3 --moon 1,2,0.3 --moon 1,2,0.3 --moon 1,2,0.3" + kSmall,
+                     "--moon: at most 4 moons");
+  // From 384 400 km up, a moon straight down at the Moon's distance sits at
+  // the planet's centre.
+  expect_usage_error("sample --altitude 384400000 --moon 0,-90,0.3" + kSmall, "reaches into the atmosphere");
 }
 
 TEST(Cli, RenderProjectionsAndCpuPath) {

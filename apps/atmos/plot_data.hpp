@@ -2,10 +2,10 @@
 //
 // A plotting helper of the command line, not part of the library: it only
 // reads the library's public API (the planet description, the tables, the
-// sky model, the colour conversion and the reference's optical depth
-// quadrature) and writes what it reads as CSV files into one directory.
-// scripts/plots.py turns them into PNG images. Header-only because the
-// command line is built from apps/atmos/main.cpp alone.
+// sky model, the colour conversion) and the reference's transmittance, and
+// writes what it reads as CSV files into one directory. scripts/plots.py
+// turns them into PNG images. Header-only so that tests/plot_test.cpp can
+// call its writers without the command line (plot_data.cpp runs them).
 //
 //   info.csv           key,value: planet, working wavelengths, orders, options
 //   solar.csv          wavelength_nm,irradiance_W_m2_nm (360-830 nm, 1 nm steps)
@@ -45,7 +45,7 @@
 
 #include "atmos/atmosphere.hpp"
 #include "atmos/colour.hpp"
-#include "atmos/reference.hpp"
+#include "reference/reference.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
 
@@ -139,8 +139,8 @@ inline void write_extinction(std::ostream& out, const atmos::Atmosphere& a) {
 
 // Transmittance from `altitude_m` to the top of the atmosphere along a view
 // zenith angle, at every working wavelength; empty if the ray hits the ground.
-// The optical depth is the reference's quadrature (reference_detail), which
-// reads nothing but the planet description.
+// The reference's transmittance, which reads nothing but the planet
+// description.
 inline std::vector<double> transmittance_to_top(const atmos::Atmosphere& a, double altitude_m, double zenith_deg) {
   const double r = a.bottom_radius_m + altitude_m;
   const double mu = std::cos(zenith_deg * M_PI / 180.0);
@@ -151,9 +151,7 @@ inline std::vector<double> transmittance_to_top(const atmos::Atmosphere& a, doub
   const glm::dvec3 from(0.0, 0.0, r);
   const glm::dvec3 view(std::sin(zenith_deg * M_PI / 180.0), 0.0, mu);
   const glm::dvec3 to = from + view * to_top;
-  std::vector<double> t;
-  for (double w : a.wavelengths_nm) t.push_back(std::exp(-atmos::reference_detail::optical_depth(a, w, from, to)));
-  return t;
+  return atmos::reference_transmittance(a, from, to);
 }
 
 inline void write_transmittance(std::ostream& out, const atmos::Atmosphere& a) {

@@ -1,0 +1,48 @@
+// atmos bench: precomputation and frame times as name<TAB>value<TAB>unit
+// lines, measured by the benchmark harness (bench/harness.hpp).
+#include <cstdio>
+#include <memory>
+
+#include "commands.hpp"
+#include "harness.hpp"
+
+namespace atmos_cli {
+
+namespace {
+
+struct BenchOptions {
+  PlanetOptions planet;
+  TableOptions tables;
+  SizeOption size{"1920x1080"};
+};
+
+int run_bench(const BenchOptions& o) {
+  o.planet.validate();
+  o.tables.validate();
+  const auto [w, h] = o.size.parse();
+  const atmos::Atmosphere atmosphere = o.planet.atmosphere();
+  atmos_bench::run_all(atmosphere, o.tables.precompute_options(), w, h, [](const atmos_bench::Figure& figure) {
+    std::printf("%s\n", atmos_bench::format_figure(figure).c_str());
+    std::fflush(stdout);
+  });
+  return 0;
+}
+
+}  // namespace
+
+Command add_bench_command(CLI::App& app) {
+  auto o = std::make_shared<BenchOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "bench",
+      "Time the library and print name<TAB>value<TAB>unit lines: each precomputation step of the tables "
+      "(precompute.*, s; always computed, never from the cache), 15-wavelength tables with 6 orders, and the GPU "
+      "times (ms, medians after a warm-up) of the renderer's frames (by day, in a total eclipse, at twilight with "
+      "the spectral tables), of the engine plugin (by day, at sunset, in a total eclipse) and of the "
+      "post-processing passes");
+  o->planet.add(*cmd);
+  o->tables.add(*cmd);
+  o->size.add(*cmd, "Size of the timed frames (the frame figures are named after it)");
+  return {cmd, [o] { return run_bench(*o); }};
+}
+
+}  // namespace atmos_cli

@@ -1,0 +1,307 @@
+// atmos render: images from the tables, on the GPU (or the CPU with --cpu);
+// with only the planet and table options, the default gallery.
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "atmos/image.hpp"
+#include "atmos/post.hpp"
+#include "atmos/renderer.hpp"
+#include "atmos/sky.hpp"
+#include "commands.hpp"
+
+namespace atmos_cli {
+
+namespace {
+
+struct RenderOptions {
+  PlanetOptions planet;
+  TableOptions tables;
+  CacheOptions cache;
+  ViewpointOptions viewpoint;
+  SunOptions sun;
+  MoonOptions moons;
+  SizeOption size{"640x360"};
+  std::string look;
+  double fov = 0.0;
+  bool fov_given = false;  // else the projection's default
+  std::string projection = "perspective";
+  double exposure = 13.0;
+  std::vector<std::string> outputs;
+  std::string precision = "full";
+  bool cpu = false;
+  bool stars = false;
+  // Camera-like PNG output (PostProcess): --tonemap, --bloom, --auto-exposure.
+  std::string tonemap = "exp";
+  double bloom = 0.0;
+  bool auto_exposure = false;
+  bool post = false;     // one of them given
+  bool gallery = false;  // no option but the planet, table, cache, --precision and --cpu ones
+};
+
+struct Shot {
+  std::string name;
+  atmos::Camera camera;
+  glm::dvec3 sun;
+  double exposure;
+  std::vector<atmos::Moon> moons = {};
+};
+
+atmos::Projection parse_projection(const std::string& p) {
+  if (p == "perspective") return atmos::Projection::perspective;
+  if (p == "fisheye") return atmos::Projection::fisheye;
+  return atmos::Projection::equirect;
+}
+
+// Camera looking along (azimuth, elevation) of the local frame at the point
+// below it (x = east, y = north, z = up at the north pole).
+atmos::Camera make_camera(const glm::dvec3& position, double azimuth, double elevation, double fov,
+                          atmos::Projection projection, int width, int height) {
+  atmos::Camera c;
+  c.position = position;
+  c.forward = atmos::direction_from_azimuth_elevation(azimuth, elevation);
+  // Straight up or down: the look azimuth is at the top of the image (north
+  // for azimuth 0; looking up, east is then on the left, as on all-sky
+  // cameras; looking down, on the right, as on maps).
+  c.up = std::abs(elevation) > 89.9 ? atmos::direction_from_azimuth_elevation(azimuth, 0.0) : glm::dvec3(0, 0, 1);
+  c.projection = projection;
+  c.fov_deg = fov > 0.0 ? fov : (projection == atmos::Projection::fisheye ? 180.0 : 60.0);
+  c.width = width;
+  c.height = height;
+  return c;
+}
+
+bool has_extension(const std::string& path, const std::string& extension) {
+  if (path.size() < extension.size()) return false;
+  std::string ext = path.substr(path.size() - extension.size());
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return ext == extension;
+}
+
+void write_outputs(const atmos::Image& image, const std::vector<std::string>& outputs, double exposure) {
+  for (const auto& path : outputs) {
+    atmos::write_image(image, path, exposure);
+    std::printf("wrote %s\n", path.c_str());
+  }
+}
+
+// PNG outputs through PostProcess (tone map, bloom, auto exposure); EXR
+// outputs keep the HDR values (write_image). A still has no past: with
+// --auto-exposure it is exposed at the converged value directly (the first
+// frame after a reset starts at its target, see AutoExposureSettings).
+void write_outputs_post(atmos::PostProcess& post, const atmos::Image& image, const std::vector<std::string>& outputs,
+                        const RenderOptions& o) {
+  atmos::PostSettings settings;
+  settings.tone_mapping = atmos::parse_tone_mapping(o.tonemap);
+  settings.exposure_ev = o.exposure;
+  settings.bloom.strength = o.bloom;
+  settings.auto_exposure.enabled = o.auto_exposure;
+  bool processed = false;
+  atmos::DisplayImage display;
+  for (const auto& path : outputs) {
+    if (!has_extension(path, ".png")) {
+      atmos::write_image(image, path, o.exposure);
+    } else {
+      if (!processed) {
+        post.reset();
+        display = post.process_image(image, settings);
+        processed = true;
+        if (o.auto_exposure) std::printf("auto exposure: EV100 %.2f\n", post.current_exposure_ev());
+      }
+      atmos::write_png(display, path);
+    }
+    std::printf("wrote %s\n", path.c_str());
+  }
+}
+
+std::vector<Shot> gallery(const atmos::Atmosphere& a) {
+  const glm::dvec3 ground = atmos::observer_position(a, 2.0);
+  // Exposures are set for Earth's sunlight (ASTM E490: 1.873 W m^-2 nm^-1 at
+  // 550 nm) and shifted by the planet's: Mars' sun is 1.2 stops dimmer.
+  const double ev_shift = std::log2(a.solar_irradiance.at(550.0) / 1.873);
+  std::vector<Shot> shots;
+  shots.push_back({"noon", make_camera(ground, 0.0, 12.0, 75.0, atmos::Projection::perspective, 960, 540),
+                   atmos::direction_from_azimuth_elevation(180.0, 70.0), 13.5 + ev_shift});
+  shots.push_back({"sunset", make_camera(ground, 270.0, 8.0, 75.0, atmos::Projection::perspective, 960, 540),
+                   atmos::direction_from_azimuth_elevation(270.0, 1.0), 10.5 + ev_shift});
+  shots.push_back({"allsky", make_camera(ground, 0.0, 90.0, 180.0, atmos::Projection::fisheye, 540, 540),
+                   atmos::direction_from_azimuth_elevation(135.0, 20.0), 13.0 + ev_shift});
+  // The planet from 2.5 radii, looking at the centre, sun from the side.
+  const double d = 2.5 * a.bottom_radius_m;
+  atmos::Camera orbit;
+  orbit.position = glm::dvec3(d, 0.0, 0.0);
+  orbit.forward = glm::dvec3(-1.0, 0.0, 0.0);
+  orbit.up = glm::dvec3(0.0, 0.0, 1.0);
+  orbit.fov_deg = 50.0;
+  orbit.width = 960;
+  orbit.height = 540;
+  shots.push_back({"orbit", orbit, glm::normalize(glm::dvec3(0.35, 1.0, 0.25)), 13.0 + ev_shift});
+  return shots;
+}
+
+// The one shot of a render with options; every value is checked here, before
+// the tables are loaded.
+Shot single_shot(const RenderOptions& o, const atmos::Atmosphere& a) {
+  const auto [w, h] = o.size.parse();
+  const Viewpoint viewpoint = o.viewpoint.viewpoint(a);
+  const glm::dvec3 sun = o.sun.direction(viewpoint);
+  // By default the camera looks towards the sun's azimuth, 15° up; from
+  // outside the atmosphere, straight down at the planet.
+  double look_az = o.sun.azimuth, look_el = glm::length(viewpoint.position) > a.top_radius_m ? -90.0 : 15.0;
+  if (!o.look.empty()) {
+    const auto l = parse_numbers(o.look, 2, "--look", "AZ,EL");
+    look_az = l[0];
+    look_el = l[1];
+    if (look_el < -90.0 || look_el > 90.0)
+      throw UsageError("--look elevation must be in [-90, 90] degrees, got " + quote(look_el));
+  }
+  const atmos::Projection projection = parse_projection(o.projection);
+  if (o.fov_given) {
+    finite(o.fov, "--fov");
+    if (projection == atmos::Projection::perspective && !(o.fov > 0.0 && o.fov < 180.0))
+      throw UsageError("--fov of a perspective camera must be in (0, 180) degrees, got " + quote(o.fov));
+    if (projection == atmos::Projection::fisheye && !(o.fov > 0.0 && o.fov <= 360.0))
+      throw UsageError("--fov of a fisheye camera must be in (0, 360] degrees, got " + quote(o.fov));
+  }
+  atmos::Camera camera =
+      make_camera(viewpoint.position, look_az, look_el, o.fov_given ? o.fov : 0.0, projection, w, h);
+  camera.forward = viewpoint.local * camera.forward;
+  camera.up = viewpoint.local * camera.up;
+  atmos::validate_camera(camera);
+  return {"render", camera, sun, o.exposure, o.moons.place(viewpoint, a)};
+}
+
+void check_options(const RenderOptions& o) {
+  o.planet.validate();
+  o.tables.validate();
+  finite(o.exposure, "--exposure");
+  finite(o.bloom, "--bloom");
+  if (o.bloom < 0.0 || o.bloom > 1.0) throw UsageError("--bloom must be in [0, 1], got " + quote(o.bloom));
+  for (const std::string& path : o.outputs)
+    if (!has_extension(path, ".png") && !has_extension(path, ".exr"))
+      throw UsageError("-o/--output must name a .png or .exr file, got \"" + path + "\"");
+}
+
+int run_render(const RenderOptions& o) {
+  check_options(o);
+  const atmos::Atmosphere atmosphere = o.planet.atmosphere();
+  const std::vector<Shot> shots = o.gallery ? gallery(atmosphere) : std::vector<Shot>{single_shot(o, atmosphere)};
+  const LoadedTables loaded = load_tables(o.planet, o.tables, o.cache, true);
+  const atmos::Atmosphere& a = loaded.atmosphere;
+
+  // The context outlives every GL object below (declared first, destroyed last).
+  std::unique_ptr<atmos::GlContext> context;
+  if (!o.cpu || o.post) context = atmos::GlContext::create_headless();
+  std::unique_ptr<atmos::Renderer> renderer;
+  if (!o.cpu)
+    renderer = std::make_unique<atmos::Renderer>(
+        a, loaded.tables, o.precision == "half" ? atmos::TexturePrecision::half : atmos::TexturePrecision::full);
+  // The post-processing runs on the GPU, also after a --cpu render.
+  std::unique_ptr<atmos::PostProcess> post;
+  if (o.post) post = std::make_unique<atmos::PostProcess>();
+  const std::vector<std::string> outputs = o.outputs.empty() ? std::vector<std::string>{"atmos.png"} : o.outputs;
+  for (const Shot& shot : shots) {
+    // The star field: with --stars, and whenever the sun is below the
+    // horizon of a single render (the gallery's shots are by day or from
+    // space, without).
+    const bool stars = !o.gallery && (o.stars || o.sun.elevation < 0.0);
+    if (renderer) {
+      renderer->set_stars(stars);
+      renderer->set_moons(shot.moons);
+    }
+    const atmos::Image image = o.cpu ? atmos::render_cpu(a, loaded.tables, shot.camera, shot.sun, stars, shot.moons)
+                                     : renderer->render(shot.camera, shot.sun);
+    if (o.gallery) {
+      write_outputs(image, {shot.name + ".png", shot.name + ".exr"}, shot.exposure);
+    } else if (post) {
+      write_outputs_post(*post, image, outputs, o);
+    } else {
+      write_outputs(image, outputs, o.exposure);
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+
+Command add_render_command(CLI::App& app) {
+  auto o = std::make_shared<RenderOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "render",
+      "Render an image of the sky (and of the ground and the planet) into the output files. With no option but "
+      "the planet, table and cache options, --precision and --cpu: the default gallery (noon, sunset, allsky and "
+      "orbit, each .png and .exr) into the current directory");
+  o->planet.add(*cmd);
+  o->tables.add(*cmd);
+  o->cache.add(*cmd);
+  o->viewpoint.add(*cmd);
+  o->sun.add(*cmd);
+  o->moons.add(*cmd);
+  cmd->add_option("--look", o->look,
+                  "View direction: azimuth AZ (degrees clockwise from north) and elevation EL in [-90, 90] "
+                  "(default: the sun's azimuth, 15 degrees up; from outside the atmosphere, straight down)")
+      ->type_name("AZ,EL");
+  auto* fov = cmd->add_option("--fov", o->fov,
+                  "Field of view, degrees: vertical for perspective, in (0, 180) (default 60); the circle's for "
+                  "fisheye, in (0, 360] (default 180); unused by equirect")
+      ->type_name("DEG");
+  cmd->add_option("--projection", o->projection,
+                  "Camera model: perspective (pinhole), fisheye (equidistant) or equirect (the whole sphere, "
+                  "azimuth across and elevation down the image)")
+      ->type_name("perspective|fisheye|equirect")
+      ->check(CLI::IsMember({"perspective", "fisheye", "equirect"}).description(""))
+      ->capture_default_str();
+  o->size.add(*cmd, "Image size");
+  cmd->add_option("--exposure", o->exposure,
+                  "Exposure value (EV100) of the PNG outputs: a pixel of L cd/m2 shows as 1 - exp(-L / (1.2 * 2^EV)) "
+                  "before the sRGB encoding; any finite value")
+      ->type_name("EV")
+      ->capture_default_str();
+  cmd->add_option("-o,--output", o->outputs,
+                  "Output file: .png (8-bit sRGB, exposed) or .exr (32-bit float linear sRGB in cd/m2); repeatable "
+                  "(default atmos.png)")
+      ->type_name("FILE");
+  cmd->add_option("--precision", o->precision,
+                  "Precision of the GPU's scattering and irradiance textures: half (16-bit float) or full (32-bit "
+                  "float)")
+      ->type_name("half|full")
+      ->check(CLI::IsMember({"half", "full"}).description(""))
+      ->capture_default_str();
+  cmd->add_flag("--cpu", o->cpu, "Render on the CPU with the same functions (no OpenGL needed unless post-processing)");
+  cmd->add_flag("--stars", o->stars,
+                "Draw the star field also with the sun above the horizon (it is drawn whenever the sun is below it)");
+  auto* tonemap = cmd->add_option("--tonemap", o->tonemap,
+                                  "Tone mapping of the PNG outputs through the post-processing chain: exp (the "
+                                  "default curve above), reinhard, filmic or aces")
+                      ->type_name("exp|reinhard|filmic|aces")
+                      ->check(CLI::IsMember({"exp", "reinhard", "filmic", "aces"}).description(""))
+                      ->capture_default_str();
+  auto* bloom = cmd->add_option("--bloom", o->bloom,
+                                "Bloom strength of the PNG outputs, in [0, 1]: the fraction of the light above "
+                                "saturation spread as glare")
+                    ->type_name("STRENGTH")
+                    ->capture_default_str();
+  auto* auto_exposure = cmd->add_flag("--auto-exposure", o->auto_exposure,
+                                      "Expose the PNG outputs from the image's log-average luminance (Collienne "
+                                      "2013, eq. 4.28) instead of --exposure");
+  return {cmd, [o, cmd, fov, tonemap, bloom, auto_exposure] {
+            o->fov_given = fov->count() > 0;
+            o->post = tonemap->count() > 0 || bloom->count() > 0 || auto_exposure->count() > 0;
+            // Only the planet, table and cache options, --precision and --cpu
+            // keep the gallery (e.g. --planet mars --wavelengths 15).
+            const std::set<std::string> gallery_options = {
+                "--planet", "--orders",    "--wavelengths", "--density-scale", "--solar",
+                "--tables", "--cache-dir", "--no-cache",    "--precision",     "--cpu"};
+            o->gallery = true;
+            for (const auto* opt : cmd->get_options())
+              if (opt->count() > 0 && gallery_options.count(opt->get_name()) == 0) o->gallery = false;
+            return run_render(*o);
+          }};
+}
+
+}  // namespace atmos_cli
