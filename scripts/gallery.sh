@@ -7,14 +7,14 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/scripts/setup.sh"
 bash "$root/scripts/build.sh"
-atmos="${ATMOS_BUILD_DIR:-$root/build}/atmos"
+atmos="${ATMOS_BUILD_DIR:-$root/build}/apps/atmos"
 out="${ATMOS_GALLERY_DIR:-$root/gallery}"
 mkdir -p "$out/earth" "$out/mars" "$out/venus" "$out/titan"
 # Spectral (15 wavelengths), orders until the rest would add less than
 # 0.1 % (Earth 14, Mars 11; Titan and Venus are foreseen to reach the cap of 64
 # and solve the rest at once from order 16). About 14 minutes on 2 cores with
-# an empty table cache (2026-11-26), most of it Titan's and Venus's
-# precomputation (Venus alone 4-7 minutes; cached afterwards).
+# an empty table cache, most of it Titan's and Venus's precomputation (Venus
+# alone 4-7 minutes; cached afterwards).
 for planet in earth mars titan venus; do
   (cd "$out/$planet" && "$atmos" render --planet "$planet" --wavelengths 15 --orders auto)
 done
