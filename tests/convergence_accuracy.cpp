@@ -28,6 +28,8 @@
 #include "atmos/atmosphere.hpp"
 #include "atmos/tables.hpp"
 #include "physics/parameters.hpp"
+#include "physics/medium_cpp.hpp"
+#include "physics/table_coordinates_cpp.hpp"
 #include "precompute/steps.hpp"
 #include "figures.hpp"
 

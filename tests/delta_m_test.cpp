@@ -13,6 +13,7 @@
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
 #include "physics/parameters.hpp"
+#include "physics/medium_cpp.hpp"
 #include "precompute/steps.hpp"
 #include "figures.hpp"
 #include "upward_flux.hpp"

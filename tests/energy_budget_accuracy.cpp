@@ -55,6 +55,7 @@
 #include "atmos/atmosphere.hpp"
 #include "atmos/tables.hpp"
 #include "physics/parameters.hpp"
+#include "physics/precomputation_integrands_cpp.hpp"
 #include "precompute/steps.hpp"
 #include "figures.hpp"
 

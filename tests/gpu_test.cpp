@@ -32,6 +32,7 @@
 #include "gpu/camera_cpp.hpp"
 #include "gpu/shader_source.hpp"
 #include "physics/parameters.hpp"
+#include "physics/stars_cpp.hpp"
 #include "figures.hpp"
 #include "gpu_fixture.hpp"
 

@@ -7,6 +7,7 @@
 
 #include "atmos/atmosphere.hpp"
 #include "physics/parameters.hpp"
+#include "physics/radiance_to_camera_cpp.hpp"
 #include "precompute/steps.hpp"
 
 namespace {

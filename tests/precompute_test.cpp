@@ -12,6 +12,7 @@
 
 #include "atmos/atmosphere.hpp"
 #include "physics/parameters.hpp"
+#include "physics/precomputation_integrands_cpp.hpp"
 #include "precompute/steps.hpp"
 
 namespace {

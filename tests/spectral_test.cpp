@@ -10,6 +10,7 @@
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
 #include "physics/parameters.hpp"
+#include "physics/view_ray_scattering_cpp.hpp"
 #include "precompute/samplers.hpp"
 #include "precompute/steps.hpp"
 

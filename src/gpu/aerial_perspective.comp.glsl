@@ -1,7 +1,8 @@
 // atmos — compute shader of the engine plugin's aerial-perspective volume
-// (GLSL only, appended by gpu/shader_source.cpp after the shared
-// definitions, functions.glsl, aerial_perspective.glsl, table_bindings.glsl and composite.glsl,
-// with VARIANT_LOW_SUN defined: whether the sun may be low in the volume, and
+// (GLSL only, appended by gpu/shader_source.cpp after the physics that
+// composite.glsl needs (kCompositePhysics), table_bindings.glsl and
+// composite.glsl, with VARIANT_LOW_SUN defined: whether the sun may be low
+// in the volume, and
 // VARIANT_ECLIPSE: 1 with the frame's moons, uniform_moons() of
 // table_bindings.glsl, 0 without). One invocation per direction:
 // the march of composite.glsl (aerial_perspective_march_begin / _slice), each

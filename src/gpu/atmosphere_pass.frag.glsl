@@ -1,6 +1,6 @@
 // atmos — fragment shaders of the engine plugin's pass (GLSL only, appended
-// by gpu/shader_source.cpp after the shared definitions, functions.glsl,
-// aerial_perspective.glsl, table_bindings.glsl and composite.glsl). Each
+// by gpu/shader_source.cpp after the physics that composite.glsl needs
+// (kCompositePhysics), table_bindings.glsl and composite.glsl). Each
 // draws one full-screen triangle over the engine's image; the program
 // variant (gpu/shader_source.cpp) defines VARIANT_PIXELS and the constants
 // SKY_VIEW_CAMERA, VARIANT_SURFACE_MODE, VARIANT_LOW_SUN, VARIANT_SHADOWS,

@@ -1,6 +1,6 @@
 // atmos — the camera model: from a pixel to a view ray.
 //
-// Shared by the GPU renderer (render.frag.glsl, after functions.glsl) and the
+// Shared by the GPU renderer (render.frag.glsl, after the physics) and the
 // CPU twin (gpu/camera_cpp.hpp), so that both trace exactly the same rays.
 // Written in the GLSL / C++ subset described at the top of
 // physics/definitions.glsl (f-suffixed literals, IN/OUT/INLINE, no swizzles).

@@ -1,10 +1,11 @@
 // atmos — the engine plugin's per-pixel work (AtmospherePass): from the
 // engine's depth and colour at a pixel to the composited radiance.
 //
-// Shared by the pass's fragment shader (atmosphere_pass.frag.glsl, after
-// functions.glsl and aerial_perspective.glsl) and its CPU twin
-// (gpu/composite_cpp.hpp, for the tests), in the GLSL / C++ subset of
-// physics/definitions.glsl.
+// Shared by the pass's fragment shader (atmosphere_pass.frag.glsl) and
+// volume (aerial_perspective.comp.glsl), after radiance_to_camera.glsl,
+// aerial_perspective.glsl and the parts of the physics they need, and by its
+// CPU twin (gpu/composite_cpp.hpp, for the tests), in the GLSL / C++ subset
+// of physics/definitions.glsl.
 //
 // Frames. The CPU reduces the engine's double-precision matrices to
 // camera-relative floats (see atmosphere_pass.cpp): `inverse_projection`
@@ -109,7 +110,7 @@ INLINE vec3 srgb_transmittance(IN(AtmosphereParams) atmosphere, IN(PassFrame) fr
 // rather than screen froxels: it needs no projection, serves any number of
 // views from the same position, and concentrates texels at the horizon,
 // where the light of long grazing paths changes fastest):
-//  - x, y: the sky-view table's parameterisation (functions.glsl:
+//  - x, y: the sky-view table's parameterisation (sky_view_table.glsl:
 //    sky_view_uv_of_size): azimuth from the sun's vertical plane, and view
 //    zenith angle split at the horizon, denser towards it;
 //  - z: AP_SLICES distances, quadratic from ap_t_min (no surface is nearer:
@@ -304,7 +305,8 @@ INLINE AerialPerspectiveMarch aerial_perspective_march_begin(IN(AtmosphereParams
 // the slice is dimmed by the mean of diffuse_light_visible_fraction along
 // the ray so far, weighted by the light each slice sends towards the camera
 // (the drop of the transmittance over it), as ray_diffuse_visibility does
-// for whole rays — the documented approximation of functions.glsl. That
+// for whole rays — the documented approximation of ray_integration.glsl
+// (diffuse_light_visible_fraction). That
 // fraction changes over tens of kilometres (its rings start 8 km out) and
 // costs ~30 overlaps: it is evaluated at the camera and at the ends of
 // groups of AP_DIFFUSE_GROUP slices (17 points per ray, where

@@ -1,6 +1,7 @@
 // atmos — the GLSL library for engines that shade in their own shaders
-// (AtmospherePass::glsl_library; GLSL only). Appended after the shared
-// definitions, functions.glsl and aerial_perspective.glsl, with
+// (AtmospherePass::glsl_library; GLSL only). Appended after the physics it
+// uses (gpu/shader_source.cpp: kEngineLibraryPhysics, up to
+// view_ray_scattering.glsl and aerial_perspective.glsl), with
 // ATMOS_UNIT_0..4 (the texture units) and ATMOS_RADIANCE_TO_SRGB defined.
 //
 // Conventions of every atmos_* function:
@@ -75,7 +76,7 @@ vec3 atmos_transmittance_to_sun(vec3 point, vec3 sun) {
 // Eclipses (FrameInput::moons): the factors by which the moons dim, at
 // `point`, the sun's irradiance (the part of the limb-darkened sun they
 // leave visible: eclipse.glsl, sunlight_visible_fraction) and the sky's
-// (the documented approximation for diffuse light: functions.glsl,
+// (the documented approximation for diffuse light: ray_integration.glsl,
 // diffuse_light_visible_fraction) — what the pass applies to the surfaces
 // it lights itself (SurfaceMode::gbuffer); an engine that lights its own
 // surfaces multiplies atmos_sun_and_sky_irradiance's two results by them.

@@ -21,6 +21,7 @@
 #include "atmos/renderer.hpp"
 #include "atmos/tables.hpp"
 #include "gpu/shader_source.hpp"
+#include "physics/sky_view_table_cpp.hpp"
 
 namespace atmos::gpu {
 

@@ -1,7 +1,8 @@
 // atmos — fragment shader of the renderer (GLSL only, appended by
-// gpu/shader_source.cpp after the shared definitions, the ATMOSPHERE constant,
-// functions.glsl, table_bindings.glsl and camera.glsl). One full-screen triangle; each fragment is
-// one pixel of the image: its view ray, the radiance reaching the camera along
+// gpu/shader_source.cpp after the definitions, the ATMOSPHERE constant, the
+// physics up to radiance_to_camera.glsl (kRenderPhysics), table_bindings.glsl
+// and camera.glsl). One full-screen triangle; each fragment is one pixel of
+// the image: its view ray, the radiance reaching the camera along
 // it, and that radiance converted to linear sRGB (cd/m² scale).
 
 // The tables and the sky-view table: table_bindings.glsl. SKY_VIEW_CAMERA

@@ -27,6 +27,7 @@
 #include "gpu/shader_source.hpp"
 #include "physics/moons.hpp"
 #include "physics/parameters.hpp"
+#include "physics/radiance_to_camera_cpp.hpp"
 #include "precompute/samplers.hpp"
 
 namespace atmos {

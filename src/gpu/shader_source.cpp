@@ -110,7 +110,7 @@ std::string atmosphere_params_glsl(const physics::AtmosphereParams& p) {
 
 std::string spectral_sets_glsl(const physics::SpectralSets& sets) {
   // The shaders' SPECTRAL_SET_CAPACITY is the actual count (see
-  // shared_fragment_shader_source).
+  // physics_shader_source).
   const int n = sets.count;
   return "const SpectralSets SPECTRAL = SpectralSets(" + glsl_int(n) + ",\n" +
          glsl_array("AtmosphereParams", n, [&](int i) { return atmosphere_params_expression(sets.set[i]); }) +
@@ -148,7 +148,7 @@ namespace {
 const char* const kSubsetMacros =
     "#define IN(T) in T\n#define OUT(T) out T\n#define INOUT(T) inout T\n#define INLINE\n";
 
-// The plugin's per-pixel part after the shared one: the table bindings, the
+// The plugin's per-pixel part after the physics: the table bindings, the
 // pixel ray and composite.glsl (the pass's fragment and compute shaders).
 void append_composite(AssembledSource& s) {
   s.append("table_bindings.glsl", embedded("src/gpu/table_bindings.glsl"));
@@ -164,8 +164,34 @@ int density_knot_bound(const physics::AtmosphereParams& params) {
   return bound;
 }
 
-AssembledSource shared_fragment_shader_source(const physics::AtmosphereParams& params,
-                                              const physics::SpectralSets& spectral) {
+// The parts of the physics (src/physics/*.glsl) that each program uses, in
+// the order of their dependencies (definitions.glsl lists the parts, and each
+// names the parts it needs at its top).
+// The sky-view table (sky_view.frag.glsl): the light of view rays.
+const std::vector<const char*> kSkyViewPhysics = {
+    "eclipse.glsl", "ray_geometry.glsl", "medium.glsl", "table_coordinates.glsl", "table_lookups.glsl",
+    "ray_integration.glsl", "view_ray_scattering.glsl", "sky_view_table.glsl"};
+// The renderer (render.frag.glsl): everything that reaches the camera.
+const std::vector<const char*> kRenderPhysics = {
+    "stars.glsl", "eclipse.glsl", "ray_geometry.glsl", "medium.glsl", "table_coordinates.glsl", "table_lookups.glsl",
+    "ray_integration.glsl", "view_ray_scattering.glsl", "sky_view_table.glsl", "radiance_to_camera.glsl"};
+// The engine plugin's pass and its volume (composite.glsl): the same and
+// the aerial perspective.
+const std::vector<const char*> kCompositePhysics = {
+    "stars.glsl", "eclipse.glsl", "ray_geometry.glsl", "medium.glsl", "table_coordinates.glsl", "table_lookups.glsl",
+    "ray_integration.glsl", "view_ray_scattering.glsl", "sky_view_table.glsl", "radiance_to_camera.glsl",
+    "aerial_perspective.glsl"};
+// The GLSL library for engines (engine_library.glsl): the sky along a ray,
+// the aerial perspective, the irradiance of surfaces, the eclipse factors.
+const std::vector<const char*> kEngineLibraryPhysics = {
+    "eclipse.glsl", "ray_geometry.glsl", "medium.glsl", "table_coordinates.glsl", "table_lookups.glsl",
+    "ray_integration.glsl", "view_ray_scattering.glsl", "aerial_perspective.glsl"};
+
+// The part every program that reads the tables starts with: the version, the
+// subset macros, definitions.glsl with the atmosphere's constants, then the
+// parts of the physics `physics` (names in src/physics/).
+AssembledSource physics_shader_source(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
+                                      const std::vector<const char*>& physics) {
   AssembledSource s;
   s.append("header", "#version 450 core\n");
   s.append("macros", kSubsetMacros);
@@ -177,10 +203,7 @@ AssembledSource shared_fragment_shader_source(const physics::AtmosphereParams& p
   s.append("definitions.glsl", embedded("src/physics/definitions.glsl"));
   s.append("ATMOSPHERE", atmosphere_params_glsl(params));
   s.append("SPECTRAL", spectral_sets_glsl(spectral));
-  s.append("stars.glsl", embedded("src/physics/stars.glsl"));
-  s.append("eclipse.glsl", embedded("src/physics/eclipse.glsl"));
-  s.append("functions.glsl", embedded("src/physics/functions.glsl"));
-  s.append("aerial_perspective.glsl", embedded("src/physics/aerial_perspective.glsl"));
+  for (const char* part : physics) s.append(part, embedded((std::string("src/physics/") + part).c_str()));
   return s;
 }
 
@@ -189,7 +212,7 @@ AssembledSource shared_fragment_shader_source(const physics::AtmosphereParams& p
 AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& params,
                                               const physics::SpectralSets& spectral, bool sky_view_camera,
                                               bool eclipse) {
-  AssembledSource s = shared_fragment_shader_source(params, spectral);
+  AssembledSource s = physics_shader_source(params, spectral, kRenderPhysics);
   s.append("variant", std::string("#define SKY_VIEW_CAMERA ") + (sky_view_camera ? "true" : "false") +
                           "\n#define RENDER_ECLIPSE " + (eclipse ? "1" : "0") + "\n");
   s.append("table_bindings.glsl", embedded("src/gpu/table_bindings.glsl"));
@@ -201,7 +224,7 @@ AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& p
 AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams& params,
                                                 const physics::SpectralSets& spectral, bool low_sun,
                                                 bool eclipse) {
-  AssembledSource s = shared_fragment_shader_source(params, spectral);
+  AssembledSource s = physics_shader_source(params, spectral, kSkyViewPhysics);
   s.append("variant", std::string("#define SKY_VIEW_LOW_SUN ") + (low_sun ? "true" : "false") +
                           "\n#define SKY_VIEW_ECLIPSE " + (eclipse ? "1" : "0") + "\n");
   s.append("table_bindings.glsl", embedded("src/gpu/table_bindings.glsl"));
@@ -212,7 +235,7 @@ AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams&
 AssembledSource atmosphere_pass_fragment_shader_source(const physics::AtmosphereParams& params,
                                                       const physics::SpectralSets& spectral,
                                                       const PassVariant& variant) {
-  AssembledSource s = shared_fragment_shader_source(params, spectral);
+  AssembledSource s = physics_shader_source(params, spectral, kCompositePhysics);
   auto flag = [](bool b) { return b ? "true" : "false"; };
   s.append("variant", std::string("#define SKY_VIEW_CAMERA ") + flag(variant.sky_view_camera) +
                           "\n#define VARIANT_LOW_SUN " + flag(variant.low_sun) + "\n#define VARIANT_SHADOWS " +
@@ -239,7 +262,7 @@ AssembledSource atmosphere_pass_vertex_shader_source() {
 AssembledSource aerial_perspective_compute_shader_source(const physics::AtmosphereParams& params,
                                                         const physics::SpectralSets& spectral, bool low_sun,
                                                         bool eclipse) {
-  AssembledSource s = shared_fragment_shader_source(params, spectral);
+  AssembledSource s = physics_shader_source(params, spectral, kCompositePhysics);
   s.append("variant", std::string("#define VARIANT_LOW_SUN ") + (low_sun ? "true" : "false") +
                           "\n#define VARIANT_ECLIPSE " + (eclipse ? "1" : "0") + "\n");
   append_composite(s);
@@ -249,8 +272,8 @@ AssembledSource aerial_perspective_compute_shader_source(const physics::Atmosphe
 
 std::string engine_library_source(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
                                   const physics::mat3& radiance_to_srgb, int first_unit) {
-  // The shared part without its "#version" line: the engine's shader has its own.
-  AssembledSource shared = shared_fragment_shader_source(params, spectral);
+  // The physics without its "#version" line: the engine's shader has its own.
+  AssembledSource shared = physics_shader_source(params, spectral, kEngineLibraryPhysics);
   std::string text = shared.text.substr(shared.text.find('\n') + 1);
   text += "#define ATMOS_FIRST_UNIT " + std::to_string(first_unit) + "\n";
   for (int unit = 0; unit < 5; ++unit)

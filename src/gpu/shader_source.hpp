@@ -29,28 +29,28 @@ std::string fullscreen_vertex_shader_source();
 struct AssembledSource {
   struct Part {
     int first_line;    // 1-based line of `text` where the part starts
-    std::string name;  // e.g. "functions.glsl"
+    std::string name;  // e.g. "table_lookups.glsl"
   };
   std::string text;
   std::vector<Part> parts;
 
   void append(const std::string& name, const std::string& part_text);
-  // "functions.glsl:57" for the line of `text` that is line 57 of functions.glsl.
+  // "table_lookups.glsl:57" for the line of `text` that is line 57 of table_lookups.glsl.
   std::string locate(int line) const;
 };
 
 // The fragment shader: "#version 450 core", the GLSL meaning of the subset
-// macros, definitions.glsl, ATMOSPHERE, functions.glsl, camera.glsl and
-// render.frag.glsl; `sky_view_camera`: the variant for cameras in the
+// macros, definitions.glsl, ATMOSPHERE, the physics up to
+// radiance_to_camera.glsl, camera.glsl and render.frag.glsl; `sky_view_camera`: the variant for cameras in the
 // atmosphere, which reads the sky-view table (see sky_radiance); `eclipse`:
 // with the moons' uniforms (table_bindings.glsl).
 AssembledSource render_fragment_shader_source(const physics::AtmosphereParams& params,
                                               const physics::SpectralSets& spectral, bool sky_view_camera,
                                               bool eclipse);
 
-// The fragment shader of the sky-view pass: the same shared part, then
-// sky_view.frag.glsl; `low_sun`: with the twilight integration
-// (functions.glsl: sun_may_be_low_on_view_rays); `eclipse`: with the moons'
+// The fragment shader of the sky-view pass: the definitions and the physics
+// up to sky_view_table.glsl, then sky_view.frag.glsl; `low_sun`: with the
+// twilight integration (sky_view_table.glsl: sun_may_be_low_on_view_rays); `eclipse`: with the moons'
 // uniforms (table_bindings.glsl), which needs `low_sun`.
 AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams& params,
                                                 const physics::SpectralSets& spectral, bool low_sun, bool eclipse);
@@ -80,7 +80,8 @@ struct PassVariant {
 };
 
 // The fragment shader of the engine plugin's pass (AtmospherePass): the
-// shared part, composite.glsl and atmosphere_pass.frag.glsl.
+// definitions, the physics up to radiance_to_camera.glsl and
+// aerial_perspective.glsl, composite.glsl and atmosphere_pass.frag.glsl.
 AssembledSource atmosphere_pass_fragment_shader_source(const physics::AtmosphereParams& params,
                                                       const physics::SpectralSets& spectral,
                                                       const PassVariant& variant);
@@ -89,8 +90,8 @@ AssembledSource atmosphere_pass_fragment_shader_source(const physics::Atmosphere
 // atmosphere_pass.vert.glsl (each pixel's PixelRay, interpolated).
 AssembledSource atmosphere_pass_vertex_shader_source();
 
-// The compute shader of the plugin's aerial-perspective volume: the shared
-// part, composite.glsl and aerial_perspective.comp.glsl; `low_sun`: the
+// The compute shader of the plugin's aerial-perspective volume: the same
+// physics, composite.glsl and aerial_perspective.comp.glsl; `low_sun`: the
 // transmittance to the sun over the disc with the planet's shadow;
 // `eclipse`: with the moons' uniforms (table_bindings.glsl), which needs
 // `low_sun`.
@@ -99,7 +100,8 @@ AssembledSource aerial_perspective_compute_shader_source(const physics::Atmosphe
                                                         bool eclipse);
 
 // The GLSL library for engines' own shaders (AtmospherePass::glsl_library):
-// the shared part without "#version", the colour matrix, then
+// the definitions and the physics up to view_ray_scattering.glsl and
+// aerial_perspective.glsl without "#version", the colour matrix, then
 // engine_library.glsl with its textures on units first_unit .. first_unit + 4.
 std::string engine_library_source(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
                                   const physics::mat3& radiance_to_srgb, int first_unit);

@@ -1,8 +1,9 @@
 // atmos — fragment shader of the sky-view pass (GLSL only, appended by
-// gpu/shader_source.cpp after the shared definitions, the ATMOSPHERE constant,
-// functions.glsl and table_bindings.glsl). One full-screen triangle over a
+// gpu/shader_source.cpp after the definitions, the ATMOSPHERE constant, the
+// physics up to sky_view_table.glsl (kSkyViewPhysics) and
+// table_bindings.glsl). One full-screen triangle over a
 // SKY_VIEW_WIDTH x SKY_VIEW_HEIGHT target with three colour attachments;
-// each fragment is one texel of the sky-view table of functions.glsl for
+// each fragment is one texel of the sky-view table (sky_view_table.glsl) for
 // this frame's camera and sun (compute_sky_view_texel), read by the render
 // passes. (Its own textures, units 5-7, are unbound while it runs.)
 // SKY_VIEW_LOW_SUN (true or false, the program variant): whether the sun may

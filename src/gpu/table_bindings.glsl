@@ -10,13 +10,13 @@ layout(binding = 1) uniform sampler3D scattering_texture;
 layout(binding = 2) uniform sampler3D single_aerosol_texture;
 layout(binding = 3) uniform sampler2D irradiance_texture;
 layout(binding = 4) uniform sampler3D multiple_scattering_texture;
-// This frame's sky-view table (sky_view.frag.glsl; functions.glsl:
+// This frame's sky-view table (sky_view.frag.glsl; view_ray_scattering.glsl:
 // view_ray_terms), for cameras in the atmosphere.
 layout(binding = 5) uniform sampler2D sky_view_rayleigh_texture;
 layout(binding = 6) uniform sampler2D sky_view_aerosol_texture;
 layout(binding = 7) uniform sampler2D sky_view_surface_texture;
 
-// The table's frame (functions.glsl: sky_view_frame), computed once per
+// The table's frame (sky_view_table.glsl: sky_view_frame), computed once per
 // frame on the CPU (GpuTables::sky_view_frame).
 layout(location = 40) uniform vec3 sky_view_zenith;
 layout(location = 41) uniform vec3 sky_view_sun_side;

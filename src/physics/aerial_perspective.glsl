@@ -1,9 +1,8 @@
 // atmos — light between a camera and a point: aerial perspective.
 //
-// Shared by the CPU (physics/shader_cpp.hpp, after functions.glsl) and the
-// shaders (gpu/shader_source.cpp), in the GLSL / C++ subset described at the
-// top of definitions.glsl. The engine plugin (gpu/composite.glsl) and the
-// GLSL library for engines (gpu/engine_library.glsl) build on it.
+// Needs: view_ray_scattering.glsl (and the parts it needs). The engine
+// plugin (gpu/composite.glsl) and the GLSL library for engines
+// (gpu/engine_library.glsl) build on it.
 //
 // The 4D tables hold the light scattered towards the start of a ray along
 // its whole length, up to the top of the atmosphere or the ground. The light

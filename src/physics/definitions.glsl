@@ -1,7 +1,7 @@
 // atmos — definitions shared by the C++ precomputation and the GLSL shaders.
 //
-// This file and functions.glsl are written in the common subset of GLSL 4.50
-// and C++20 + glm (see physics/shader_cpp.hpp for the C++ side and
+// The physics (src/physics/*.glsl) is written in the common subset of GLSL
+// 4.50 and C++20 + glm (see physics/shader_cpp.hpp for the C++ side and
 // gpu/shader_source.cpp for the GLSL side):
 //  - float literals carry an `f` suffix (valid in both languages),
 //  - parameters are declared with IN(T) / OUT(T) / INOUT(T),
@@ -13,6 +13,28 @@
 //
 // Units: lengths in metres, coefficients in m^-1, angles as cosines, spectral
 // quantities per working wavelength (three at a time, one per vec3 channel).
+//
+// The parts of the physics, each using only this file and the parts above it
+// (each names the parts it needs at its top):
+//   stars.glsl                      the procedural star field
+//   eclipse.glsl                    the solar disc and the moons that eclipse it
+//   ray_geometry.glsl               rays in a spherical atmosphere
+//   medium.glsl                     density profiles, scattering and extinction,
+//                                   optical depth, phase functions, the ground
+//   table_coordinates.glsl          (r, mu, mu_s, nu) <-> the tables' texture
+//                                   coordinates
+//   table_lookups.glsl              reading transmittance, scattering, irradiance
+//   ray_integration.glsl            quadrature along rays, single scattering
+//                                   integrated along them, eclipsed diffuse light
+//   precomputation_integrands.glsl  single scattering, scattering density,
+//                                   multiple scattering, irradiance: the orders
+//   view_ray_scattering.glsl        the renderers' light along a view ray
+//   aerial_perspective.glsl         the light between a camera and a point
+//   sky_view_table.glsl             the per-frame sky-view table
+//   radiance_to_camera.glsl         sky, ground, sun disc, stars, moons
+// C++ compiles each part through physics/<part>_cpp.hpp, which includes the
+// headers of the parts it needs; each shader lists the parts it uses
+// (gpu/shader_source.cpp).
 //
 // Channels. The precomputation works on triples of wavelengths ("sets"). With
 // one set (the three-wavelength mode) the tables' three channels ARE those
@@ -112,10 +134,10 @@ struct AtmosphereParams {
   // source_integration_nodes).
   float source_flat_optical_depth;
   // Height above the ground of the scattering tables' radius row 1
-  // (scattering_row_height(1), functions.glsl), stored because the run time
-  // needs it for every lookup of a ray to the ground in a thick atmosphere
-  // (ray_scattering_lookup) and shader compilers do not fold the search
-  // through the r axis's knots. (Computed per lookup it seemed to cost the
+  // (scattering_row_height(1), table_coordinates.glsl), stored because the
+  // run time needs it for every lookup of a ray to the ground in a thick
+  // atmosphere (ray_scattering_lookup) and shader compilers do not fold the
+  // search through the r axis's knots. (Computed per lookup it seemed to cost the
   // plugin's aerial-perspective volume on Venus 50 % more time, but that was
   // measured beside a CI run, when timings vary by +-30 %; not re-measured.)
   float scattering_row_1_height;

@@ -1,9 +1,9 @@
 // atmos — the solar disc and the moons that eclipse it.
 //
-// Shared by the CPU (physics/shader_cpp.hpp) and the shaders
-// (gpu/shader_source.cpp), after definitions.glsl and before functions.glsl
-// (whose single scattering, ground lighting and view rays are dimmed by the
-// moons here), in the GLSL / C++ subset of definitions.glsl.
+// Needs: definitions.glsl. The single scattering along rays
+// (ray_integration.glsl), the lighting of the ground and the view rays
+// (view_ray_scattering.glsl, radiance_to_camera.glsl) are dimmed by the
+// moons here.
 //
 // Seen from a point, the sun and a moon are discs of angular radii a and b
 // whose centres are d apart. The discs are a few tenths of a degree wide:
@@ -23,7 +23,7 @@
 // measured in the visible; the measured coefficient also grows towards the
 // blue (Neckel & Labs 1994, Sol. Phys. 153, 91), which this grey law leaves
 // out: the limb is dimmer, not redder. Used by sun_disc_radiance
-// (functions.glsl) and by the eclipses below.
+// (radiance_to_camera.glsl) and by the eclipses below.
 #define SUN_LIMB_DARKENING_U 0.6f
 
 // The area of the intersection of two circles of radii a and b whose centres
@@ -90,7 +90,7 @@ INLINE float sun_visible_fraction_behind_moon(float a, float b, float d) {
       covered += half_width * weight * limb_darkening(rho, a) * ring_fraction_covered(rho, b, d) * 2.0f * PI * rho;
     }
   }
-  // The whole disc's flux: pi a² (1 - u / 3) (see sun_disc_radiance in functions.glsl).
+  // The whole disc's flux: pi a² (1 - u / 3) (radiance_to_camera.glsl: sun_disc_radiance).
   float total = PI * a * a * (1.0f - SUN_LIMB_DARKENING_U / 3.0f);
   return clamp(1.0f - covered / total, 0.0f, 1.0f);
 }
@@ -154,7 +154,7 @@ INLINE float sunlight_visible_fraction(IN(Moons) moons, float a, vec3 point, vec
 
 // The same for a uniform disc (the overlap's area only): the cheap form, for
 // where the limb darkening does not show (the diffuse light,
-// functions.glsl: diffuse_light_visible_fraction, and the placement of
+// ray_integration.glsl: diffuse_light_visible_fraction, and the placement of
 // integration nodes).
 INLINE float uniform_sunlight_visible_fraction(IN(Moons) moons, float a, vec3 point, vec3 sun_direction) {
   float visible = 1.0f;

@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "atmos/eclipse.hpp"
-#include "physics/shader_cpp.hpp"
+#include "physics/eclipse_cpp.hpp"
 
 namespace atmos::physics {
 

@@ -4,6 +4,8 @@
 #include <cmath>
 
 #include "atmos/colour.hpp"
+#include "physics/medium_cpp.hpp"
+#include "physics/table_coordinates_cpp.hpp"
 
 namespace atmos::physics {
 

@@ -1,5 +1,9 @@
-// The C++ side of the shared physics: compiles definitions.glsl,
-// stars.glsl, eclipse.glsl, functions.glsl and aerial_perspective.glsl as C++ on top of glm, in namespace atmos::physics.
+// The C++ side of the shared physics: the C++ meaning of the GLSL subset
+// (definitions.glsl) on top of glm, and definitions.glsl itself, in namespace
+// atmos::physics. The parts of the physics (the other src/physics/*.glsl)
+// are compiled by physics/<part>_cpp.hpp, each of which includes the headers
+// of the parts it needs: a translation unit includes those of the parts it
+// uses.
 //
 // GLSL constructs map as follows:
 //   IN(T) -> const T&,  OUT(T)/INOUT(T) -> T&,  INLINE -> inline,
@@ -116,9 +120,5 @@ inline vec4 texture(const sampler3D& s, vec3 uvw) {
 }
 
 #include "physics/definitions.glsl"
-#include "physics/stars.glsl"
-#include "physics/eclipse.glsl"
-#include "physics/functions.glsl"
-#include "physics/aerial_perspective.glsl"
 
 }  // namespace atmos::physics

@@ -1,9 +1,7 @@
 // atmos — the stars behind the atmosphere: a procedural star field.
 //
-// Shared by the CPU (physics/shader_cpp.hpp) and the shaders
-// (gpu/shader_source.cpp), between definitions.glsl and functions.glsl (whose
-// radiance_along_view_ray adds the stars), in the GLSL / C++ subset of
-// definitions.glsl.
+// Needs: definitions.glsl. radiance_to_camera.glsl adds the stars to what
+// a view ray sees beyond the atmosphere.
 //
 // No catalogue: the sky is divided into the cells of a cube map,
 // STAR_CELLS x STAR_CELLS per face, and each cell holds one star placed and

@@ -100,10 +100,13 @@ void write_sizes(Fnv1a& h, const TableSizes& s) {
 std::string tables_cache_key(const Atmosphere& a, const PrecomputeOptions& options) {
   Fnv1a h;
   h.value(kFormatVersion);
-  // The physics, and the colour matching functions that convert spectral
-  // tables to sRGB.
+  // The physics the precomputation runs, and the colour matching functions
+  // that convert spectral tables to sRGB.
   for (const char* source :
-       {"src/physics/definitions.glsl", "src/physics/functions.glsl", "data/spectra/cie1931_2deg.csv"}) {
+       {"src/physics/definitions.glsl", "src/physics/eclipse.glsl", "src/physics/ray_geometry.glsl",
+        "src/physics/medium.glsl", "src/physics/table_coordinates.glsl", "src/physics/table_lookups.glsl",
+        "src/physics/ray_integration.glsl", "src/physics/precomputation_integrands.glsl",
+        "data/spectra/cie1931_2deg.csv"}) {
     const char* text = io::embedded_file(source);
     h.text(text ? text : "");
   }

@@ -20,6 +20,7 @@
 #include "atmos/colour.hpp"
 #include "atmos/tables.hpp"
 #include "physics/parameters.hpp"
+#include "physics/precomputation_integrands_cpp.hpp"
 #include "precompute/steps.hpp"
 
 namespace atmos {

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "physics/precomputation_integrands_cpp.hpp"
 #include "precompute/simd.hpp"
 
 namespace atmos::precompute {

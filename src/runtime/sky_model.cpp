@@ -5,6 +5,7 @@
 #include "atmos/colour.hpp"
 #include "physics/moons.hpp"
 #include "physics/parameters.hpp"
+#include "physics/radiance_to_camera_cpp.hpp"
 #include "precompute/samplers.hpp"
 
 namespace atmos {
