@@ -7,8 +7,9 @@
 // The 4D tables hold the light scattered towards the start of a ray along
 // its whole length, up to the top of the atmosphere or the ground. The light
 // scattered along a PART of the ray, up to a surface point P at distance t,
-// is the difference of two table values (seed 001 §4.2, seed 000 §4.5.2,
-// Bruneton & Neyret 2008 §4 "aerial perspective"):
+// is the difference of two table values (Schafhitzel, Falk & Ertl 2007,
+// §4.2; Collienne 2013, §4.5.2; Bruneton & Neyret 2008, §4 "aerial
+// perspective"):
 //   S(x -> P) = S(x, v) - T(x, P) S(P, v),
 // the ray from P in the same direction v being the rest of the camera's ray.
 // Both lookups use the half of the table (rays that hit the ground or not)

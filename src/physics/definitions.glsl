@@ -38,9 +38,9 @@
 //
 // Channels. The precomputation works on triples of wavelengths ("sets"). With
 // one set (the three-wavelength mode) the tables' three channels ARE those
-// wavelengths. With several (spectral mode, seed 004 §4.4) every linear
-// quantity — scattered radiance, irradiance — is converted set by set to
-// linear sRGB and summed, so that the run time reads one set of textures
+// wavelengths. With several (spectral mode, Elek & Kmoch 2010, §4.4) every
+// linear quantity — scattered radiance, irradiance — is converted set by set
+// to linear sRGB and summed, so that the run time reads one set of textures
 // whose channels are linear sRGB divided by 683 lm/W (radiometric units,
 // which keep 16-bit float textures far from overflow); see
 // channels_to_srgb_matrix in physics/parameters.hpp.
@@ -137,9 +137,7 @@ struct AtmosphereParams {
   // (scattering_row_height(1), table_coordinates.glsl), stored because the
   // run time needs it for every lookup of a ray to the ground in a thick
   // atmosphere (ray_scattering_lookup) and shader compilers do not fold the
-  // search through the r axis's knots. (Computed per lookup it seemed to cost the
-  // plugin's aerial-perspective volume on Venus 50 % more time, but that was
-  // measured beside a CI run, when timings vary by +-30 %; not re-measured.)
+  // search through the r axis's knots.
   float scattering_row_1_height;
 };
 

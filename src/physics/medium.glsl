@@ -4,16 +4,18 @@
 //
 // Needs: ray_geometry.glsl.
 
+// The density of a constituent at `altitude`, relative to its reference
+// density (DensityProfile).
 INLINE float profile_density(IN(DensityProfile) profile, float altitude) {
   if (profile.scale_height > 0.0f) return exp(-altitude / profile.scale_height);
   // Piecewise linear between the knots, 0 outside them: the first segment
   // that contains the altitude. A loop of constant length (DENSITY_KNOT_BOUND:
   // in shaders the most knots of the atmosphere's constituents, see
-  // shader_source.cpp) without early exits. Shader compilers do not fold the
-  // atmosphere's constants through the function calls, and software
-  // rasterisers run every iteration and both sides of every branch anyway:
-  // a loop bounded by the profile's own count, with a return inside, cost
-  // the aerial-perspective volume 3x its time on llvmpipe.
+  // shader_source.cpp) without early exits, which the compiler can unroll.
+  // Shader compilers do not fold the atmosphere's constants through the
+  // function calls, and software rasterisers run every iteration and both
+  // sides of every branch anyway, so a loop bounded by the profile's own
+  // count with a return inside saves nothing and cannot be unrolled.
   float density = 0.0f;
   bool found = false;
   for (int i = 1; i < DENSITY_KNOT_BOUND; ++i) {
@@ -56,7 +58,7 @@ INLINE vec3 extinction_at(IN(AtmosphereParams) atmosphere, float r) {
 }
 
 // Optical depth of the segment [t0, t1] of the ray (r, mu): trapezoidal rule
-// with `steps` steps (seed 000 eq. 3.8).
+// with `steps` steps (Collienne 2013, eq. 3.8).
 INLINE vec3 optical_depth_along_ray(IN(AtmosphereParams) atmosphere, float r, float mu, float t0, float t1, int steps) {
   float dt = (t1 - t0) / float(steps);
   vec3 result = vec3(0.0f);
@@ -70,15 +72,16 @@ INLINE vec3 optical_depth_along_ray(IN(AtmosphereParams) atmosphere, float r, fl
 
 // --- Phase functions (each integrates to 1 over the sphere) ------------------
 
-// Seed 000 eq. 3.2.
+// Collienne 2013, eq. 3.2.
 INLINE float rayleigh_phase_function(float nu) { return 3.0f / (16.0f * PI) * (1.0f + nu * nu); }
 
+// Henyey & Greenstein 1941, with asymmetry parameter g = <cos θ>.
 INLINE float henyey_greenstein_phase_function(float g, float nu) {
   float k = 1.0f + g * g - 2.0f * g * nu;
   return (1.0f - g * g) / (4.0f * PI * k * sqrt(k));
 }
 
-// Seed 000 eq. 3.5 (Cornette & Shanks 1992).
+// Cornette & Shanks 1992 (Collienne 2013, eq. 3.5).
 INLINE float cornette_shanks_phase_function(float g, float nu) {
   float k = 1.0f + g * g - 2.0f * g * nu;
   return 3.0f / (8.0f * PI) * (1.0f - g * g) * (1.0f + nu * nu) / ((2.0f + g * g) * k * sqrt(k));

@@ -14,8 +14,8 @@
 
 // Single scattering of the ray (r, mu), up to the atmosphere's boundary,
 // with the sun at (mu_s, nu), without its phase function (applied per pixel
-// so that the aerosol halo stays sharp): seed 000 eq. 3.13 with j reduced to
-// the direct sunlight,
+// so that the aerosol halo stays sharp): Collienne 2013, eq. 3.13, with j
+// reduced to the direct sunlight,
 //   S = E_sun ∫ T(x, y) beta_s(y) T(y, sun) dy,
 // for the Rayleigh and the aerosol constituents separately. T(x, y) is
 // integrated along the ray itself (ray_integration_nodes), not read from the
@@ -36,15 +36,15 @@ INLINE void compute_single_scattering(IN(AtmosphereParams) atmosphere, IN(sample
 // node, scaled so that they add up to ∫ T beta_ext dt = 1 - T(d) exactly
 // (per channel): a uniform source function — the diffuse light deep in a
 // conservative cloud — is then transported without gain or loss, whatever
-// the optical thickness between nodes. Unscaled, the sum was off by -5..+8 %
+// the optical thickness between nodes. Unscaled, the sum is off by -5..+8 %
 // of 1 - T(d) on the view rays of a Venus table (5-14 optical depths of
 // cloud between radius samples, up to 12 per cell of the ray map), which
-// lost or created light at every one of the hundreds of orders that reach
+// loses or creates light at every one of the hundreds of orders that reach
 // its ground. (The linear-source rule of short-characteristics solvers,
 // Olson & Kunasz 1987, JQSRT 38, 325, is exact for a uniform source too, but
-// only second order: the twilight sky of the Earth, whose source changes
-// along the ray with the planet's shadow, came out worse with it, RMS 5.5 %
-// instead of 4.5 % from the ground with the sun 5° down.) On the view rays of
+// only of second order: on the twilight sky of the Earth, whose source
+// changes along the ray with the planet's shadow, its RMS error from the
+// ground with the sun 5° down is 5.5 % against 4.5 %.) On the view rays of
 // the default Earth tables the scale is 0.96-1.03.
 //
 // In atmospheres of several optical depths the nodes are uniform in optical
@@ -56,15 +56,15 @@ INLINE void compute_single_scattering(IN(AtmosphereParams) atmosphere, IN(sample
 // the transmittance back to the start falls (the sun's optical depth shrinks
 // by 1/mu_s per optical depth climbed), so much of the integral comes from
 // where T is already small, and nodes uniform in 1 - T leave a handful
-// there. Measured against the reference on 100x Earth's air alone (3.6
-// optical depths at 680 nm, black ground): the radiance of orders 1 + 2 on
-// the ground was 15-29 % too high above 20° elevation with nodes uniform in
+// there. Against the reference on 100x Earth's air alone (3.6 optical
+// depths at 680 nm, black ground), the radiance of orders 1 + 2 on the
+// ground is 15-29 % too high above 20° elevation with nodes uniform in
 // 1 - T, within -5..+2 % with these. The sky light on the ground of the full
-// 100x Earth at 680 nm (16 optical depths) was 0.84 of the reference with
-// 32 radius texels and 0.74 with 64, an error that more texels made worse;
-// with these nodes 1.16 and 1.04, converging with the texels (128 intervals
-// with the old placement: 1.12 and 1.00, at 2.6x the precomputation time).
-// More in parameters.hpp.
+// 100x Earth at 680 nm (16 optical depths) is 0.84 of the reference with 32
+// radius texels and 0.74 with 64 with nodes uniform in 1 - T, an error that
+// grows with the texels; with these nodes 1.16 and 1.04, converging with the
+// texels (nodes uniform in 1 - T need 128 intervals, 2.6 times the
+// precomputation time, for 1.12 and 1.00). More in parameters.hpp.
 INLINE RayNodes source_integration_nodes(IN(AtmosphereParams) atmosphere, float r, float mu,
                                          bool ray_r_mu_intersects_ground, int intervals) {
   float d = distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ray_r_mu_intersects_ground);
@@ -96,19 +96,19 @@ INLINE vec3 source_function(IN(AtmosphereParams) atmosphere, float r, vec3 densi
 // atmospheres. The multiple scattering step reads each order's source
 // function at the nodes of its view rays, between the density table's radius
 // rows. Interpolated linearly in u_r there (what texture() does) it has two
-// faults in an optically thick atmosphere, measured against the
-// plane-parallel adding-doubling reference (reference_plane_parallel_fluxes)
-// on Venus, default sizes, sun 40° up:
+// faults in an optically thick atmosphere, against the plane-parallel
+// adding-doubling reference (reference_plane_parallel_fluxes) on Venus,
+// default sizes, sun 40° up:
 //  - where the rows are optical depths apart (Venus's cloud deck: 2-3.4),
 //    the chord between two rows cuts the curvature off each order's source
 //    (its rise below the sunlit top, the bump of light diffusing through),
 //    and a little of every order is lost: over the hundreds of orders of a
-//    nearly conservative cloud, the tables reflected 0.89 of the
+//    nearly conservative cloud, the tables reflect 0.89 of the
 //    reference's light to space;
 //  - near the ground u_r follows rho ~ sqrt(altitude), so a source linear in
 //    u_r rises like a square root above the ground row, too much source just
 //    above the ground: in the 42 optical depths of Venus's air at 440 nm the
-//    sky light on the ground was 1.55 of the reference's (linear in altitude
+//    sky light on the ground is 1.55 of the reference's (linear in altitude
 //    instead: 0.68 of it, on the air alone).
 // In thick atmospheres the source is therefore interpolated between the rows
 // around r with a cubic Hermite polynomial in source_r_coordinate: the
@@ -119,15 +119,16 @@ INLINE vec3 source_function(IN(AtmosphereParams) atmosphere, float r, vec3 densi
 // and last rows). The result is blended with texture()'s linear
 // interpolation by the thickness weight scattering_mu_log_weight, 0 below 10
 // optical depths: thin atmospheres keep the linear interpolation exactly.
-// Measured (Venus, default sizes, sun 40° up, 680 / 550 / 440 nm; the
-// azimuthal mean of the radiance leaving the top straight down, and the
-// light on the ground): reflected 0.99 / 0.99 / 0.99 of the reference, on
-// the ground 0.96 / 1.00 / 1.10 (linear: 0.90 / 0.91 / 0.91 and 0.95 / 1.03
-// / 1.55). Tried (with a finer r axis map of 129 knots, where this scheme
-// gave 1.00 and 1.00 / 1.03 / 1.10): Catmull-Rom in u_r (uniform in the row
-// index) 1.00 reflected and 1.02 / 1.06 / 1.20 on the ground; Hermite in
-// altitude 1.02 and 1.18 / 1.12 / 1.07; linear in altitude, on the air
-// alone, 0.98 / 0.90 / 0.68 on the ground.
+// On Venus (default sizes, sun 40° up, 680 / 550 / 440 nm; the azimuthal
+// mean of the radiance leaving the top straight down, and the light on the
+// ground) this reflects 0.99 / 0.99 / 0.99 of the reference, and gives the
+// ground 0.96 / 1.00 / 1.10 of it (linear: 0.90 / 0.91 / 0.91 and 0.95 /
+// 1.03 / 1.55). The other interpolations compare worse (with a finer r axis
+// map of 129 knots, where this scheme gives 1.00 and 1.00 / 1.03 / 1.10):
+// Catmull-Rom in u_r (uniform in the row index) 1.00 reflected and 1.02 /
+// 1.06 / 1.20 on the ground; Hermite in altitude 1.02 and 1.18 / 1.12 /
+// 1.07; linear in altitude, on the air alone, 0.98 / 0.90 / 0.68 on the
+// ground.
 #define SOURCE_ALTITUDE_SHARE 0.05f
 
 INLINE float source_r_coordinate(IN(AtmosphereParams) atmosphere, float r) {
@@ -180,16 +181,16 @@ INLINE vec4 source_row_weights(IN(AtmosphereParams) atmosphere, int z0, float f,
 // A cubic undershoots where the source changes by orders of magnitude from
 // row to row, as the first orders of a thick atmosphere do in tables whose
 // rows are many optical depths apart (100x Earth with 8 rows: from 2 m the
-// zenith sky of 4 orders came out 1e-9 of what linear interpolation gives,
-// most of it clamped away from negative values; the Monte Carlo reference
-// gives 0.1 of the linear value there): where the two rows around r differ
-// by more than SOURCE_FLOOR_RATIO, the result is kept above the smaller,
-// the lowest value a source monotone between them can take (the floor
-// brought that sky to 0.6 of the reference). Only there: the floor adds
-// light, and applied wherever the cubic dips below a row it added 2 % to the
-// green sky light on Venus's ground over 600 orders of small tables, more
-// than the tail solver, which applies the same weights without any floor
-// (its operator must stay linear), found for the same orders.
+// cubic gives the zenith sky of 4 orders 1e-9 of what linear interpolation
+// gives, most of it clamped away from negative values; the Monte Carlo
+// reference gives 0.1 of the linear value there): where the two rows around
+// r differ by more than SOURCE_FLOOR_RATIO, the result is kept above the
+// smaller, the lowest value a source monotone between them can take (with
+// the floor that sky is 0.6 of the reference). Only there: the floor adds
+// light, and applied wherever the cubic dips below a row it would add 2 % to
+// the green sky light on Venus's ground over 600 orders of small tables,
+// more than the tail solver, which applies the same weights without any
+// floor (its operator must stay linear), finds for the same orders.
 #define SOURCE_FLOOR_RATIO 10.0f
 
 INLINE vec3 source_floor(vec3 bracket0, vec3 bracket1) {
@@ -231,20 +232,17 @@ INLINE vec3 source_function_lookup(IN(AtmosphereParams) atmosphere, IN(sampler3D
 // scattering_u_mu). One set of nodes serves the three wavelengths of a
 // table, and deep in a cloud they see the light from different depths (on
 // Venus the CO2 under the cloud is 7 optical depths thick at 680 nm and 42
-// at 440 nm): the nodes placed for all three leave each fewer of its own.
-// Measured against the reference on Venus at 550 nm (tests/venus_accuracy.cpp,
-// default sizes): with the preset's 680/550/440 nm the ground gets 0.82 of
-// the reference's light with 16 intervals and 0.96 with 32 (549.5/550/550.5
-// nm with 16: 1.06, +-12 %; ratios to that test's 2000-path reference of
-// the time, which later runs of 16000 paths put 1.24 times too high); the
-// precomputation's multiple scattering step costs twice as much (Venus at
-// 15 wavelengths, auto orders: 181 s in all instead of 152 s).
+// at 440 nm): the nodes placed for all three leave each fewer of its own,
+// so thick atmospheres get twice as many, at twice the cost of the
+// precomputation's multiple scattering step (tests/venus_accuracy.cpp
+// compares Venus's ground light with the reference).
 INLINE int multiple_scattering_intervals(IN(AtmosphereParams) atmosphere) {
   return atmosphere.scattering_mu_log_weight > 0.0f ? 2 * MULTIPLE_SCATTERING_INTERVALS
                                                     : MULTIPLE_SCATTERING_INTERVALS;
 }
 
-// Multiple scattering of one order along the ray (r, mu): seed 000 eq. 3.13,
+// Multiple scattering of one order along the ray (r, mu) (Collienne 2013,
+// eq. 3.13):
 //   L = ∫ T(x, y) J(y, v) dy = ∫ T(x, y) beta_ext(y) S(y, v) dy,
 // with S = J / beta_ext the source function of that order (in
 // `scattering_density_texture`, same layout as the scattering tables; see
@@ -310,7 +308,7 @@ INLINE vec3 incident_radiance(IN(AtmosphereParams) atmosphere, IN(sampler2D) tra
 }
 
 // Straightforward scattering density of order `order` + 1 at radius r for the
-// direction (mu, nu) with the sun at mu_s (seed 000 eq. 3.14):
+// direction (mu, nu) with the sun at mu_s (Collienne 2013, eq. 3.14):
 //   J = sum_i beta_s,i(r) ∫ P_i(v . w) L_order(w) dw,
 // by the midpoint rule over `theta_samples` x 2 `theta_samples` directions,
 // returned as the source function J / beta_ext(r) (source_function): the

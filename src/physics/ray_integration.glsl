@@ -109,7 +109,7 @@ INLINE vec3 exponential_interpolation(vec3 a, vec3 b, float f) {
 // fall off exponentially with altitude. A cell of the run time's maps spans
 // kilometres of altitude on a ray a few degrees up (22 km of ray, 2.3 km of
 // altitude at 6°: a whole scale height of a continental aerosol), where the
-// trapezoid overestimated the optical depth by 11 % and dimmed everything
+// trapezoid overestimates the optical depth by 11 % and dims everything
 // beyond it (single scattering 7-10 % low at 6-15° elevation).
 
 INLINE RayMap extinction_ray_map(IN(AtmosphereParams) atmosphere, float r, float mu, float d, int cells,

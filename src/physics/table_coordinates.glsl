@@ -69,10 +69,11 @@ INLINE void r_mu_from_transmittance_uv(IN(AtmosphereParams) atmosphere, vec2 uv,
 // atmosphere. In an optically thick one the radiance changes on the scale
 // of one optical depth wherever that lies: Venus's cloud deck (optical depth
 // 30 between 47 and 90 km) gets only 8 of 32 texels from rho / H, and the
-// ground light there converges only slowly with their number (at 680 nm
-// 9.3, 8.5, 8.2 % of the sunlight with 32, 64, 128 texels, the reference
-// 7.8 %; with the axis below 7.1 and 7.9 % with 32 and 64, and at 550 nm
-// 5.1 % with 32 against the reference's 5.1 %). So there the axis is
+// light on the ground converges slowly with their number (at 680 nm 9.3,
+// 8.5, 8.2 % of the sunlight with 32, 64, 128 texels, against the
+// reference's 7.8 %; with the axis below 7.1 and 7.9 % with 32 and 64
+// texels, and at 550 nm 5.1 % with 32, the reference's 5.1 %). So there the
+// axis is
 //   x_r = (1 - w) rho / H + w (1 - tau(r) / tau(bottom)),
 // tau(r) the vertical optical depth at 550 nm from r to the top and
 // w = scattering_r_optical_depth_weight (make_atmosphere_params), tabulated
@@ -123,8 +124,8 @@ INLINE float scattering_u_r(IN(AtmosphereParams) atmosphere, float r) {
 // to 60° from it lies within 1.1 of the 64 texels of the upward half,
 // yet inside the cloud deck that is where the light comes from. Log-spaced
 // distances give it 11 texels, and keep 12 for the rays below the local
-// horizontal. Measured against the brute-force reference (tests/venus_accuracy.cpp):
-// see make_atmosphere_params for the choice of w.
+// horizontal. make_atmosphere_params chooses w from the comparison with the
+// brute-force reference (tests/venus_accuracy.cpp).
 #define MU_WARP_FLOOR_FRACTION 0.01f
 INLINE float mu_warp_k(IN(AtmosphereParams) atmosphere, float d_min, float d_max) {
   float d_0 = MU_WARP_FLOOR_FRACTION * (atmosphere.top_radius - atmosphere.bottom_radius);
@@ -190,14 +191,14 @@ INLINE float scattering_u_mu_s(IN(AtmosphereParams) atmosphere, float mu_s) {
 // tiles 180° / (nu_size - 1) apart everywhere (25.7° with 8 tiles), where
 // uniform in nu they are 41° apart next to the sun and 17° at right angles
 // to it. The light scattered more than once by such a lobe (even delta-M
-// scaled) changes fastest next to the sun. Measured on the "mars" dust
-// against the reference, 6 orders, sun 60/10/2° up, RMS beyond 20° of the
-// sun: 9.4/8.1/11.8 % in angle, 9.8/20/30 % uniform in nu (worst 19/31/57 %
-// against 19/73/122 %; within 20° of the sun 6.5/20/26 % against
-// 4.5/11/19 %). Earth's clear sky is better uniform in nu (0.45 % against
-// 0.57 % RMS at sun 60°, 4.55 % against 4.91 % in twilight at sun -5°), and
-// so is Venus's energy balance (out / in 1.10 against 1.15,
-// tests/presets_test.cpp).
+// scaled) changes fastest next to the sun. Against the reference, the
+// "mars" dust with 6 orders and the sun 60/10/2° up has RMS errors beyond
+// 20° of the sun of 9.4/8.1/11.8 % uniform in angle and 9.8/20/30 % uniform
+// in nu (worst 19/31/57 % against 19/73/122 %; within 20° of the sun
+// 6.5/20/26 % against 4.5/11/19 %). Earth's clear sky is better uniform in
+// nu (0.45 % against 0.57 % RMS with the sun 60° up, 4.55 % against 4.91 %
+// in twilight with the sun 5° down), and so is Venus's energy balance (out
+// / in 1.10 against 1.15, tests/presets_test.cpp).
 INLINE float nu_from_unit_range(IN(AtmosphereParams) atmosphere, float x) {
   return atmosphere.scattering_nu_in_angle != 0 ? cos(PI * (1.0f - x)) : clamp_cosine(x * 2.0f - 1.0f);
 }
@@ -249,7 +250,8 @@ INLINE void r_mu_mu_s_nu_from_scattering_uvwz(IN(AtmosphereParams) atmosphere, v
 }
 
 // The 4D table is stored as a 3D texture: width = nu_size tiles of mu_s_size
-// texels, height = mu, depth = r (seed 004 §3, "4D table tiled in 3D").
+// texels, height = mu, depth = r (the 4D table tiled in 3D of Elek & Kmoch
+// 2010, §3).
 // `texel` is the texel index (integer part) of a 3D texel centre.
 INLINE vec4 scattering_uvwz_from_texel(IN(AtmosphereParams) atmosphere, vec3 texel) {
   float nu_index = floor(texel.x / float(atmosphere.scattering_mu_s_size));
@@ -307,19 +309,19 @@ INLINE float scattering_row_u_r(IN(AtmosphereParams) atmosphere, int row) {
 // The r axis is linear in the altitude h (Bruneton's), except in optically
 // thick atmospheres (scattering_r_optical_depth_weight w > 0). There the sky
 // light changes within a few kilometres of the ground, where terrain is lit:
-// with 16 linear rows, 6.7 km apart on Venus, it came out 4 / 8 / 15 % low
-// at 1 km (680 / 550 / 440 nm, against 128 rows; the profile is concave).
+// 16 linear rows, 6.7 km apart on Venus, give it 4 / 8 / 15 % too low at
+// 1 km (680 / 550 / 440 nm, against 128 rows; the profile is concave).
 // So there the axis is
 //   x_r = (1 - w) log(1 + h / h_0) / log(1 + h_top / h_0) + w tau_part(h),
 // h_0 = IRRADIANCE_R_LOG_SCALE_FRACTION of the atmosphere's thickness h_top,
 // and tau_part the optical depth part of the scattering table's r axis
 // (scattering_x_r_from_rho_fraction minus its rho / H part), so that the
 // rows crowd near the ground without the square root of rho / H (whose
-// infinite slope at the ground put a third of a row into the lowest 200 m:
+// infinite slope at the ground puts a third of a row into the lowest 200 m:
 // 5-15 % too much light there on Venus; tau_part keeps it only below its
 // first knot, the lowest 60-100 m) and still follow the optical depth into
-// a cloud deck. Venus's 16 rows now agree with 128 within 2.4 % from 200 m
-// to 10 km (tests/presets_test.cpp). The inverse is a bisection (the
+// a cloud deck: Venus's 16 rows agree with 128 within 2.4 % from 200 m to
+// 10 km (tests/presets_test.cpp). The inverse is a bisection (the
 // precomputation's texel centres only).
 #define IRRADIANCE_R_LOG_SCALE_FRACTION 0.01f
 

@@ -7,7 +7,7 @@
 // Needs: ray_geometry.glsl, medium.glsl, table_coordinates.glsl.
 
 // The transmittance table holds the optical depth τ to the top of the
-// atmosphere (seed 000 eq. 3.8), T = exp(-τ). Storing τ rather than T makes
+// atmosphere (Collienne 2013, eq. 3.8), T = exp(-τ). Storing τ rather than T makes
 // the transmittance of part of a ray a difference of two lookups,
 // exp(-(τ_a - τ_b)), instead of a ratio T_a / T_b that is 0 / 0 wherever a
 // dense atmosphere (Venus, 30x Earth in the blue) makes both underflow; and τ
@@ -28,9 +28,9 @@ INLINE vec3 transmittance_to_top_atmosphere_boundary(IN(AtmosphereParams) atmosp
 // near the ground of a dense atmosphere the values are huge: looking 3°
 // below the horizon from 2 m above Venus's ground, the ray reversed from
 // the ground point to the top has an optical depth of 424 at 550 nm (626
-// at the horizon), and the difference made the transmittance of the 40 m
+// at the horizon), and the difference makes the transmittance of the 40 m
 // to the ground jump between 0.7 and 1 from one pixel to the next
-// (concentric bands on the ground of the noon image). Where the larger
+// (concentric bands on the ground). Where the larger
 // value exceeds DIRECT_SEGMENT_MIN_OPTICAL_DEPTH and the segment stays
 // within a band of altitude 1/16 of the atmosphere's thickness (3.75 km on
 // Earth, 6 km on Venus), its optical depth is integrated directly instead:
@@ -182,7 +182,7 @@ INLINE float sun_disc_node(IN(AtmosphereParams) atmosphere, float mu_s, float mu
 
 // Transmittance from radius r to the sun, including the planet's shadow:
 // the mean over the solar disc of the transmittance of the unobstructed
-// rays to its points (a uniform disc; seed 000 §3 uses a point sun).
+// rays to its points (a uniform disc; Collienne 2013, §3, uses a point sun).
 INLINE vec3 transmittance_to_sun(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture, float r,
                                  float mu_s) {
   float mu_h = horizon_mu(atmosphere, r);
@@ -279,10 +279,10 @@ INLINE vec3 grazing_ray_lookup(IN(AtmosphereParams) atmosphere, IN(sampler3D) sc
 // u_mu is longer in the same proportion, and its light grows with its
 // length), and wrong where it is not: a ray whose light has saturated (one
 // optical depth near Venus's ground is a few kilometres at 550 nm) is not
-// brighter for being longer. Seen from 2 m above Venus's ground the ground
-// darkened towards its horizon, to 0.13 of the brute-force reference's
-// radiance 4 km away, where the reference brightens into the haze as bright
-// as the sky above the horizon (tests/venus_accuracy.cpp).
+// brighter for being longer. Seen from 2 m above Venus's ground, the plain
+// lookup darkens the ground towards its horizon, to 0.13 of the brute-force
+// reference's radiance 4 km away, where the reference brightens into the
+// haze as bright as the sky above the horizon (tests/venus_accuracy.cpp).
 // Instead:
 //  1. The ray of row 1 that reaches the ground after the SAME distance d
 //     (same_length_ground_ray_lookup) runs through the same lowest air down
@@ -290,16 +290,17 @@ INLINE vec3 grazing_ray_lookup(IN(AtmosphereParams) atmosphere, IN(sampler3D) sc
 //  2. It starts higher, and near the ground the light changes fast with
 //     height: a dark ground sends little up (on Venus a ray 0.5° above
 //     the horizon is 0.58 as bright from 2 m as from 330 m; reference),
-//     dense haze dims the sunlight. The grazing rays of rows 0 and 1 (grazing_ray_lookup, g_0
-//     and g_1) measure that change between the ground and h_1, and s_1 is
-//     scaled by (g_0 / g_1)^e, with e the fraction of h_1 between where row
-//     1's ray and the camera's ray collect their light: e = (1 - h / h_1)
+//     dense haze dims the sunlight. The grazing rays of rows 0 and 1
+//     (grazing_ray_lookup, g_0 and g_1) measure that change between the
+//     ground and h_1, and s_1 is scaled by (g_0 / g_1)^e, with e the
+//     fraction of h_1 between where row 1's ray and the camera's ray
+//     collect their light: e = (1 - h / h_1)
 //     (1/2 + 1/2 min(s_1 / g_1, 1)). A ray whose light is far from
 //     saturated (s_1 << g_1) collects it all along its descent, around
 //     h_1 / 2; a saturated one near its start, h_1.
 // The ratio g_0 / g_1 is kept within [1/2, 2]. The value is continuous at
-// h_1, where it is the table's own. Measured: Venus from 2 m, 20 m and 107 m,
-// the ground 100 m to 4 km away: 1.00-1.07 of the reference (the plain
+// h_1, where it is the table's own. Against the reference, Venus from 2 m,
+// 20 m and 107 m, the ground 100 m to 4 km away: 1.00-1.07 of it (the plain
 // lookup 0.13-0.85); single scattering in 10 times Earth's air (where it
 // can be integrated exactly, tests/precompute_test.cpp): at most 5.2 %
 // beyond the table's own interpolation error on row 1, 12.4 % in all (the
@@ -333,8 +334,8 @@ INLINE vec3 ground_ray_scattering_below_row_1(IN(AtmosphereParams) atmosphere, I
 // for a short, nearly level ray: it is steep (105 m down in 115 m), and
 // the multiple scattering of a hazy sky depends on the direction. In
 // Earth's continental haze from 2 m, the sun 60° up, 1° down towards the
-// sun, the in-scatter 115 m away was 23 % short with it, 14 % without
-// (tests/aerial_perspective_accuracy.cpp), although steep rays came nearer
+// sun, the in-scatter 115 m away is 23 % short with it, 14 % without
+// (tests/aerial_perspective_accuracy.cpp), although steep rays come nearer
 // the reference (within 0.5 % 4-12 m away, 3-12 % too bright without).
 INLINE vec3 ray_scattering_lookup(IN(AtmosphereParams) atmosphere, IN(sampler3D) scattering_texture, float r,
                                   float mu, float mu_s, float nu, bool ray_r_mu_intersects_ground) {

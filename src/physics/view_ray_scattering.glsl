@@ -211,8 +211,9 @@ INLINE vec3 sun_and_sky_irradiance(IN(AtmosphereParams) atmosphere, IN(SpectralS
 // (scattering_along_ray: single Rayleigh + multiple / P_R, and single
 // aerosol), and in `surface` what lies at its end — for a ray that meets the
 // ground sphere, the radiance of the Lambertian ground lit by the sun and
-// the sky (seed 000 §4.3.3) times the transmittance to it; for the others,
-// the transmittance to the top of the atmosphere, which the sun disc needs.
+// the sky (Collienne 2013, §4.3.3) times the transmittance to it; for the
+// others, the transmittance to the top of the atmosphere, which the sun disc
+// needs.
 // Everything that depends on the direction only, so that a sky pixel is
 // three texture reads (radiance_along_view_ray) instead of the ~15 lookups
 // of the transmittance and irradiance it would otherwise need per pixel.
@@ -258,9 +259,10 @@ INLINE void view_ray_terms(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spe
 }
 
 // Radiance scattered towards the camera along the view ray up to the top of
-// the atmosphere or the ground (seed 000 eq. 3.13), and the transmittance of
-// that path: scattering_along_ray for the ray itself (the GLSL library for
-// engines). Excludes the sun disc and the light reflected by the ground.
+// the atmosphere or the ground (Collienne 2013, eq. 3.13), and the
+// transmittance of that path: scattering_along_ray for the ray itself (the
+// GLSL library for engines). Excludes the sun disc and the light reflected
+// by the ground.
 INLINE vec3 sky_radiance(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
                          IN(sampler2D) spectral_transmittance_texture, IN(sampler3D) scattering_texture,
                          IN(sampler3D) single_aerosol_texture, IN(sampler3D) multiple_scattering_texture,
