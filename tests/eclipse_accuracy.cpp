@@ -130,6 +130,8 @@ Errors measure(int orders, double offset_deg, int paths_factor, const char* name
   atmos_test::record_figure("RMS", 100.0 * e.rms, "%", "");
   atmos_test::record_figure("max", 100.0 * e.worst, "%", "");
   atmos_test::record_figure("max abs ln(tables / reference)", e.worst_log_ratio, "", "");
+  atmos_test::record_figure("max beyond 3 standard errors of the reference",
+                            100.0 * std::max(0.0, e.worst_beyond_noise), "%", "");
   atmos_test::record_figure("zenith, tables", e.zenith_table, "cd/m2", "");
   atmos_test::record_figure("zenith, reference", e.zenith_reference, "cd/m2", "");
   return e;
