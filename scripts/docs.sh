@@ -30,6 +30,11 @@ done
 
 run="$build/docs-run"
 meta=()
+# The commit the run measures (what is built from the working tree).
+commit="$(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)"
+if [ -n "$(git -C "$root" status --porcelain --untracked-files=no 2>/dev/null)" ]; then
+  commit="$commit with uncommitted changes"
+fi
 if [ -z "$figures" ] || [ -z "$bench" ]; then
   ATMOS_BUILD_DIR="$build" bash "$root/scripts/build.sh"
   mkdir -p "$run"
@@ -52,7 +57,8 @@ if [ -z "$figures" ]; then
   [ "$found" = 1 ] || { echo "docs.sh: no test executables (atmos_*tests) in $build" >&2; exit 1; }
   seconds=$(( $(date +%s) - start ))
   echo "docs.sh: tests took $((seconds / 60)) min $((seconds % 60)) s ($(wc -l < "$figures") figures; log: $run/tests.log)"
-  printf 'tests_time=%s\ntest_filter=%s\n' "$((seconds / 60)) min $((seconds % 60)) s" "$filter" > "$figures.meta"
+  printf 'tests_time=%s\ntest_filter=%s\ntests_commit=%s\n' "$((seconds / 60)) min $((seconds % 60)) s" "$filter" \
+    "$commit" > "$figures.meta"
   if [ "$failed" = 1 ]; then
     echo "docs.sh: some tests failed (see $run/tests.log); the documents are not written" >&2
     exit 1
@@ -73,8 +79,8 @@ if [ -z "$bench" ]; then
   "$cli" bench > "$bench"
   seconds=$(( $(date +%s) - start ))
   echo "docs.sh: bench took $((seconds / 60)) min $((seconds % 60)) s"
-  printf 'bench_time=%s\nbench_load=%s\n' "$((seconds / 60)) min $((seconds % 60)) s" \
-    "$load_before before, $(cut -d' ' -f1 /proc/loadavg) after" > "$bench.meta"
+  printf 'bench_time=%s\nbench_load=%s\nbench_commit=%s\n' "$((seconds / 60)) min $((seconds % 60)) s" \
+    "$load_before before, $(cut -d' ' -f1 /proc/loadavg) after" "$commit" > "$bench.meta"
 fi
 
 # Facts about the run, kept next to its output (also when it is reused).
