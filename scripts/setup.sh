@@ -2,6 +2,7 @@
 # Installs every Debian package atmos needs to build, test and render.
 # Idempotent and non-interactive: packages already present are skipped, so it is
 # safe (and fast) to run twice.
+#   --fuzz  also clang and libFuzzer, for scripts/fuzz.sh
 set -euo pipefail
 
 packages=(
@@ -11,6 +12,13 @@ packages=(
   libepoxy-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev
   libeigen3-dev python3-matplotlib
 )
+
+for arg in "$@"; do
+  case "$arg" in
+    --fuzz) packages+=(clang libclang-rt-14-dev) ;;
+    *) echo "setup: unknown option $arg (only --fuzz)" >&2; exit 2 ;;
+  esac
+done
 
 missing=()
 for p in "${packages[@]}"; do
