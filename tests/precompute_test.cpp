@@ -4,15 +4,21 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <iterator>
+#include <limits>
 #include <random>
 #include <string>
 
 #include "atmos/atmosphere.hpp"
 #include "physics/parameters.hpp"
 #include "physics/precomputation_integrands_cpp.hpp"
+#include "precompute/cache_file.hpp"
 #include "precompute/steps.hpp"
 
 namespace {
@@ -614,6 +620,83 @@ TEST_F(Cache, CorruptAndTruncatedFilesAreRecomputed) {
   EXPECT_EQ(again.status, atmos::CacheStatus::recomputed_invalid);
   // And the rewritten file is good again.
   EXPECT_EQ(atmos::load_or_precompute_tables(earth, options, dir.string()).status, atmos::CacheStatus::hit);
+}
+
+// A file longer than any file of these tables is refused from its length,
+// before it is read (a sparse file of 1 GiB: reading it would allocate 1 GiB).
+TEST_F(Cache, FileLongerThanAnyTableFileIsNotRead) {
+  const auto first = atmos::load_or_precompute_tables(earth, options, dir.string());
+  std::filesystem::resize_file(first.path, std::uintmax_t(1) << 30);
+  const auto again = atmos::load_or_precompute_tables(earth, options, dir.string());
+  EXPECT_EQ(again.status, atmos::CacheStatus::recomputed_invalid);
+  EXPECT_NE(again.problem.find("more than"), std::string::npos) << again.problem;
+  EXPECT_EQ(again.tables.set.scattering, first.tables.set.scattering);
+}
+
+// Fields of a cache file (src/precompute/cache.cpp, write_cache) that the
+// decoder tests below change.
+constexpr std::size_t kSizesOffset = 28, kSetsOffset = 64, kWavelengthsOffset = 68, kConvergenceOffset = 72,
+                      kFirstWavelengthOffset = 76;
+
+std::string file_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+template <class T>
+void put(std::string& file, std::size_t offset, T value) {
+  std::memcpy(file.data() + offset, &value, sizeof value);
+}
+
+// The file's last 8 bytes: the 64-bit FNV-1a hash (Fowler, Noll & Vo) of
+// the bytes before them, recomputed so that a changed field passes the
+// checksum and reaches the check of its own.
+void recompute_checksum(std::string& file) {
+  const std::size_t body = file.size() - 8;
+  std::uint64_t h = 1469598103934665603ull;
+  for (std::size_t i = 0; i < body; ++i) {
+    h ^= static_cast<unsigned char>(file[i]);
+    h *= 1099511628211ull;
+  }
+  put(file, body, h);
+}
+
+// Files that pass the key and the checksum but were not written for these
+// tables: other working wavelengths, a non-finite convergence report, and a
+// header claiming tables and counts far beyond the options' (refused before
+// anything of their size is allocated). Each is refused with its reason.
+TEST_F(Cache, DecoderRefusesFieldsThatDisagreeWithThePlanet) {
+  options.auto_orders = true;  // a convergence report with a tail entry
+  const auto first = atmos::load_or_precompute_tables(earth, options, dir.string());
+  ASSERT_FALSE(first.tables.convergence.empty());
+  const std::string key = atmos::tables_cache_key(earth, options);
+  const std::string good = file_bytes(first.path);
+  atmos::Tables tables;
+  ASSERT_EQ(atmos::read_tables_file(good, key, options, earth, tables), "");
+  EXPECT_EQ(tables.set.scattering, first.tables.set.scattering);
+
+  auto problem_of = [&](const std::function<void(std::string&)>& change) {
+    std::string file = good;
+    change(file);
+    recompute_checksum(file);
+    atmos::Tables t;
+    return atmos::read_tables_file(file, key, options, earth, t);
+  };
+  std::string problem = problem_of([](std::string& f) { put(f, kFirstWavelengthOffset, 681.0); });
+  EXPECT_NE(problem.find("wavelengths"), std::string::npos) << problem;
+  problem = problem_of([](std::string& f) { put(f, kFirstWavelengthOffset, std::nan("")); });
+  EXPECT_NE(problem.find("wavelengths"), std::string::npos) << problem;
+  // The first convergence entry follows the 3 wavelengths: order, iterations (int32), then `added`.
+  const std::size_t added = kFirstWavelengthOffset + 3 * 8 + 4 + 4;
+  problem = problem_of([&](std::string& f) { put(f, added, std::numeric_limits<double>::infinity()); });
+  EXPECT_NE(problem.find("convergence"), std::string::npos) << problem;
+  problem = problem_of([](std::string& f) {
+    for (std::size_t i = 0; i < 8; ++i) put(f, kSizesOffset + 4 * i, std::int32_t(4096));
+    put(f, kSetsOffset, std::numeric_limits<std::int32_t>::max());
+    put(f, kWavelengthsOffset, std::numeric_limits<std::int32_t>::max());
+    put(f, kConvergenceOffset, std::numeric_limits<std::int32_t>::max());
+  });
+  EXPECT_EQ(problem, "parameters mismatch");
 }
 
 TEST_F(Cache, UnwritableDirectoryStillReturnsTables) {

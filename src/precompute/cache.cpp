@@ -18,10 +18,10 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 
 #include "atmos/tables.hpp"
 #include "io/embedded_files.hpp"
+#include "precompute/cache_file.hpp"
 
 namespace atmos {
 namespace {
@@ -59,6 +59,10 @@ constexpr char kMagic[8] = {'A', 'T', 'M', 'O', 'S', 'T', 'B', 'L'};
 //    tail solver from order 16 (precompute.cpp kEarliestTailHandoff).
 constexpr std::uint32_t kFormatVersion = 14;
 constexpr std::size_t kConvergenceEntryBytes = 4 + 4 + 3 * 8;
+// Magic, version, key, 8 table sizes, orders, wavelength triples, wavelengths,
+// convergence entries.
+constexpr std::size_t kHeaderBytes = sizeof kMagic + 4 + 16 + 8 * 4 + 4 + 4 + 4 + 4;
+constexpr std::int32_t kMaxConvergenceEntries = 100;
 
 struct Fnv1a {
   std::uint64_t h = 1469598103934665603ull;
@@ -87,6 +91,16 @@ std::size_t set_floats(const TableSizes& s) {
   const std::size_t e = std::size_t(s.irradiance_mu_s) * s.irradiance_r;
   const std::size_t sc = std::size_t(s.scattering_nu) * s.scattering_mu_s * s.scattering_mu * s.scattering_r;
   return 3 * (2 * e + 3 * sc);  // 2 irradiance, 3 scattering tables
+}
+
+// The length of a file of tables of sizes `s` at `wavelengths` working
+// wavelengths with `convergence` report entries: the header, the wavelengths,
+// the report, the texels and the checksum.
+std::size_t file_bytes(const TableSizes& s, std::size_t wavelengths, std::size_t convergence) {
+  const std::size_t sets = (wavelengths + 2) / 3;
+  const std::size_t transmittance_floats = 3 * std::size_t(s.transmittance_mu) * s.transmittance_r;
+  const std::size_t floats = set_floats(s) + transmittance_floats * 2 * sets;
+  return kHeaderBytes + wavelengths * 8 + convergence * kConvergenceEntryBytes + floats * 4 + 8;
 }
 
 void write_sizes(Fnv1a& h, const TableSizes& s) {
@@ -164,19 +178,9 @@ std::string default_cache_directory() {
   return ".atmos-cache";
 }
 
-namespace {
-
-// Reads and checks a cache file. Returns an empty string on success, else why
-// the file is unusable.
-std::string read_cache(const std::string& path, const std::string& key, const PrecomputeOptions& options,
-                       const Atmosphere& atmosphere, Tables& tables) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return "cannot open";
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  const std::string data = buffer.str();
-  const std::size_t header = sizeof kMagic + 4 + 16 + 8 * 4 + 4 + 4 + 4 + 4;
-  if (data.size() < header + 8) return "truncated header";
+std::string read_tables_file(std::string_view data, const std::string& key, const PrecomputeOptions& options,
+                             const Atmosphere& atmosphere, Tables& tables) {
+  if (data.size() < kHeaderBytes + 8) return "truncated header";
   std::size_t pos = 0;
   auto take = [&](void* out, std::size_t n) {
     std::memcpy(out, data.data() + pos, n);
@@ -201,12 +205,9 @@ std::string read_cache(const std::string& path, const std::string& key, const Pr
   const bool orders_match = options.auto_orders ? orders >= 1 && orders <= options.scattering_orders
                                                 : orders == options.scattering_orders;
   if (!(s == options.sizes) || !orders_match || wavelengths != std::int32_t(atmosphere.wavelengths_nm.size()) ||
-      sets != (wavelengths + 2) / 3 || convergence < 0 || convergence > 100)
+      sets != (wavelengths + 2) / 3 || convergence < 0 || convergence > kMaxConvergenceEntries)
     return "parameters mismatch";
-  const std::size_t transmittance_floats = 3 * std::size_t(s.transmittance_mu) * s.transmittance_r;
-  const std::size_t floats = set_floats(s) + transmittance_floats * std::size_t(2 * sets);
-  const std::size_t expected =
-      header + std::size_t(wavelengths) * 8 + std::size_t(convergence) * kConvergenceEntryBytes + floats * 4 + 8;
+  const std::size_t expected = file_bytes(s, std::size_t(wavelengths), std::size_t(convergence));
   if (data.size() != expected)
     return "size " + std::to_string(data.size()) + " bytes, expected " + std::to_string(expected) + " (truncated?)";
   Fnv1a check;
@@ -220,6 +221,7 @@ std::string read_cache(const std::string& path, const std::string& key, const Pr
   tables.scattering_orders = orders;
   tables.wavelengths_nm.resize(std::size_t(wavelengths));
   take(tables.wavelengths_nm.data(), std::size_t(wavelengths) * 8);
+  if (tables.wavelengths_nm != atmosphere.wavelengths_nm) return "working wavelengths differ from the planet's";
   for (int i = 0; i < convergence; ++i) {
     OrderContribution c;
     std::int32_t order, iterations;  // iterations < 0: an order, not the tail
@@ -231,6 +233,8 @@ std::string read_cache(const std::string& path, const std::string& key, const Pr
     c.order = order;
     c.tail = iterations >= 0;
     c.iterations = std::max(iterations, std::int32_t(0));
+    if (!std::isfinite(c.added) || !std::isfinite(c.relative) || !std::isfinite(c.residual))
+      return "non-finite convergence report";
     tables.convergence.push_back(c);
   }
   auto take_vec3 = [&](std::vector<glm::vec3>& v, std::size_t count) {
@@ -249,6 +253,28 @@ std::string read_cache(const std::string& path, const std::string& key, const Pr
       !take_vec3(set.multiple_scattering, sc) || !take_vec3(tables.spectral_optical_depth, t * std::size_t(2 * sets)))
     return "non-finite texels";
   return "";
+}
+
+namespace {
+
+// Reads and checks a cache file. Returns an empty string on success, else why
+// the file is unusable. A file longer than any file of these tables is
+// refused before it is read, so that its length never sizes an allocation.
+std::string read_cache(const std::string& path, const std::string& key, const PrecomputeOptions& options,
+                       const Atmosphere& atmosphere, Tables& tables) {
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec) return "cannot open";
+  const std::size_t longest =
+      file_bytes(options.sizes, atmosphere.wavelengths_nm.size(), std::size_t(kMaxConvergenceEntries));
+  if (size > longest)
+    return "size " + std::to_string(size) + " bytes, more than the " + std::to_string(longest) +
+           " of any file of these tables";
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return "cannot open";
+  std::string data(std::size_t(size), '\0');
+  if (!in.read(data.data(), std::streamsize(data.size()))) return "cannot read " + std::to_string(size) + " bytes";
+  return read_tables_file(data, key, options, atmosphere, tables);
 }
 
 // Writes atomically: a temporary file renamed over the final name, so that a
