@@ -156,4 +156,14 @@ TEST(PlanetFile, BadInputsAreClearErrors) {
   expect_error("{\"format\": NaN}", "malformed JSON");
 }
 
+// A sample out of bounds at a wavelength beyond the range of an int:
+// validate()'s message gives the wavelength as it is (converting it to int
+// would be undefined behaviour).
+TEST(PlanetFile, SampleOutOfBoundsAtAHugeWavelengthIsNamedAsItIs) {
+  expect_error(modified([](nlohmann::json& j) {
+                 j["ground_albedo"] = {{"unit", "1"}, {"wavelengths_nm", {1e300}}, {"values", {2.0}}};
+               }),
+               "ground_albedo at 1e+300 nm is 2");
+}
+
 }  // namespace

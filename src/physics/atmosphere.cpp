@@ -376,18 +376,24 @@ void Atmosphere::validate() const {
   if (constituents.size() > 4) bad("at most 4 constituents are supported");
   if (!std::isfinite(sun_angular_radius_rad) || sun_angular_radius_rad <= 0.0 || sun_angular_radius_rad > 0.2)
     bad("sun_angular_radius must be in (0, 0.2] rad");
+  // A spectrum's samples may lie at any finite wavelength, beyond the range of an int.
+  auto nm = [](double wavelength) {
+    std::ostringstream o;
+    o << wavelength;
+    return o.str();
+  };
   auto check_spectrum = [&](const Spectrum& s, const std::string& what, double max) {
     if (s.empty()) bad(what + " is missing");
     for (size_t i = 0; i < s.values().size(); ++i) {
       const double v = s.values()[i];
       if (!std::isfinite(v) || v < 0.0 || v > max)
-        bad(what + " at " + std::to_string(int(s.wavelengths_nm()[i])) + " nm is " + std::to_string(v) +
+        bad(what + " at " + nm(s.wavelengths_nm()[i]) + " nm is " + std::to_string(v) +
             ", outside [0, " + std::to_string(max) + "]");
     }
     for (double w : wavelengths_nm) {
       const double v = s.at(w);
       if (!std::isfinite(v) || v < 0.0 || v > max)
-        bad(what + " at " + std::to_string(int(w)) + " nm is " + std::to_string(v) + ", outside [0, " +
+        bad(what + " at " + nm(w) + " nm is " + std::to_string(v) + ", outside [0, " +
             std::to_string(max) + "]");
     }
   };
