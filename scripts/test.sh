@@ -1,20 +1,54 @@
 #!/usr/bin/env bash
-# Install what is needed, build, and run the whole test suite (CTest +
-# GoogleTest), then the fast tests again under AddressSanitizer and
-# UndefinedBehaviorSanitizer. OpenGL runs headless (EGL, Mesa llvmpipe on
-# machines without a GPU).
+# Installs what is needed, builds with warnings as errors, and runs a tier of
+# the tests (CTest, one test per GoogleTest suite; tests/CMakeLists.txt):
+#
+#   bash scripts/test.sh          the default tier (about 15 minutes from a fresh
+#                                 clone on 2 cores): unit tests (invariants, fast
+#                                 paths against the shared definitions, cache, CLI,
+#                                 post, plugin, example, GPU against the CPU twins,
+#                                 the installed package) and accuracy against the
+#                                 stored reference results (tests/data/reference/);
+#   bash scripts/test.sh --full   the full tier (at most 45 minutes): everything,
+#                                 the references recomputed and checked bit for bit
+#                                 against the stored ones, Venus, the dense
+#                                 atmospheres and the convergence of the orders.
+#
+# Both end with the unit tests built with AddressSanitizer and
+# UndefinedBehaviorSanitizer, and print the 10 slowest tests of the main run.
+# OpenGL runs headless (EGL; Mesa llvmpipe on machines without a GPU).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+tier=default
+case "${1:-}" in
+  "") ;;
+  --full) tier=full ;;
+  *) echo "usage: bash scripts/test.sh [--full]" >&2; exit 2 ;;
+esac
+jobs="$(nproc)"
+start=$(date +%s)
 bash "$root/scripts/setup.sh"
 export ATMOS_CACHE_DIR="${ATMOS_CACHE_DIR:-$(mktemp -d)}"
+report="$(mktemp -d)"
 
 bash "$root/scripts/build.sh" -DATMOS_WERROR=ON
-ctest --test-dir "$root/build" --output-on-failure --parallel 1 --timeout 1200
+echo "test.sh: built in $(( $(date +%s) - start )) s; running the $tier tier"
+if [ "$tier" = full ]; then
+  export ATMOS_REFERENCE_MODE=verify
+fi
+status=0
+ctest --test-dir "$root/build" --output-on-failure --parallel "$jobs" -L "^$tier$" \
+  --output-junit "$report/main.xml" || status=$?
+python3 "$root/scripts/slowest_tests.py" "$report/main.xml" || true
+unset ATMOS_REFERENCE_MODE
+[ "$status" -eq 0 ] || { echo "test.sh: the $tier tier failed" >&2; exit "$status"; }
 
-# Sanitizers: everything except the long accuracy runs. This build has only
-# the baseline x86-64 code of the precomputation's hot loops (no AVX2 copy),
-# so that both copies are tested.
-ATMOS_BUILD_DIR="$root/build-sanitize" bash "$root/scripts/build.sh" -DATMOS_SANITIZE=ON -DATMOS_WERROR=ON \
-  -DATMOS_KERNEL_CLONES=OFF
+# Sanitizers: the unit tests. This build has only the baseline x86-64 code of
+# the precomputation's hot loops (no AVX2 copy), so that both copies are tested.
+sanitize="$root/build-sanitize"
+cmake -S "$root" -B "$sanitize" -G Ninja -DCMAKE_BUILD_TYPE=Release -DATMOS_SANITIZE=ON -DATMOS_WERROR=ON \
+  -DATMOS_KERNEL_CLONES=OFF > /dev/null
+cmake --build "$sanitize" --parallel "$jobs" --target atmos_tests
 ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1 \
-  ctest --test-dir "$root/build-sanitize" --output-on-failure --parallel 1 --timeout 1200 -LE slow
+  ctest --test-dir "$sanitize" --output-on-failure --parallel "$jobs" -L '^unit$' --output-junit "$report/sanitize.xml"
+python3 "$root/scripts/slowest_tests.py" "$report/sanitize.xml" --title "sanitizer build" || true
+echo "test.sh: the $tier tier passed in $(( $(date +%s) - start )) s"

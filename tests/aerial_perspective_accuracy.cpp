@@ -49,9 +49,11 @@
 #include <string>
 #include <vector>
 
-#include "atmos/reference.hpp"
+#include "atmos/planet_file.hpp"
+#include "reference/reference.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "support/reference_store.hpp"
 #include "clear_sky_earth.hpp"
 #include "figures.hpp"
 #include "gpu/atmosphere_pass.hpp"
@@ -184,7 +186,7 @@ class AerialPerspective : public ::testing::Test {
       tbb::parallel_for(size_t(0), horizon.size(), [&](size_t i) {
         atmos::ReferenceOptions o = options;
         o.seed = 500 + i;
-        horizon[i] = atmos::reference_radiance(
+        horizon[i] = atmos_test::oracle::reference_radiance(
             a, camera, atmos::direction_from_azimuth_elevation(kSunAzimuth + kRelativeAzimuths[i], 0.0), sun, o);
       });
       for (const auto& h : horizon)
@@ -195,8 +197,8 @@ class AerialPerspective : public ::testing::Test {
     tbb::parallel_for(size_t(0), pts.size(), [&](size_t i) {
       atmos::ReferenceOptions o = options;
       o.seed = 1000 + i;
-      reference[i] = atmos::reference_radiance_to_point(a, camera, camera + pts[i].offset, sun, o);
-      transmittance[i] = atmos::reference_transmittance(a, camera, camera + pts[i].offset);
+      reference[i] = atmos_test::oracle::reference_radiance_to_point(a, camera, camera + pts[i].offset, sun, o);
+      transmittance[i] = atmos_test::oracle::reference_transmittance(a, camera, camera + pts[i].offset);
     });
 
     CaseResult result;

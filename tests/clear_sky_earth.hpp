@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "atmos/atmosphere.hpp"
+#include "atmos/planet_file.hpp"
 
 inline atmos::Atmosphere clear_sky_earth() {
   atmos::Atmosphere atmosphere = atmos::load_atmosphere("earth");

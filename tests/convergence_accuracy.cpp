@@ -26,6 +26,7 @@
 #include <cstdio>
 
 #include "atmos/atmosphere.hpp"
+#include "atmos/planet_file.hpp"
 #include "atmos/tables.hpp"
 #include "physics/parameters.hpp"
 #include "physics/medium_cpp.hpp"

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "atmos/atmosphere.hpp"
+#include "atmos/planet_file.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
 #include "physics/parameters.hpp"

@@ -25,9 +25,11 @@
 #include <cmath>
 #include <cstdio>
 
-#include "atmos/reference.hpp"
+#include "atmos/planet_file.hpp"
+#include "reference/reference.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "support/reference_store.hpp"
 #include "figures.hpp"
 
 namespace {
@@ -59,7 +61,7 @@ TEST(DenseGroundAccuracy, HundredTimesEarthConvergesToTheReferenceWithRadiusTexe
   const double fine = ground_over_top(dense, atmos::precompute_tables(dense, options), sun);
 
   const double mu_s = std::sin(elevation * M_PI / 180.0);
-  const atmos::PlaneParallelFluxes pp = atmos::reference_plane_parallel_fluxes(dense, mu_s);
+  const atmos::PlaneParallelFluxes pp = atmos_test::oracle::reference_plane_parallel_fluxes(dense, mu_s);
   const double truth = (pp.ground_direct[0] + pp.ground_diffuse[0]) / (dense.solar_irradiance.at(680.0) * mu_s);
   std::printf("100x Earth, 680 nm, sun 40 deg: ground / top %.4e (32 radius texels), %.4e (64), %.4e "
               "(plane-parallel reference): %.3f, %.3f\n",

@@ -32,9 +32,11 @@
 
 #include "atmos/colour.hpp"
 #include "atmos/eclipse.hpp"
-#include "atmos/reference.hpp"
+#include "atmos/planet_file.hpp"
+#include "reference/reference.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "support/reference_store.hpp"
 #include "clear_sky_earth.hpp"
 #include "figures.hpp"
 
@@ -97,7 +99,7 @@ Errors measure(int orders, double offset_deg, int paths_factor, const char* name
     table[i] = atmos::srgb_luminance(model.to_srgb(model.radiance(observer, directions[i], sun, false, moons)));
     atmos::ReferenceOptions o = reference_options;
     o.seed = 3000 + i;
-    const atmos::ReferenceResult r = atmos::reference_radiance(atmosphere, observer, directions[i], sun, o);
+    const atmos::ReferenceResult r = atmos_test::oracle::reference_radiance(atmosphere, observer, directions[i], sun, o);
     reference[i] = luminance_of_spectrum(r.radiance);
     noise[i] = std::abs(luminance_of_spectrum(r.standard_error));
   });

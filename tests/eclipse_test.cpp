@@ -74,7 +74,7 @@ Camera straight_down(const glm::dvec3& position, int size) {
 // several times brighter than the zenith: the horizon ring. The GPU image
 // matches the CPU's.
 TEST_F(EclipseGpu, TotalityDarkensTheSkyAndLeavesAHorizonRing) {
-  atmos::Renderer renderer(*context_, *earth_, *tables_);
+  atmos::Renderer renderer(*earth_, *tables_);
   const int size = 49;
   const Camera camera = all_sky(observer(), size);
   const Image day = renderer.render(camera, sun(40.0));
@@ -126,7 +126,7 @@ TEST_F(EclipseGpu, TotalityDarkensTheSkyAndLeavesAHorizonRing) {
 // irradiance times albedo / pi; the uneclipsed ground's, scaled by the sky's
 // share of the irradiance (SkyModel), is the sky-light level.
 TEST_F(EclipseGpu, TheGroundInTotalityGetsLessThanTheSkyLight) {
-  atmos::Renderer renderer(*context_, *earth_, *tables_);
+  atmos::Renderer renderer(*earth_, *tables_);
   const Camera camera = straight_down(observer(), 9);
   const Image day = renderer.render(camera, sun(40.0));
   renderer.set_moons({moon(40.0, 0.28)});
@@ -147,7 +147,7 @@ TEST_F(EclipseGpu, TheGroundInTotalityGetsLessThanTheSkyLight) {
 // sky's level in totality, and about half of them go dark when the moon
 // covers half the disc.
 TEST_F(EclipseGpu, TheMoonHidesTheSunDisc) {
-  atmos::Renderer renderer(*context_, *earth_, *tables_);
+  atmos::Renderer renderer(*earth_, *tables_);
   Camera camera;
   camera.position = observer();
   camera.forward = sun(40.0);
@@ -184,7 +184,7 @@ TEST_F(EclipseGpu, TheMoonHidesTheSunDisc) {
 // tables'; a moon 5° off eclipses nothing at all (moons_may_eclipse) and
 // the image is the moonless one, bit for bit.
 TEST_F(EclipseGpu, PartialEclipsesBrightenAsTheMoonMovesOff) {
-  atmos::Renderer renderer(*context_, *earth_, *tables_);
+  atmos::Renderer renderer(*earth_, *tables_);
   const Camera camera = straight_down(observer(), 5);
   const double clear = luminance(renderer.render(camera, sun(40.0)), 2, 2);
   double previous = 0.0;
@@ -207,7 +207,7 @@ TEST_F(EclipseGpu, PartialEclipsesBrightenAsTheMoonMovesOff) {
 // bit for bit, except on the moon's own disc, where its sunlit side shows
 // (a gibbous moon 140° from the sun, brighter than the sky around it).
 TEST_F(EclipseGpu, AMoonAwayFromTheSunChangesOnlyItsDisc) {
-  atmos::Renderer renderer(*context_, *earth_, *tables_);
+  atmos::Renderer renderer(*earth_, *tables_);
   const glm::dvec3 sun = atmos::direction_from_azimuth_elevation(150.0, 10.0);
   const glm::dvec3 towards_moon = atmos::direction_from_azimuth_elevation(330.0, 30.0);
   Camera camera;
@@ -244,7 +244,7 @@ TEST_F(EclipseGpu, AMoonAwayFromTheSunChangesOnlyItsDisc) {
 // cannot happen (the program is the eclipse variant, compiled apart: equal
 // to float rounding, not bit for bit).
 TEST_F(EclipseGpu, FromSpaceAMoonAwayFromTheSunChangesNothing) {
-  atmos::Renderer renderer(*context_, *earth_, *tables_);
+  atmos::Renderer renderer(*earth_, *tables_);
   const glm::dvec3 up(0.0, 0.0, 1.0);
   const glm::dvec3 sun = glm::normalize(glm::dvec3(1.0, 0.0, 0.3));
   Camera camera;
@@ -270,7 +270,7 @@ TEST_F(EclipseGpu, FromSpaceAMoonAwayFromTheSunChangesNothing) {
 
 // Bad moons are errors that keep the renderer's previous moons.
 TEST_F(EclipseGpu, RejectsBadMoons) {
-  atmos::Renderer renderer(*context_, *earth_, *tables_);
+  atmos::Renderer renderer(*earth_, *tables_);
   const Moon good = moon(40.0, 0.28);
   renderer.set_moons({good});
   const double nan = std::numeric_limits<double>::quiet_NaN();

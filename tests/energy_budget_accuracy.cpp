@@ -53,6 +53,7 @@
 #include <vector>
 
 #include "atmos/atmosphere.hpp"
+#include "atmos/planet_file.hpp"
 #include "atmos/tables.hpp"
 #include "physics/parameters.hpp"
 #include "physics/precomputation_integrands_cpp.hpp"

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "atmos/atmosphere.hpp"
+#include "atmos/planet_file.hpp"
 #include "atmos/renderer.hpp"
 #include "atmos/tables.hpp"
 #include "table_sizes.hpp"

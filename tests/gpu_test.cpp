@@ -16,6 +16,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <vector>
 
@@ -26,6 +27,8 @@
 #include "atmos/atmosphere.hpp"
 #include "atmos/colour.hpp"
 #include "atmos/image.hpp"
+#include "atmos/plugin.hpp"
+#include "atmos/post.hpp"
 #include "atmos/renderer.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
@@ -245,8 +248,43 @@ void expect_gpu_matches_cpu(atmos::Renderer& renderer, const atmos::Atmosphere& 
   }
 }
 
+// The OpenGL context rule of Renderer, AtmospherePass and PostProcess: each
+// needs a current 4.5 context on the calling thread and says so when there is
+// none (a new thread has no current context), and none of them makes the
+// fixture's context current by itself.
+TEST_F(Gpu, EveryGlClassNeedsACurrentContext) {
+  std::string renderer_error, pass_error, post_error;
+  std::thread other([&] {
+    try {
+      atmos::Renderer renderer(*earth_, *tables_);
+    } catch (const atmos::Error& e) {
+      renderer_error = e.what();
+    }
+    try {
+      atmos::AtmospherePass pass(*earth_, *tables_, atmos::PlanetFrame{});
+    } catch (const atmos::Error& e) {
+      pass_error = e.what();
+    }
+    try {
+      atmos::PostProcess post;
+    } catch (const atmos::Error& e) {
+      post_error = e.what();
+    }
+  });
+  other.join();
+  EXPECT_NE(renderer_error.find("atmos::Renderer needs a current OpenGL 4.5 core context"), std::string::npos)
+      << renderer_error;
+  EXPECT_NE(pass_error.find("needs a current OpenGL 4.5 core context"), std::string::npos) << pass_error;
+  EXPECT_NE(post_error.find("atmos::PostProcess needs a current OpenGL 4.5 core context"), std::string::npos)
+      << post_error;
+  // On the fixture's thread, where its context is current, all three work.
+  atmos::Renderer renderer(*earth_, *tables_);
+  atmos::AtmospherePass pass(*earth_, *tables_, atmos::PlanetFrame{});
+  atmos::PostProcess post;
+}
+
 TEST_F(Gpu, FullPrecisionMatchesCpu) {
-  atmos::Renderer renderer(*context_, *earth_, *tables_, TexturePrecision::full);
+  atmos::Renderer renderer(*earth_, *tables_, TexturePrecision::full);
   expect_gpu_matches_cpu(renderer, *earth_, *tables_, "full vs cpu");
 }
 
@@ -259,7 +297,7 @@ TEST_F(Gpu, SpectralTablesMatchCpu) {
   atmos::PrecomputeOptions options;
   options.sizes = atmos_test::small_gpu_sizes();
   const atmos::Tables tables = atmos::precompute_tables(spectral, options);
-  atmos::Renderer renderer(*context_, spectral, tables, TexturePrecision::full);
+  atmos::Renderer renderer(spectral, tables, TexturePrecision::full);
   expect_gpu_matches_cpu(renderer, spectral, tables, "spectral full vs cpu");
 }
 
@@ -279,7 +317,7 @@ TEST_F(Gpu, WavelengthDependentAerosolPhaseMatchesCpu) {
   atmos::PrecomputeOptions options;
   options.sizes = atmos_test::small_gpu_sizes();
   const atmos::Tables tables = atmos::precompute_tables(spectral, options);
-  atmos::Renderer renderer(*context_, spectral, tables, TexturePrecision::full);
+  atmos::Renderer renderer(spectral, tables, TexturePrecision::full);
   expect_gpu_matches_cpu(renderer, spectral, tables, "DHG spectral vs cpu");
 }
 
@@ -308,12 +346,12 @@ TEST_F(Gpu, WarpedMuAxisMatchesCpu) {
   const atmos::physics::AtmosphereParams params = atmos::physics::make_atmosphere_params(dense, options.sizes, 0);
   ASSERT_GT(params.scattering_mu_log_weight, 0.9f);
   ASSERT_GT(params.scattering_r_optical_depth_weight, 0.4f);
-  atmos::Renderer renderer(*context_, dense, tables, TexturePrecision::full);
+  atmos::Renderer renderer(dense, tables, TexturePrecision::full);
   expect_gpu_matches_cpu(renderer, dense, tables, "warped axes vs cpu", 2e-3, 4e-3);
 }
 
 TEST_F(Gpu, HalfPrecisionMatchesCpu) {
-  atmos::Renderer renderer(*context_, *earth_, *tables_, TexturePrecision::half);
+  atmos::Renderer renderer(*earth_, *tables_, TexturePrecision::half);
   const atmos::Tables half_tables = round_to_half(*tables_);
   for (const Scene& scene : scenes()) {
     const Image gpu = renderer.render(scene.camera, scene.sun);
@@ -332,7 +370,7 @@ TEST_F(Gpu, HalfPrecisionMatchesCpu) {
 }
 
 TEST_F(Gpu, ImageOrientationAndProjections) {
-  atmos::Renderer renderer(*context_, *earth_, *tables_);
+  atmos::Renderer renderer(*earth_, *tables_);
   // Pixel (0, 0) is the top-left: put the sun's disc (0.27° in radius, a
   // billion cd/m²) on the centre of pixel (16, 12), up and to the left of
   // the image centre; its pixels of 1.25° leave the disc in that pixel alone.
@@ -368,7 +406,7 @@ TEST_F(Gpu, LargeImagesAreTiled) {
   // Larger than one 2048-pixel tile: the tiles must land in the right place,
   // i.e. match the CPU twin everywhere. Thin strips keep it fast; each puts a
   // steep feature in its second tile so that a misplaced tile would show.
-  atmos::Renderer renderer(*context_, *earth_, *tables_);
+  atmos::Renderer renderer(*earth_, *tables_);
   Camera row = scenes()[0].camera;
   row.width = 2100;
   row.height = 3;
@@ -398,7 +436,7 @@ TEST_F(Gpu, LargeImagesAreTiled) {
 // the horizontal irradiance / sin 30°), on the GPU and on the CPU; and the
 // disc is limb-darkened (functions.glsl: sun_disc_radiance).
 TEST_F(Gpu, SunDiscCarriesTheAttenuatedSolarIrradiance) {
-  atmos::Renderer renderer(*context_, *earth_, *tables_, TexturePrecision::full);
+  atmos::Renderer renderer(*earth_, *tables_, TexturePrecision::full);
   const atmos::SkyModel model(*earth_, *tables_);
   const glm::dvec3 sun = sun_at(30.0, 0.0);
   Camera camera;
@@ -477,7 +515,7 @@ TEST_F(Gpu, StarsShineAtNightAndDrownByDay) {
       star = s;
     }
   }
-  atmos::Renderer renderer(*context_, *earth_, *tables_, TexturePrecision::full);
+  atmos::Renderer renderer(*earth_, *tables_, TexturePrecision::full);
   Camera camera;
   camera.position = {0.0, 0.0, kEarthRadius + 2.0};
   camera.forward = glm::dvec3(star);
@@ -521,13 +559,13 @@ TEST_F(Gpu, RejectsMismatchedTables) {
   atmos::Tables truncated = *tables_;
   truncated.spectral_optical_depth.pop_back();
   for (const atmos::Tables* bad : {&other_wavelengths, &truncated}) {
-    EXPECT_THROW(atmos::Renderer(*context_, *earth_, *bad), atmos::Error);
+    EXPECT_THROW(atmos::Renderer(*earth_, *bad), atmos::Error);
     EXPECT_THROW(atmos::render_cpu(*earth_, *bad, scenes()[0].camera, {0.0, 0.0, 1.0}), atmos::Error);
   }
 }
 
 TEST_F(Gpu, RejectsBadSunDirection) {
-  atmos::Renderer renderer(*context_, *earth_, *tables_);
+  atmos::Renderer renderer(*earth_, *tables_);
   EXPECT_THROW(renderer.render(scenes()[0].camera, {0.0, 0.0, 0.0}), atmos::Error);
   EXPECT_THROW(renderer.render(scenes()[0].camera, {std::nan(""), 0.0, 1.0}), atmos::Error);
 }

@@ -16,7 +16,9 @@
 #include <vector>
 
 #include "atmos/colour.hpp"
-#include "atmos/reference.hpp"
+#include "atmos/planet_file.hpp"
+#include "reference/reference.hpp"
+#include "reference/reference_detail.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
 #include "physics/parameters.hpp"

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "atmos/atmosphere.hpp"
+#include "atmos/planet_file.hpp"
 #include "physics/parameters.hpp"
 #include "physics/radiance_to_camera_cpp.hpp"
 #include "precompute/steps.hpp"

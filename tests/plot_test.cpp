@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "atmos/atmosphere.hpp"
+#include "atmos/planet_file.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
 #include "atmos/plot_data.hpp"

@@ -16,6 +16,8 @@
 #include <string>
 
 #include "atmos/atmosphere.hpp"
+#include "atmos/planet_file.hpp"
+#include "atmos/tables.hpp"
 #include "physics/parameters.hpp"
 #include "physics/precomputation_integrands_cpp.hpp"
 #include "precompute/cache_file.hpp"

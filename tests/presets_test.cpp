@@ -15,6 +15,7 @@
 
 #include "atmos/atmosphere.hpp"
 #include "atmos/colour.hpp"
+#include "atmos/planet_file.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
 #include "upward_flux.hpp"

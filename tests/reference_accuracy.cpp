@@ -21,9 +21,11 @@
 #include <vector>
 
 #include "atmos/colour.hpp"
-#include "atmos/reference.hpp"
+#include "atmos/planet_file.hpp"
+#include "reference/reference.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "support/reference_store.hpp"
 #include "clear_sky_earth.hpp"
 #include "figures.hpp"
 
@@ -103,7 +105,7 @@ struct Measurement {
       table[i] = atmos::srgb_luminance(model->to_srgb(model->radiance(position, dirs[i], sun, false)));
       atmos::ReferenceOptions o = options;
       o.seed = 1000 + i;
-      const atmos::ReferenceResult r = atmos::reference_radiance(atmosphere, position, dirs[i], sun, o);
+      const atmos::ReferenceResult r = atmos_test::oracle::reference_radiance(atmosphere, position, dirs[i], sun, o);
       reference[i] = luminance_of_spectrum(r.radiance);
       // The standard error of a weighted sum, with the (conservative)
       // assumption of fully correlated wavelengths.

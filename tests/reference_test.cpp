@@ -17,7 +17,9 @@
 #include <string>
 #include <vector>
 
-#include "atmos/reference.hpp"
+#include "atmos/planet_file.hpp"
+#include "reference/reference.hpp"
+#include "reference/reference_detail.hpp"
 
 namespace {
 

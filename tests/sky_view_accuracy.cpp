@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "atmos/colour.hpp"
+#include "atmos/planet_file.hpp"
 #include "atmos/renderer.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"

@@ -7,11 +7,12 @@
 #include <vector>
 
 #include "atmos/colour.hpp"
+#include "atmos/planet_file.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
 #include "physics/parameters.hpp"
 #include "physics/view_ray_scattering_cpp.hpp"
-#include "precompute/samplers.hpp"
+#include "runtime/table_samplers.hpp"
 #include "precompute/steps.hpp"
 
 namespace {
@@ -123,7 +124,7 @@ TEST(Spectral, SunlightTransmittanceIsTheTransmittedSunsColour) {
     const atmos::Tables t = atmos::precompute_tables(earth, options);
     const AtmosphereParams render = make_render_params(earth, t.sizes);
     const std::unique_ptr<SpectralSets> spectral = make_spectral_sets(earth, t.sizes);
-    const atmos::precompute::TableSamplers s = atmos::precompute::make_samplers(t);
+    const atmos::runtime::TableSamplers s = atmos::runtime::make_samplers(t);
     const std::vector<glm::dvec3> weights = atmos::spectral_to_srgb_weights(earth.wavelengths_nm);
     const glm::dmat3 to_srgb(channels_to_srgb_matrix(earth.wavelengths_nm));
     for (float r : {render.bottom_radius, render.bottom_radius + 5e3f})

@@ -16,9 +16,11 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "atmos/reference.hpp"
+#include "atmos/planet_file.hpp"
+#include "reference/reference.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "support/reference_store.hpp"
 #include "physics/quadrature.hpp"
 #include "figures.hpp"
 #include "upward_flux.hpp"
@@ -78,7 +80,7 @@ TEST(VenusAccuracy, GroundLightAgainstTheReference) {
     const double tables = ground_light(model, channel, sun);
     atmos::Atmosphere narrow = venus;
     narrow.wavelengths_nm = {nm - 0.5, nm, nm + 0.5};
-    const atmos::ReferenceResult reference = atmos::reference_horizontal_irradiance(
+    const atmos::ReferenceResult reference = atmos_test::oracle::reference_horizontal_irradiance(
         narrow, atmos::observer_position(narrow, 0.0), sun, reference_options);
     const double in = narrow.solar_irradiance.at(nm) * std::sin(elevation * M_PI / 180.0);
     const double truth = reference.radiance[1] / in;
@@ -109,7 +111,7 @@ TEST(VenusAccuracy, GroundLightAgainstTheReference) {
   atmos::Atmosphere green = venus;
   green.wavelengths_nm = {549.5, 550.0, 550.5};
   reference_options.paths = 4000;
-  const atmos::ReferenceResult up = atmos::reference_irradiance(green, top, glm::dvec3(0.0, 0.0, -1.0), sun,
+  const atmos::ReferenceResult up = atmos_test::oracle::reference_irradiance(green, top, glm::dvec3(0.0, 0.0, -1.0), sun,
                                                                 reference_options);
   const double in = green.solar_irradiance.at(550.0) * std::sin(40.0 * M_PI / 180.0);
   const double truth_up = up.radiance[1] / in;
@@ -163,7 +165,7 @@ TEST(VenusAccuracy, FluxesAgainstThePlaneParallelReference) {
   for (double elevation : {40.0, 70.0}) {
     const double mu_s = std::sin(elevation * M_PI / 180.0);
     const glm::dvec3 sun = atmos::direction_from_azimuth_elevation(180.0, elevation);
-    const atmos::PlaneParallelFluxes pp = atmos::reference_plane_parallel_fluxes(venus, mu_s);
+    const atmos::PlaneParallelFluxes pp = atmos_test::oracle::reference_plane_parallel_fluxes(venus, mu_s);
     glm::dvec3 ground_sun, ground_sky;
     model.horizontal_irradiance(ground, sun, ground_sun, ground_sky);
     const glm::dvec3 up = atmos_test::upward_flux(model, top, sun, 64, 24);
@@ -258,7 +260,7 @@ TEST(VenusAccuracy, GroundSeenFromLowCameras) {
     std::printf("venus, 2 m up, %s (elevation %.4f deg): tables %.3e of the sunlight", views[i].name,
                 views[i].elevation, table_values[i]);
     if (views[i].reference) {
-      const atmos::ReferenceResult ref = atmos::reference_radiance(green, camera, view, sun, reference_options);
+      const atmos::ReferenceResult ref = atmos_test::oracle::reference_radiance(green, camera, view, sun, reference_options);
       reference_values[i] = ref.radiance[1] / e_sun;
       std::printf(", reference %.3e +- %.1e: %.3f", reference_values[i], ref.standard_error[1] / e_sun,
                   table_values[i] / reference_values[i]);
@@ -301,7 +303,7 @@ TEST(VenusAccuracy, SphericalAlbedoIsTheMeasuredOne) {
   const glm::dvec3 top = atmos::observer_position(venus, venus.top_radius_m - venus.bottom_radius_m - 1.0);
   glm::dvec3 reference(0.0), tables(0.0);
   for (size_t k = 0; k < mu_s.size(); ++k) {
-    const atmos::PlaneParallelFluxes pp = atmos::reference_plane_parallel_fluxes(venus, mu_s[k]);
+    const atmos::PlaneParallelFluxes pp = atmos_test::oracle::reference_plane_parallel_fluxes(venus, mu_s[k]);
     const glm::dvec3 sun(std::sqrt(1.0 - mu_s[k] * mu_s[k]), 0.0, mu_s[k]);
     const glm::dvec3 up = atmos_test::upward_flux(model, top, sun, 64, 24);
     for (int c = 0; c < 3; ++c) {

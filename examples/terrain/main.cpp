@@ -39,6 +39,7 @@
 #include "scene.hpp"
 #include "terrain.hpp"
 #include "world.hpp"
+#include "atmos/planet_file.hpp"
 
 namespace {
 

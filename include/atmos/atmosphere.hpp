@@ -134,14 +134,21 @@ Spectrum blackbody_spectrum(double temperature_k, double total_irradiance_w_m2);
 // 360–830 nm: `spec` is "table" (ASTM E490) or "blackbody:T" (T in K).
 void set_solar_spectrum(Atmosphere& atmosphere, const std::string& spec);
 
-// Built-in planets (data/planets/<name>.json, compiled in): earth, mars (a
-// dusty Mars from measurements), mars-thesis (seed 000 §5), titan, venus.
-std::vector<std::string> preset_names();
-
-// `name_or_path` is a preset name or the path of a planet JSON file.
-Atmosphere load_atmosphere(const std::string& name_or_path);
-
-// Parses planet JSON text; `origin` names the source in error messages.
-Atmosphere parse_atmosphere(const std::string& json_text, const std::string& origin);
+// Coefficients (m^-1 at the reference density) from physical inputs, sampled
+// every 1 nm over 200-2000 nm. Each throws Error for inputs outside its range.
+//  - Molecular (Rayleigh) scattering of a gas of refractive index n (at the
+//    reference density, taken as non-dispersive), number density N (m^-3) and
+//    King correction factor F in [1, 2) for depolarisation:
+//    β(λ) = 8π³ (n² - 1)² F / (3 N λ⁴) (Elek & Kmoch 2010, eqs. 1-2).
+Spectrum rayleigh_scattering_spectrum(double refractive_index, double number_density_m3, double king_factor = 1.0);
+//  - An absorber or scatterer of cross section σ(λ) (m²) and number density
+//    N (m^-3): β(λ) = N σ(λ).
+Spectrum cross_section_spectrum(const Spectrum& cross_section_m2, double number_density_m3);
+//  - An aerosol of optical depth τ(λ) = β_A (λ / 1 µm)^-α (Ångström 1929)
+//    spread over an exponential layer of scale height H: β(λ) = τ(λ) / H at
+//    the ground. α in [-1, 4], β_A >= 0.
+Spectrum angstrom_aerosol_spectrum(double alpha, double beta, double scale_height_m);
+//  - value · (λ / reference)^exponent (exponent -4: molecules).
+Spectrum power_law_spectrum(double value, double reference_nm, double exponent);
 
 }  // namespace atmos

@@ -25,13 +25,6 @@ struct Image {
 // infinite values, has inconsistent dimensions, or the file cannot be written.
 void write_exr(const Image& image, const std::string& path);
 
-// 8-bit sRGB PNG. Each channel L (cd/m²) is exposed and tone mapped as
-//   display = 1 - exp(-L / L_sat),  L_sat = 1.2 * 2^exposure_ev,
-// where L_sat is the saturation luminance of a camera at exposure value
-// `exposure_ev` (EV100; 78 / (100 * 0.65) = 1.2), then clamped to [0, 1] and
-// encoded with the sRGB OETF (IEC 61966-2-1). Throws atmos::Error like write_exr.
-void write_png(const Image& image, const std::string& path, double exposure_ev);
-
 // Display-referred 8-bit pixels (sRGB-encoded), e.g. from PostProcess
 // (post.hpp): width * height * 3 bytes, R G B interleaved, top row first.
 struct DisplayImage {
@@ -43,11 +36,6 @@ struct DisplayImage {
 // Writes already tone-mapped pixels unchanged as an 8-bit sRGB PNG. Throws
 // atmos::Error naming `path` on inconsistent dimensions or a failed write.
 void write_png(const DisplayImage& image, const std::string& path);
-
-// write_png or write_exr by the extension of `path` (.png / .exr, any case);
-// any other extension throws atmos::Error "unsupported output format ...".
-// `exposure_ev` is used by PNG only.
-void write_image(const Image& image, const std::string& path, double exposure_ev);
 
 // Reads the R, G, B channels of an OpenEXR file (for tests and tools).
 // Throws atmos::Error naming `path` if it cannot be read.

@@ -24,9 +24,10 @@
 // engine's colour must be in those same units (use the GLSL library below to
 // light it with the atmosphere's sun and sky irradiance).
 //
-// Threading and GL state. Construct, use and destroy the pass with the
-// engine's OpenGL 4.5 core context current (the pass never creates or
-// switches contexts). render() changes the bound program, vertex array,
+// Threading and GL state: the OpenGL context rule of Renderer (renderer.hpp).
+// Construct, use and destroy the pass with the engine's OpenGL 4.5 core
+// context current (the pass never creates, owns or switches contexts; the
+// constructor throws atmos::Error without one). render() changes the bound program, vertex array,
 // framebuffer, viewport, texture units 0–15 and their sampler objects, image
 // units 0–3, the stencil state, and disables blending, depth and stencil
 // tests, scissor and sRGB conversion; it restores none of them (engines

@@ -17,12 +17,13 @@
 // Units. The input holds linear sRGB (the plugin's and the renderer's
 // colour space); a texel times nits_per_unit is in cd/m² (luminance by
 // Collienne 2013, eq. 4.27). Exposure is an exposure value at ISO 100 (EV100) with
-// the definition of write_png (image.hpp): a pixel of L cd/m² is exposed to
+// the definition of write_png (below): a pixel of L cd/m² is exposed to
 // x = L / L_sat, L_sat = 1.2 * 2^EV cd/m². The formulas are in
 // src/post/tone_mapping.glsl, compiled both for the GPU and the CPU.
 //
-// GL state. Construct, use and destroy with the same OpenGL 4.5 core
-// context current. process() changes the bound program, texture unit 0,
+// OpenGL context: the rule of Renderer (renderer.hpp). Construct, use and
+// destroy with the same OpenGL 4.5 core context current; the constructor
+// throws atmos::Error without one. process() changes the bound program, texture unit 0,
 // image units 0-2, shader storage bindings 0-1 and the pixel pack/unpack
 // alignment; it restores none of them.
 #pragma once
@@ -166,6 +167,18 @@ class PostProcess {
  private:
   std::unique_ptr<Impl> impl_;
 };
+
+// 8-bit sRGB PNG. Each channel L (cd/m²) is exposed and tone mapped as
+//   display = 1 - exp(-L / L_sat),  L_sat = 1.2 * 2^exposure_ev,
+// where L_sat is the saturation luminance of a camera at exposure value
+// `exposure_ev` (EV100; 78 / (100 * 0.65) = 1.2), then clamped to [0, 1] and
+// encoded with the sRGB OETF (IEC 61966-2-1). Throws atmos::Error like write_exr.
+void write_png(const Image& image, const std::string& path, double exposure_ev);
+
+// write_png or write_exr by the extension of `path` (.png / .exr, any case);
+// any other extension throws atmos::Error "unsupported output format ...".
+// `exposure_ev` is used by PNG only.
+void write_image(const Image& image, const std::string& path, double exposure_ev);
 
 // Reads an srgb8 result back (row y of the texture is row y of the image,
 // as the upload in process_image writes it). Throws atmos::Error.

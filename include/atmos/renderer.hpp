@@ -26,11 +26,6 @@
 #include "atmos/image.hpp"
 #include "atmos/tables.hpp"
 
-namespace atmos::gpu {
-class GpuTables;
-class GpuTimer;
-}
-
 namespace atmos {
 
 enum class Projection {
@@ -71,8 +66,7 @@ void validate_camera(const Camera& camera);
 // EGL_KHR_surfaceless_context): Mesa's surfaceless platform first (llvmpipe
 // or a render node), then the EGL devices (EGL_EXT_platform_device, e.g. the
 // NVIDIA driver), then EGL_DEFAULT_DISPLAY. GL functions are resolved by
-// libepoxy. The context is made current on the creating thread; a Renderer
-// makes it current again on the thread that uses it.
+// libepoxy. The context is made current on the creating thread.
 class GlContext {
  public:
   // Throws atmos::Error with one line such as
@@ -94,15 +88,22 @@ class GlContext {
 };
 
 // Renders images of one atmosphere from its tables on the GPU.
+//
+// OpenGL contexts (the rule of every GL class of atmos: Renderer,
+// AtmospherePass, PostProcess): the class neither creates, owns nor switches
+// a context. Construct it, call it and destroy it with an OpenGL 4.5 core
+// context current on the calling thread: the engine's, or one from
+// GlContext::create_headless(). The constructor throws atmos::Error when no
+// such context is current; destroyed without one, its GL objects are left to
+// die with their context.
 class Renderer {
  public:
   // Uploads the tables (computed for the atmosphere's wavelengths, three or
   // spectral) and compiles the shader with the atmosphere's parameters built
-  // in. Throws atmos::Error on mismatched tables or on
-  // shader compile/link errors (with the first lines of the info log).
-  // `context` must outlive the renderer.
-  Renderer(GlContext& context, const Atmosphere& atmosphere, const Tables& tables,
-           TexturePrecision precision = TexturePrecision::full);
+  // in. Throws atmos::Error without a current OpenGL 4.5 context, on
+  // mismatched tables or on shader compile/link errors (with the first lines
+  // of the info log).
+  Renderer(const Atmosphere& atmosphere, const Tables& tables, TexturePrecision precision = TexturePrecision::full);
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
@@ -116,8 +117,8 @@ class Renderer {
   // procedural sky with the real sky's counts per magnitude, attenuated by
   // the atmosphere and drowned by its light by day). Off by default; the CLI
   // turns it on when the sun is below the horizon (or with --stars).
-  void set_stars(bool enabled) { stars_ = enabled; }
-  bool stars() const { return stars_; }
+  void set_stars(bool enabled);
+  bool stars() const;
 
   // The moons that may eclipse the sun (include/atmos/eclipse.hpp), in the
   // planet-centred frame of the camera; none by default. Throws
@@ -125,39 +126,22 @@ class Renderer {
   // With moons, the sky-view table is the eclipsed one: single scattering
   // integrated along every view ray (as at twilight) over the full azimuth.
   void set_moons(const std::vector<Moon>& moons);
-  const std::vector<Moon>& moons() const { return moons_; }
+  const std::vector<Moon>& moons() const;
 
   // GPU time of the draw of the last render() in milliseconds (all tiles,
   // excluding the read-back); 0 before the first render. From GL_TIME_ELAPSED
   // queries, except on software rasterisers (llvmpipe, softpipe, SwiftShader):
-  // their queries time only the submission of the deferred rasterisation
-  // (llvmpipe reports ~3 % of the real time, and garbage for its first query),
-  // so there it is the wall-clock time of the draw up to glFinish — the time
+  // their queries time only the submission of the deferred rasterisation, so
+  // there it is the wall-clock time of the draw up to glFinish — the time
   // the "GPU", i.e. the CPU, spent rendering.
-  double last_frame_ms() const { return last_frame_ms_; }
+  double last_frame_ms() const;
   // The part of last_frame_ms() spent on the sky-view table (the per-frame
-  // low-sun single scattering, see sky_view_frame in functions.glsl).
-  double last_sky_view_ms() const { return last_sky_view_ms_; }
+  // low-sun single scattering).
+  double last_sky_view_ms() const;
 
  private:
-  void release();
-  GlContext& context_;
-  std::unique_ptr<gpu::GpuTables> tables_;   // the tables and the sky-view table
-  std::unique_ptr<gpu::GpuTimer> timer_;
-  // The render pass's programs: index 1 for a camera in the atmosphere
-  // (reads the sky-view table), 0 above it; + 2 with moons (compiled on
-  // first use).
-  std::uint32_t programs_[4] = {0, 0, 0, 0};
-  std::uint32_t program(bool sky_view_camera, bool eclipse);
-  std::uint32_t vertex_array_ = 0;
-  std::uint32_t framebuffer_ = 0;             // one RGBA32F tile, reused while large enough
-  std::uint32_t tile_texture_ = 0;
-  int tile_width_ = 0;
-  int tile_height_ = 0;
-  double last_frame_ms_ = 0.0;
-  double last_sky_view_ms_ = 0.0;
-  bool stars_ = false;
-  std::vector<Moon> moons_;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 // The same image computed on the CPU (all cores, TBB) with the same shared

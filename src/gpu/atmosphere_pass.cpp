@@ -153,18 +153,6 @@ struct AtmospherePass::Impl {
   }
 };
 
-namespace {
-
-void require_context() {
-  // Without a current context every GL call is a no-op (or a crash through a
-  // null dispatch): check before the first one.
-  if (epoxy_gl_version() < 45)
-    throw Error("the engine plugin needs a current OpenGL 4.5 core context (found version " +
-                std::to_string(epoxy_gl_version() / 10) + "." + std::to_string(epoxy_gl_version() % 10) + ")");
-}
-
-}  // namespace
-
 AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const Tables& tables, const PlanetFrame& frame)
     : impl_(std::make_unique<Impl>()) {
   if (!is_finite(frame.centre))
@@ -172,7 +160,7 @@ AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const Tables& table
   if (!(frame.units_per_metre > 0.0 && std::isfinite(frame.units_per_metre)))
     throw Error("invalid planet frame: units_per_metre " + number(frame.units_per_metre) + " must be > 0");
   check_tables_match(atmosphere, tables);
-  require_context();
+  gpu::require_gl_context("the engine plugin (atmos::AtmospherePass)");
   Impl& p = *impl_;
   p.frame = frame;
   gpu::clear_gl_errors();
@@ -239,7 +227,7 @@ AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const Tables& table
 
 AtmospherePass::~AtmospherePass() {
   // With no current context the objects die with the engine's context.
-  if (impl_ && epoxy_gl_version() >= 45) impl_->release();
+  if (impl_ && gpu::gl_context_is_current()) impl_->release();
 }
 
 const PassTimings& AtmospherePass::last_timings() const { return impl_->timings; }
@@ -267,7 +255,7 @@ void AtmospherePass::bind_textures(int first_unit) const {
 
 std::uint32_t AtmospherePass::render(const FrameInput& input) {
   Impl& p = *impl_;
-  require_context();
+  gpu::require_gl_context("the engine plugin (atmos::AtmospherePass)");
   // --- Validation: everything before the first state change. ---
   if (input.width < 1 || input.height < 1 || input.width > kMaxImageSize || input.height > kMaxImageSize)
     throw Error("plugin input: frame size " + std::to_string(input.width) + "x" + std::to_string(input.height) +

@@ -10,7 +10,7 @@
 
 #include "atmos/plugin.hpp"
 #include "gpu/composite_cpp.hpp"
-#include "precompute/samplers.hpp"
+#include "runtime/table_samplers.hpp"
 
 namespace atmos::gpu {
 
@@ -53,7 +53,7 @@ struct CpuSkyView {
   physics::sampler2D sampler(int i) const { return {SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT, textures[i].data()}; }
 };
 CpuSkyView compute_sky_view_cpu(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
-                                const precompute::TableSamplers& samplers, const glm::vec3& camera,
+                                const runtime::TableSamplers& samplers, const glm::vec3& camera,
                                 const glm::vec3& sun, const physics::Moons& moons = physics::no_moons());
 
 // The aerial-perspective volume (composite.glsl) serves cameras below
@@ -86,7 +86,7 @@ struct CpuVolume {
   physics::sampler3D sampler(int i) const { return {AP_WIDTH, AP_HEIGHT, AP_SLICES, textures[i].data()}; }
 };
 CpuVolume compute_volume_cpu(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
-                             const precompute::TableSamplers& samplers, const physics::PassFrame& frame);
+                             const runtime::TableSamplers& samplers, const physics::PassFrame& frame);
 
 // The light between a camera (m, planet-centred) and the points
 // camera + offsets[i], in the tables' channels (for three wavelengths: the

@@ -212,6 +212,17 @@ void clear_gl_errors() {
   }
 }
 
+bool gl_context_is_current() { return epoxy_gl_version() > 0; }
+
+void require_gl_context(const char* who) {
+  const int version = epoxy_gl_version();
+  if (version < 45)
+    throw Error(std::string(who) + " needs a current OpenGL 4.5 core context (" +
+                (version == 0 ? std::string("none is current") :
+                                "found version " + std::to_string(version / 10) + "." + std::to_string(version % 10)) +
+                ")");
+}
+
 bool is_software_rasterizer() {
   const GLubyte* name = glGetString(GL_RENDERER);
   const std::string renderer_name = name != nullptr ? reinterpret_cast<const char*>(name) : "";

@@ -42,6 +42,14 @@ GLuint make_texture_2d(int width, int height, const std::vector<glm::vec3>& texe
 GLuint make_texture_3d(int width, int height, int depth, const std::vector<glm::vec3>& texels,
                        GLenum internal_format);
 
+// Whether an OpenGL context is current on the calling thread.
+bool gl_context_is_current();
+// Throws atmos::Error ("<who> needs a current OpenGL 4.5 core context ...")
+// unless an OpenGL 4.5 context is current on the calling thread: every GL
+// class checks this before its first GL call (without a context GL calls are
+// no-ops or crash through a null dispatch).
+void require_gl_context(const char* who);
+
 // Throws atmos::Error naming the pending GL error, if any ("OpenGL error
 // 0x0505 (GL_OUT_OF_MEMORY) while uploading the tables").
 void check_gl(const char* when);

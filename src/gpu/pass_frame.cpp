@@ -204,7 +204,7 @@ void set_shadow_depth_bias(const FrameInput& input, int width, int height, physi
 }
 
 CpuSkyView compute_sky_view_cpu(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
-                                const precompute::TableSamplers& samplers, const glm::vec3& camera,
+                                const runtime::TableSamplers& samplers, const glm::vec3& camera,
                                 const glm::vec3& sun, const physics::Moons& moons) {
   CpuSkyView view;
   for (auto& t : view.textures) t.assign(size_t(SKY_VIEW_WIDTH) * SKY_VIEW_HEIGHT, glm::vec3(0.0f));
@@ -227,7 +227,7 @@ CpuSkyView compute_sky_view_cpu(const physics::AtmosphereParams& params, const p
 }
 
 CpuVolume compute_volume_cpu(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
-                             const precompute::TableSamplers& samplers, const physics::PassFrame& frame) {
+                             const runtime::TableSamplers& samplers, const physics::PassFrame& frame) {
   CpuVolume volume;
   const size_t size = size_t(AP_WIDTH) * AP_HEIGHT * AP_SLICES;
   for (auto& t : volume.textures) t.assign(size, glm::vec3(0.0f));
@@ -257,7 +257,7 @@ std::vector<AerialPerspectiveSample> aerial_perspective_cpu(const Atmosphere& at
   check_tables_match(atmosphere, tables);
   const physics::AtmosphereParams params = physics::make_render_params(atmosphere, tables.sizes);
   const std::unique_ptr<physics::SpectralSets> spectral = physics::make_spectral_sets(atmosphere, tables.sizes);
-  const precompute::TableSamplers samplers = precompute::make_samplers(tables);
+  const runtime::TableSamplers samplers = runtime::make_samplers(tables);
   physics::PassFrame frame{};
   frame.camera = glm::vec3(camera);
   frame.sun_direction = glm::vec3(glm::normalize(sun));
@@ -295,7 +295,7 @@ std::vector<glm::vec3> composite_cpu(const Atmosphere& atmosphere, const Tables&
   const glm::mat3 matrix = physics::channels_to_srgb_matrix(tables.wavelengths_nm);
   physics::PassFrame frame = make_pass_frame(input, planet, params, matrix, own_sun_illuminance(params, matrix));
   if (input.shadow_map != 0) set_shadow_depth_bias(input, buffers.shadow_width, buffers.shadow_height, frame);
-  const precompute::TableSamplers samplers = precompute::make_samplers(tables);
+  const runtime::TableSamplers samplers = runtime::make_samplers(tables);
   const bool sky_view_camera = physics::camera_uses_sky_view(params, frame.camera);
   // Cameras above the atmosphere evaluate every ray; their table stays unread.
   CpuSkyView sky_view;

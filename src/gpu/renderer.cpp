@@ -28,7 +28,7 @@
 #include "physics/moons.hpp"
 #include "physics/parameters.hpp"
 #include "physics/radiance_to_camera_cpp.hpp"
-#include "precompute/samplers.hpp"
+#include "runtime/table_samplers.hpp"
 
 namespace atmos {
 
@@ -129,32 +129,84 @@ void validate_camera(const Camera& camera) {
 
 // --- GPU ------------------------------------------------------------------
 
-void Renderer::release() {
-  for (std::uint32_t& program : programs_) {
-    if (program != 0) glDeleteProgram(program);
-    program = 0;
-  }
-  if (vertex_array_ != 0) glDeleteVertexArrays(1, &vertex_array_);
-  if (framebuffer_ != 0) glDeleteFramebuffers(1, &framebuffer_);
-  if (tile_texture_ != 0) glDeleteTextures(1, &tile_texture_);
-  vertex_array_ = framebuffer_ = tile_texture_ = 0;
-  timer_.reset();
-  tables_.reset();
-}
+struct Renderer::Impl {
+  std::unique_ptr<gpu::GpuTables> tables;  // the tables and the sky-view table
+  std::unique_ptr<gpu::GpuTimer> timer;
+  // The render pass's programs: index 1 for a camera in the atmosphere
+  // (reads the sky-view table), 0 above it; + 2 with moons (compiled on
+  // first use).
+  std::uint32_t programs[4] = {0, 0, 0, 0};
+  std::uint32_t vertex_array = 0;
+  std::uint32_t framebuffer = 0;  // one RGBA32F tile, reused while large enough
+  std::uint32_t tile_texture = 0;
+  int tile_width = 0;
+  int tile_height = 0;
+  double last_frame_ms = 0.0;
+  double last_sky_view_ms = 0.0;
+  bool stars = false;
+  std::vector<Moon> moons;
 
-Renderer::Renderer(GlContext& context, const Atmosphere& atmosphere, const Tables& tables,
-                   TexturePrecision precision)
-    : context_(context) {
+  std::uint32_t program(bool sky_view_camera, bool eclipse) {
+    std::uint32_t& p = programs[(sky_view_camera ? 1 : 0) + (eclipse ? 2 : 0)];
+    if (p == 0) {
+      gpu::AssembledSource vertex;
+      vertex.append("vertex shader", gpu::fullscreen_vertex_shader_source());
+      p = gpu::link_program(vertex, gpu::render_fragment_shader_source(tables->params(), tables->spectral(),
+                                                                        sky_view_camera, eclipse));
+    }
+    return p;
+  }
+
+  void release() {
+    for (std::uint32_t& p : programs) {
+      if (p != 0) glDeleteProgram(p);
+      p = 0;
+    }
+    if (vertex_array != 0) glDeleteVertexArrays(1, &vertex_array);
+    if (framebuffer != 0) glDeleteFramebuffers(1, &framebuffer);
+    if (tile_texture != 0) glDeleteTextures(1, &tile_texture);
+    vertex_array = framebuffer = tile_texture = 0;
+    timer.reset();
+    tables.reset();
+  }
+
+  // The tile render target, grown to at least w x h pixels.
+  void reserve_tile(int width, int height) {
+    if (width <= tile_width && height <= tile_height) return;
+    const int w = std::max(width, tile_width);
+    const int h = std::max(height, tile_height);
+    if (framebuffer != 0) glDeleteFramebuffers(1, &framebuffer);
+    if (tile_texture != 0) glDeleteTextures(1, &tile_texture);
+    framebuffer = tile_texture = 0;
+    tile_width = tile_height = 0;
+    glCreateTextures(GL_TEXTURE_2D, 1, &tile_texture);
+    glTextureStorage2D(tile_texture, 1, GL_RGBA32F, w, h);
+    glCreateFramebuffers(1, &framebuffer);
+    glNamedFramebufferTexture(framebuffer, GL_COLOR_ATTACHMENT0, tile_texture, 0);
+    glNamedFramebufferDrawBuffer(framebuffer, GL_COLOR_ATTACHMENT0);
+    glNamedFramebufferReadBuffer(framebuffer, GL_COLOR_ATTACHMENT0);
+    gpu::check_gl("while creating the render target");
+    if (glCheckNamedFramebufferStatus(framebuffer, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw Error("the RGBA32F render target of " + std::to_string(w) + "x" + std::to_string(h) +
+                  " pixels is not supported by this OpenGL driver");
+    tile_width = w;
+    tile_height = h;
+  }
+};
+
+Renderer::Renderer(const Atmosphere& atmosphere, const Tables& tables, TexturePrecision precision)
+    : impl_(std::make_unique<Impl>()) {
+  gpu::require_gl_context("atmos::Renderer");
   check_tables_match(atmosphere, tables);
-  context_.make_current();
   gpu::clear_gl_errors();
+  Impl& p = *impl_;
   try {
-    tables_ = std::make_unique<gpu::GpuTables>(atmosphere, tables, precision);
-    timer_ = std::make_unique<gpu::GpuTimer>();
-    program(true, false);
-    program(false, false);
+    p.tables = std::make_unique<gpu::GpuTables>(atmosphere, tables, precision);
+    p.timer = std::make_unique<gpu::GpuTimer>();
+    p.program(true, false);
+    p.program(false, false);
     // Core profile draws need a vertex array object, even an empty one.
-    glCreateVertexArrays(1, &vertex_array_);
+    glCreateVertexArrays(1, &p.vertex_array);
     gpu::check_gl("while creating the renderer");
     // Drivers (llvmpipe's JIT in particular) compile the shader at its first
     // draw; do it now, so that render() and last_frame_ms() time frames, not
@@ -164,52 +216,41 @@ Renderer::Renderer(GlContext& context, const Atmosphere& atmosphere, const Table
     warm_up.width = 1;
     warm_up.height = 1;
     render(warm_up, {0.0, 0.0, 1.0});
-    last_frame_ms_ = last_sky_view_ms_ = 0.0;
+    p.last_frame_ms = p.last_sky_view_ms = 0.0;
   } catch (...) {
-    release();
+    p.release();
     throw;
   }
 }
 
 Renderer::~Renderer() {
-  try {
-    context_.make_current();
-  } catch (const Error&) {
-    return;  // the context is current elsewhere: its objects die with it
-  }
-  release();
+  // Without a current context the objects die with their context.
+  if (impl_ && gpu::gl_context_is_current()) impl_->release();
+}
+
+void Renderer::set_stars(bool enabled) { impl_->stars = enabled; }
+bool Renderer::stars() const { return impl_->stars; }
+const std::vector<Moon>& Renderer::moons() const { return impl_->moons; }
+double Renderer::last_frame_ms() const { return impl_->last_frame_ms; }
+double Renderer::last_sky_view_ms() const { return impl_->last_sky_view_ms; }
+
+void Renderer::set_moons(const std::vector<Moon>& moons) {
+  validate_moons(moons, double(impl_->tables->params().top_radius));
+  impl_->moons = moons;
 }
 
 Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   const CameraFrame frame = camera_frame(camera);
   const glm::vec3 sun = sun_vector(sun_direction);
-  context_.make_current();
+  Impl& p = *impl_;
+  gpu::require_gl_context("atmos::Renderer::render");
   gpu::clear_gl_errors();
 
   const int width = camera.width;
   const int height = camera.height;
   const int tile_width = std::min(width, kTileSize);
   const int tile_height = std::min(height, kTileSize);
-  if (tile_width > tile_width_ || tile_height > tile_height_) {
-    const int w = std::max(tile_width, tile_width_);
-    const int h = std::max(tile_height, tile_height_);
-    if (framebuffer_ != 0) glDeleteFramebuffers(1, &framebuffer_);
-    if (tile_texture_ != 0) glDeleteTextures(1, &tile_texture_);
-    framebuffer_ = tile_texture_ = 0;
-    tile_width_ = tile_height_ = 0;
-    glCreateTextures(GL_TEXTURE_2D, 1, &tile_texture_);
-    glTextureStorage2D(tile_texture_, 1, GL_RGBA32F, w, h);
-    glCreateFramebuffers(1, &framebuffer_);
-    glNamedFramebufferTexture(framebuffer_, GL_COLOR_ATTACHMENT0, tile_texture_, 0);
-    glNamedFramebufferDrawBuffer(framebuffer_, GL_COLOR_ATTACHMENT0);
-    glNamedFramebufferReadBuffer(framebuffer_, GL_COLOR_ATTACHMENT0);
-    gpu::check_gl("while creating the render target");
-    if (glCheckNamedFramebufferStatus(framebuffer_, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-      throw Error("the RGBA32F render target of " + std::to_string(w) + "x" + std::to_string(h) +
-                  " pixels is not supported by this OpenGL driver");
-    tile_width_ = w;
-    tile_height_ = h;
-  }
+  p.reserve_tile(tile_width, tile_height);
 
   glDisable(GL_BLEND);
   glDisable(GL_DEPTH_TEST);
@@ -220,21 +261,22 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   // Pass 1: this frame's sky-view table, for cameras in the atmosphere (see
   // sky_radiance); the test is the shared function's, on the same floats.
   double gpu_ms = 0.0;
-  const bool sky_view_camera = physics::camera_uses_sky_view(tables_->params(), frame.position);
+  const gpu::GpuTables& tables = *p.tables;
+  const bool sky_view_camera = physics::camera_uses_sky_view(tables.params(), frame.position);
   // The moons, all drawn; those that may hide the sun also eclipse.
-  const physics::Moons moons = physics::make_moons(tables_->params(), moons_);
+  const physics::Moons moons = physics::make_moons(tables.params(), p.moons);
   const physics::Moons eclipsing =
-      physics::moons_may_eclipse(tables_->params(), moons, sun) ? moons : physics::no_moons();
-  physics::SkyViewFrame sky_view = tables_->sky_view_frame(frame.position, sun);
+      physics::moons_may_eclipse(tables.params(), moons, sun) ? moons : physics::no_moons();
+  physics::SkyViewFrame sky_view = tables.sky_view_frame(frame.position, sun);
   sky_view.full_azimuth = eclipsing.count > 0;
-  if (sky_view_camera) gpu_ms += tables_->update_sky_view(frame.position, sun, sky_view, timer_.get(), eclipsing);
-  last_sky_view_ms_ = gpu_ms;
+  if (sky_view_camera) gpu_ms += p.tables->update_sky_view(frame.position, sun, sky_view, p.timer.get(), eclipsing);
+  p.last_sky_view_ms = gpu_ms;
 
   // Pass 2: the image, in tiles.
-  const GLuint program = this->program(sky_view_camera, moons.count > 0);
-  const glm::mat3& matrix = tables_->radiance_to_srgb();
+  const GLuint program = p.program(sky_view_camera, moons.count > 0);
+  const glm::mat3& matrix = tables.radiance_to_srgb();
   glUseProgram(program);
-  glBindVertexArray(vertex_array_);
+  glBindVertexArray(p.vertex_array);
   glProgramUniform3f(program, 0, frame.position.x, frame.position.y, frame.position.z);
   glProgramUniform3f(program, 1, frame.right.x, frame.right.y, frame.right.z);
   glProgramUniform3f(program, 2, frame.up.x, frame.up.y, frame.up.z);
@@ -245,12 +287,12 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   glProgramUniform3f(program, 7, sun.x, sun.y, sun.z);
   glProgramUniformMatrix3fv(program, 9, 1, GL_FALSE, &matrix[0][0]);
   gpu::set_sky_view_frame_uniforms(program, sky_view);
-  glProgramUniform1i(program, 12, stars_ ? 1 : 0);
+  glProgramUniform1i(program, 12, p.stars ? 1 : 0);
   glProgramUniform1f(program, 13, float(star_image_sigma(camera)));
   gpu::set_moons_uniforms(program, moons);
   glProgramUniform1i(program, kMoonsEclipseLocation, eclipsing.count > 0 ? 1 : 0);
-  tables_->bind();
-  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
+  tables.bind();
+  glBindFramebuffer(GL_FRAMEBUFFER, p.framebuffer);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
   glPixelStorei(GL_PACK_ROW_LENGTH, 0);
   glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
@@ -266,9 +308,9 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
       const int h = std::min(kTileSize, height - y0);
       glViewport(0, 0, w, h);
       glProgramUniform2f(program, 8, float(x0), float(y0 + h));
-      timer_->begin();
+      p.timer->begin();
       glDrawArrays(GL_TRIANGLES, 0, 3);
-      gpu_ms += timer_->end_ms();
+      gpu_ms += p.timer->end_ms();
       glReadPixels(0, 0, w, h, GL_RGBA, GL_FLOAT, tile.data());
       // GL rows go up from the bottom of the tile, image rows down from the top.
       for (int row = 0; row < h; ++row) {
@@ -284,24 +326,8 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   }
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   gpu::check_gl("while rendering");
-  last_frame_ms_ = gpu_ms;
+  p.last_frame_ms = gpu_ms;
   return image;
-}
-
-std::uint32_t Renderer::program(bool sky_view_camera, bool eclipse) {
-  std::uint32_t& program = programs_[(sky_view_camera ? 1 : 0) + (eclipse ? 2 : 0)];
-  if (program == 0) {
-    gpu::AssembledSource vertex;
-    vertex.append("vertex shader", gpu::fullscreen_vertex_shader_source());
-    program = gpu::link_program(vertex, gpu::render_fragment_shader_source(tables_->params(), tables_->spectral(),
-                                                                            sky_view_camera, eclipse));
-  }
-  return program;
-}
-
-void Renderer::set_moons(const std::vector<Moon>& moons) {
-  validate_moons(moons, double(tables_->params().top_radius));
-  moons_ = moons;
 }
 
 // --- CPU ------------------------------------------------------------------
@@ -330,7 +356,7 @@ Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camer
   const glm::vec3 sun = sun_vector(sun_direction);
   const physics::AtmosphereParams params = physics::make_render_params(atmosphere, tables.sizes);
   const std::unique_ptr<physics::SpectralSets> spectral = physics::make_spectral_sets(atmosphere, tables.sizes);
-  const precompute::TableSamplers samplers = precompute::make_samplers(tables);
+  const runtime::TableSamplers samplers = runtime::make_samplers(tables);
   const glm::mat3 matrix = srgb_matrix(tables);
 
   // The sky-view table, texel by texel as the sky-view pass computes it.

@@ -5,7 +5,7 @@
 #include <cstdio>
 
 #include "atmos/atmosphere.hpp"
-#include "io/embedded_files.hpp"
+#include "data/embedded_files.hpp"
 
 namespace atmos::gpu {
 
@@ -44,7 +44,7 @@ std::string glsl_density_profile(const physics::DensityProfile& d) {
 }
 
 const char* embedded(const char* path) {
-  const char* text = io::embedded_file(path);
+  const char* text = data::embedded_file(path);
   // Only a build that forgot to embed the file gets here.
   if (text == nullptr) throw Error(std::string("shader source not embedded in this build: ") + path);
   return text;

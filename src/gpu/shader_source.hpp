@@ -1,5 +1,5 @@
 // Assembles the renderer's GLSL from the embedded shared sources
-// (src/physics/*.glsl, src/gpu/*.glsl; see io/embedded_files.hpp).
+// (src/physics/*.glsl, src/gpu/*.glsl; see data/embedded_files.hpp).
 #pragma once
 
 #include <string>

@@ -20,7 +20,6 @@
 #pragma GCC diagnostic pop
 
 #include <algorithm>
-#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -32,11 +31,9 @@
 
 #include "atmos/atmosphere.hpp"
 #include "atmos/image.hpp"
-#include "post/tone_mapping_cpp.hpp"
+#include "io/image_checks.hpp"
 
 namespace atmos {
-
-namespace {
 
 // Dimensions consistent with the pixel data, and every value finite: a NaN
 // or an infinity in a picture is always a bug upstream, never data.
@@ -53,6 +50,8 @@ void check_image(const Image& image, const std::string& path) {
     }
   }
 }
+
+namespace {
 
 void write_file(const std::string& path, const unsigned char* data, size_t size) {
   errno = 0;
@@ -87,15 +86,6 @@ void encode_png(int width, int height, const std::vector<unsigned char>& pixels,
   if (stbi_write_png_to_func(append, &encoded, width, height, 3, pixels.data(), width * 3) == 0)
     throw Error("cannot write " + path + ": PNG encoding failed");
   write_file(path, encoded.data(), encoded.size());
-}
-
-std::string lowercase_extension(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  const size_t dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
-  std::string ext = path.substr(dot);
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return ext;
 }
 
 }  // namespace
@@ -149,36 +139,12 @@ void write_exr(const Image& image, const std::string& path) {
   std::free(memory);
 }
 
-void write_png(const Image& image, const std::string& path, double exposure_ev) {
-  check_image(image, path);
-  if (!std::isfinite(exposure_ev)) throw Error("cannot write " + path + ": exposure is not finite");
-  // The exp operator of PostProcess, from the same definition
-  // (src/post/tone_mapping.glsl): x = L / L_sat, display = 1 - exp(-x),
-  // sRGB encoded. Negative components (colours outside the sRGB gamut) clamp
-  // to black.
-  const float exposure = post::exposure_from_ev100(float(exposure_ev));
-  std::vector<unsigned char> pixels(image.rgb.size());
-  for (size_t i = 0; i < image.rgb.size(); ++i) {
-    const float display = post::display_encoded_channel(image.rgb[i] * exposure, post::TONE_MAP_EXP);
-    pixels[i] = static_cast<unsigned char>(std::lround(display * 255.0f));
-  }
-  encode_png(image.width, image.height, pixels, path);
-}
-
 void write_png(const DisplayImage& image, const std::string& path) {
   if (image.width < 1 || image.height < 1 ||
       image.rgb.size() != size_t(image.width) * size_t(image.height) * 3)
     throw Error("cannot write " + path + ": display image of " + std::to_string(image.width) + "x" +
                 std::to_string(image.height) + " pixels holds " + std::to_string(image.rgb.size()) + " bytes");
   encode_png(image.width, image.height, image.rgb, path);
-}
-
-void write_image(const Image& image, const std::string& path, double exposure_ev) {
-  const std::string ext = lowercase_extension(path);
-  if (ext == ".png") return write_png(image, path, exposure_ev);
-  if (ext == ".exr") return write_exr(image, path);
-  throw Error("unsupported output format " + (ext.empty() ? std::string("(no extension)") : "'" + ext + "'") +
-              " for " + path + " (use .png or .exr)");
 }
 
 Image read_exr(const std::string& path) {

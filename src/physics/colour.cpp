@@ -7,7 +7,7 @@
 #include <string>
 
 #include "atmos/atmosphere.hpp"
-#include "io/embedded_files.hpp"
+#include "data/embedded_files.hpp"
 
 namespace atmos {
 namespace {
@@ -20,7 +20,7 @@ const glm::dmat3 kSrgbFromXyz(3.2406, -0.9689, 0.0557,   // column X
 // The 1 nm table, 360..830 nm, parsed once from the embedded CSV.
 const std::vector<glm::dvec3>& cie_table() {
   static const std::vector<glm::dvec3> table = [] {
-    const char* text = io::embedded_file("data/spectra/cie1931_2deg.csv");
+    const char* text = data::embedded_file("data/spectra/cie1931_2deg.csv");
     if (text == nullptr) throw Error("the CIE 1931 table is not embedded in this build");
     std::vector<glm::dvec3> rows;
     std::istringstream in(text);

@@ -8,7 +8,7 @@
 #include <memory>
 
 #include "atmos/atmosphere.hpp"
-#include "atmos/tables.hpp"
+#include "atmos/table_sizes.hpp"
 #include "physics/shader_cpp.hpp"
 
 namespace atmos::physics {

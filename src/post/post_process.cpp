@@ -33,7 +33,7 @@
 #include "atmos/atmosphere.hpp"
 #include "gpu/gl_util.hpp"
 #include "gpu/shader_source.hpp"
-#include "io/embedded_files.hpp"
+#include "data/embedded_files.hpp"
 #include "post/tone_mapping_cpp.hpp"
 
 namespace atmos {
@@ -71,7 +71,7 @@ std::string number(double x) {
 }
 
 const char* embedded(const char* path) {
-  const char* text = io::embedded_file(path);
+  const char* text = data::embedded_file(path);
   if (text == nullptr) throw Error(std::string("shader source not embedded in this build: ") + path);
   return text;
 }
@@ -293,7 +293,11 @@ struct PostProcess::Impl {
     gpu::check_gl("creating the post-processing passes");
   }
 
+  // False when destroyed without a current context: the objects die with it.
+  bool delete_gl_objects = true;
+
   ~Impl() {
+    if (!delete_gl_objects) return;
     for (GLuint p : {reduce_program, adapt_program, bright_program, bright_reduce_program, downsample_program,
                      blur_x_program, blur_y_program, blur_y_mix_program})
       glDeleteProgram(p);
@@ -457,9 +461,14 @@ struct PostProcess::Impl {
   }
 };
 
-PostProcess::PostProcess() : impl_(std::make_unique<Impl>()) {}
+PostProcess::PostProcess() {
+  gpu::require_gl_context("atmos::PostProcess");
+  impl_ = std::make_unique<Impl>();
+}
 
-PostProcess::~PostProcess() = default;
+PostProcess::~PostProcess() {
+  if (impl_) impl_->delete_gl_objects = gpu::gl_context_is_current();
+}
 
 std::uint32_t PostProcess::process(const PostInput& in, const PostSettings& settings) {
   validate(settings);

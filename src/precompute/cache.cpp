@@ -20,7 +20,7 @@
 #include <fstream>
 
 #include "atmos/tables.hpp"
-#include "io/embedded_files.hpp"
+#include "data/embedded_files.hpp"
 #include "precompute/cache_file.hpp"
 
 namespace atmos {
@@ -121,7 +121,7 @@ std::string tables_cache_key(const Atmosphere& a, const PrecomputeOptions& optio
         "src/physics/medium.glsl", "src/physics/table_coordinates.glsl", "src/physics/table_lookups.glsl",
         "src/physics/ray_integration.glsl", "src/physics/precomputation_integrands.glsl",
         "data/spectra/cie1931_2deg.csv"}) {
-    const char* text = io::embedded_file(source);
+    const char* text = data::embedded_file(source);
     h.text(text ? text : "");
   }
   write_sizes(h, options.sizes);

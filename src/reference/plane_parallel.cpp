@@ -41,7 +41,8 @@
 #include <string>
 #include <vector>
 
-#include "atmos/reference.hpp"
+#include "reference/reference.hpp"
+#include "reference/reference_detail.hpp"
 #include "physics/quadrature.hpp"
 
 namespace atmos {

@@ -47,7 +47,8 @@
 // For speed the exponential constituents' extinction is read from a cached
 // altitude table (steps of H_min/20, cubic interpolation, error < 3e-7
 // relative); piecewise-linear constituents are evaluated exactly.
-#include "atmos/reference.hpp"
+#include "reference/reference.hpp"
+#include "reference/reference_detail.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

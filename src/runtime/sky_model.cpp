@@ -6,14 +6,14 @@
 #include "physics/moons.hpp"
 #include "physics/parameters.hpp"
 #include "physics/radiance_to_camera_cpp.hpp"
-#include "precompute/samplers.hpp"
+#include "runtime/table_samplers.hpp"
 
 namespace atmos {
 
 struct SkyModel::Impl {
   physics::AtmosphereParams params;
   std::unique_ptr<physics::SpectralSets> spectral;
-  precompute::TableSamplers samplers;
+  runtime::TableSamplers samplers;
   glm::dmat3 to_srgb;
 };
 
@@ -21,7 +21,7 @@ SkyModel::SkyModel(const Atmosphere& atmosphere, const Tables& tables) : impl_(s
   check_tables_match(atmosphere, tables);
   impl_->params = physics::make_render_params(atmosphere, tables.sizes);
   impl_->spectral = physics::make_spectral_sets(atmosphere, tables.sizes);
-  impl_->samplers = precompute::make_samplers(tables);
+  impl_->samplers = runtime::make_samplers(tables);
   impl_->to_srgb = glm::dmat3(physics::channels_to_srgb_matrix(tables.wavelengths_nm));
 }
 

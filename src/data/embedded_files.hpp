@@ -4,7 +4,7 @@
 
 #include <string>
 
-namespace atmos::io {
+namespace atmos::data {
 
 struct EmbeddedFile {
   const char* path;  // relative to the repository root, e.g. "src/physics/functions.glsl"
@@ -20,4 +20,4 @@ const char* embedded_file(const std::string& path);
 // The JSON text of a planet preset ("earth" -> data/planets/earth.json), or nullptr.
 const char* embedded_planet(const std::string& name);
 
-}  // namespace atmos::io
+}  // namespace atmos::data

@@ -5,7 +5,7 @@
 #include "atmos/tables.hpp"
 #include "physics/shader_cpp.hpp"
 
-namespace atmos::precompute {
+namespace atmos::runtime {
 
 struct TableSamplers {
   physics::sampler2D direct_irradiance;
@@ -33,4 +33,4 @@ inline TableSamplers make_samplers(const Tables& tables) {
   return out;
 }
 
-}  // namespace atmos::precompute
+}  // namespace atmos::runtime

@@ -1,6 +1,6 @@
-#include "io/embedded_files.hpp"
+#include "data/embedded_files.hpp"
 
-namespace atmos::io {
+namespace atmos::data {
 
 const char* embedded_file(const std::string& path) {
   for (int i = 0; i < embedded_file_count; ++i)
@@ -13,4 +13,4 @@ const char* embedded_planet(const std::string& name) {
   return embedded_file("data/planets/" + name + ".json");
 }
 
-}  // namespace atmos::io
+}  // namespace atmos::data

@@ -1,0 +1,56 @@
+# Registers one CTest test per GoogleTest suite of EXECUTABLE (run after each
+# build of it): a suite's tests share their fixtures (tables, GL context,
+# SetUpTestSuite), so they run in one process. Writes OUTPUT, a CTest script.
+#   -DEXECUTABLE=... -DOUTPUT=... -DPREFIX=... (test name prefix, may be empty)
+#   -DLABELS=label;... (for every suite) -DFULL_ONLY="regex of full-tier-only suites"
+#   -DTIMES=<file of "suite seconds" lines> -DTIMEOUT=seconds -DENVIRONMENT="VAR=value;..."
+execute_process(COMMAND ${EXECUTABLE} --gtest_list_tests OUTPUT_VARIABLE listing RESULT_VARIABLE result
+                ERROR_VARIABLE errors)
+if(NOT result EQUAL 0)
+  message(FATAL_ERROR "${EXECUTABLE} --gtest_list_tests failed (${result}): ${errors}")
+endif()
+
+# Measured seconds per suite (tests/test_times.txt, written by
+# scripts/slowest_tests.py --write-times): the speed labels follow them.
+set(known_times "")
+if(EXISTS ${TIMES})
+  file(STRINGS ${TIMES} time_lines REGEX "^[^#]")
+  foreach(line IN LISTS time_lines)
+    string(REGEX MATCH "^([^ ]+) +([0-9.]+)" _ "${line}")
+    set(time_${CMAKE_MATCH_1} ${CMAKE_MATCH_2})
+  endforeach()
+endif()
+
+string(REPLACE "\n" ";" lines "${listing}")
+set(script "")
+foreach(line IN LISTS lines)
+  # Suite lines end with '.', test lines are indented.
+  if(line MATCHES "^([^ #][^ ]*)\\.( .*)?$")
+    set(suite ${CMAKE_MATCH_1})
+    set(labels ${LABELS})
+    if(FULL_ONLY AND suite MATCHES "${FULL_ONLY}")
+      list(APPEND labels full)
+    else()
+      list(APPEND labels default full)
+    endif()
+    string(REPLACE "/" "_" key ${suite})
+    if(DEFINED time_${PREFIX}${key})
+      set(seconds ${time_${PREFIX}${key}})
+      if(seconds LESS 10)
+        list(APPEND labels quick)
+      elseif(seconds LESS 60)
+        list(APPEND labels moderate)
+      else()
+        list(APPEND labels long)
+      endif()
+    else()
+      list(APPEND labels unmeasured)
+    endif()
+    string(REPLACE ";" "\\;" environment_arg "${ENVIRONMENT}")
+    string(APPEND script
+      "add_test(\"${PREFIX}${key}\" \"${EXECUTABLE}\" \"--gtest_filter=${suite}.*\" \"--gtest_brief=1\")\n"
+      "set_tests_properties(\"${PREFIX}${key}\" PROPERTIES LABELS \"${labels}\" TIMEOUT ${TIMEOUT}"
+      " ENVIRONMENT \"${environment_arg}\")\n")
+  endif()
+endforeach()
+file(WRITE ${OUTPUT} "${script}")
