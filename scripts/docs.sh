@@ -44,6 +44,7 @@ fi
 if [ -z "$figures" ]; then
   figures="$run/figures.jsonl"
   : > "$figures"
+  : > "$run/tests.log"
   filter="$(python3 "$root/scripts/docs.py" --list-tests)"
   echo "docs.sh: running the tests that carry figures: $filter"
   start=$(date +%s)
