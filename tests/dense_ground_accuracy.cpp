@@ -9,7 +9,7 @@
 //
 // What it guards: the tables must converge to the reference as their radius
 // texels are refined. Two parts of the multiple scattering make them do so
-// in thick atmospheres (functions.glsl): the nodes along each view ray are
+// in thick atmospheres (precomputation_integrands.glsl): the nodes along each view ray are
 // uniform in optical depth over its first optical depths
 // (source_integration_nodes), because the source function grows towards the
 // sunlit top of a ray looking up; and the source is read between radius rows

@@ -10,7 +10,7 @@
 //    totality: every direction within 5 % + 3 standard errors of the
 //    (noisy) reference;
 //  - all orders (4 against K = 4) in totality: the documented approximation
-//    of the multiple-scattered light (functions.glsl:
+//    of the multiple-scattered light (ray_integration.glsl:
 //    diffuse_light_visible_fraction), which has no such claim — under a
 //    clear sky (Earth with an aerosol of optical depth 0.005) every
 //    direction within a factor of 1.5 of the reference (|ln ratio| <=

@@ -86,7 +86,7 @@ TEST(Energy, WhiteGroundNonAbsorbingAtmosphereConservesEnergy) {
 // of the sunlight, as on the thin Earth above.
 // The tables return about 1.006 of the sunlight: over the thousands of
 // orders of this case, the cubic interpolation of the source between radius
-// rows (source_function_lookup in functions.glsl), which is not exactly
+// rows (source_function_lookup in precomputation_integrands.glsl), which is not exactly
 // conservative, creates a few thousandths of it. Where a transport step loses
 // or creates light is measured order by order in
 // tests/energy_budget_accuracy.cpp. The tail solver reaches its step cap

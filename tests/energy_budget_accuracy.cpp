@@ -12,7 +12,7 @@
 //    of the density table as the multiple scattering step reads it (for
 //    n = 1: the sunlight the medium scatters, ∫ beta_s T_sun E_sun dV);
 //  - removed: ∫ beta_ext ∫ L_n dw dV, with L_n the radiance of the order
-//    from the tables (incident_radiance in functions.glsl);
+//    from the tables (incident_radiance in precomputation_integrands.glsl);
 //  - escaped: the flux of L_n out through the top (looking down below the
 //    horizon and, through the limb, between the horizon and 90°) and into
 //    the ground.
@@ -26,7 +26,7 @@
 // cloud, where the radius rows are 2-3.4 optical depths apart) returns about
 // a tenth less light to space in the end. The multiple scattering step reads
 // the source between radius rows with cubic weights in the optical depth
-// (functions.glsl source_function_lookup). This file's quadrature reads the
+// (precomputation_integrands.glsl, source_function_lookup). This file's quadrature reads the
 // tables linearly in r, so what it calls the transport's loss includes the
 // difference between the two interpolations: a few per cent in the first
 // orders (2.1 / 1.5 / 0.8 % of orders 2 / 3 / 4), whose source changes most

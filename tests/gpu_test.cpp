@@ -323,7 +323,7 @@ TEST_F(Gpu, WavelengthDependentAerosolPhaseMatchesCpu) {
 
 // An optically thick atmosphere (100x Earth, vertical optical depth 27 at
 // 550 nm) has its mu axis warped towards log-spaced distances
-// (scattering_mu_log_weight, functions.glsl scattering_u_mu) and its r axis
+// (scattering_mu_log_weight, table_coordinates.glsl scattering_u_mu) and its r axis
 // following the optical depth (scattering_r_optical_depth_weight and the
 // knots of scattering_r_axis, scattering_x_r_from_rho_fraction): both are
 // baked into the shaders, and the GPU must read the tables exactly where the
@@ -434,7 +434,7 @@ TEST_F(Gpu, LargeImagesAreTiled) {
 // in radius), minus the sky around the disc, summed over the pixels' solid
 // angles, equals the sun's direct normal irradiance at the camera (SkyModel:
 // the horizontal irradiance / sin 30°), on the GPU and on the CPU; and the
-// disc is limb-darkened (functions.glsl: sun_disc_radiance).
+// disc is limb-darkened (radiance_to_camera.glsl: sun_disc_radiance).
 TEST_F(Gpu, SunDiscCarriesTheAttenuatedSolarIrradiance) {
   atmos::Renderer renderer(*earth_, *tables_, TexturePrecision::full);
   const atmos::SkyModel model(*earth_, *tables_);

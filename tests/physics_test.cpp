@@ -1,4 +1,4 @@
-// Invariants of the shared physics (src/physics/functions.glsl compiled as C++).
+// Invariants of the shared physics (the GLSL of src/physics/ compiled as C++).
 #include <gtest/gtest.h>
 
 #include <cmath>

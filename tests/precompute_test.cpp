@@ -1,5 +1,5 @@
 // The CPU precomputation: its fast paths against the straightforward forms in
-// functions.glsl, finiteness of every table, and the disk cache.
+// precomputation_integrands.glsl, finiteness of every table, and the disk cache.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -126,7 +126,7 @@ TEST_F(EarthSteps, TransmittanceTableMatchesDirectIntegration) {
 // two table values, each an optical depth of hundreds along the grazing ray
 // from the ground point to the top, would make the transmittance of a 10-300
 // m path jump between 0.7 and 1; such segments are integrated directly
-// (functions.glsl, use_direct_optical_depth), within 0.1 % of the
+// (table_lookups.glsl, use_direct_optical_depth), within 0.1 % of the
 // trapezoidal integral (4000 steps), and smooth.
 TEST(DenseAtmosphere, TransmittanceOfShortSegmentsNearTheGround) {
   const AtmosphereParams p = make_atmosphere_params(atmos::load_atmosphere("venus"), atmos::TableSizes{}, 0);
@@ -314,7 +314,7 @@ TEST_F(EarthSteps, ScatteringDensityOfOrderThreeMatchesTheSphereQuadrature) {
 }
 
 // The sky irradiance table (rings of directions that share their (mu, r)
-// lookups) against compute_indirect_irradiance() of functions.glsl, from the
+// lookups) against compute_indirect_irradiance() of precomputation_integrands.glsl, from the
 // single scattering (order 1) and from an order of multiple scattering.
 TEST_F(EarthSteps, IndirectIrradianceFastPathEqualsTheSharedDefinition) {
   for (int order : {1, 2}) {
@@ -336,7 +336,7 @@ TEST_F(EarthSteps, IndirectIrradianceFastPathEqualsTheSharedDefinition) {
   }
 }
 
-// compute_multiple_scattering() of functions.glsl at 300 random texels of
+// compute_multiple_scattering() of precomputation_integrands.glsl at 300 random texels of
 // `multiple`, the fast path's table from `density`: relative difference
 // below 2e-3, with an absolute floor of `floor`.
 void expect_multiple_scattering_matches_the_shared_definition(const AtmosphereParams& p, const Table3D& density,
@@ -394,7 +394,7 @@ TEST(OddTableSizes, FastPathsEqualTheSharedDefinitionsInEveryTexel) {
 }
 
 // Optically thick atmospheres read the source function between radius rows
-// with cubic Hermite weights (source_function_lookup in functions.glsl). The
+// with cubic Hermite weights (source_function_lookup in precomputation_integrands.glsl). The
 // CPU fast path precomputes them per view ray node; it must give what the
 // shared definition gives, on Venus's order-2 density (small tables).
 TEST(DenseAtmosphere, MultipleScatteringFastPathEqualsTheSharedDefinition) {

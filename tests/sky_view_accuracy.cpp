@@ -1,4 +1,4 @@
-// The renderers' per-frame sky-view table (functions.glsl, sky_radiance)
+// The renderers' per-frame sky-view table (view_ray_scattering.glsl, sky_radiance)
 // against the exact per-ray evaluation of the same functions (the CPU sky
 // model, which the reference tests measure): the table only adds the error of
 // interpolating over view directions, for cameras in the atmosphere.

@@ -219,7 +219,7 @@ TEST(VenusAccuracy, FluxesAgainstThePlaneParallelReference) {
 // optically thick atmospheres their in-scattered light is read from that
 // row's ray of the same length, scaled by the change of the light between
 // the ground and the row that the rows' grazing rays show
-// (ray_scattering_lookup in functions.glsl); interpolating between the bottom
+// (ray_scattering_lookup in table_lookups.glsl); interpolating between the bottom
 // row, where such rays have no length, and that row would darken the ground
 // towards its horizon instead (to 0.13 of the reference 4 km away).
 // Tolerances: the ground 4 km away at least twice as bright as 100 m away

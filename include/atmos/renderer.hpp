@@ -2,7 +2,7 @@
 // and the same image computed on the CPU.
 //
 // Both paths evaluate the one definition of the physics
-// (src/physics/functions.glsl: radiance_along_view_ray) and of the camera
+// (src/physics/radiance_to_camera.glsl: radiance_along_view_ray) and of the camera
 // model (src/gpu/camera.glsl), the GPU as GLSL, the CPU as C++, with the same
 // lookup tables. They differ only by floating-point rounding (the GPU's own
 // sin/cos/sqrt, evaluation order): ~1e-5 relative in the sky, up to ~1e-2
@@ -40,7 +40,7 @@ enum class Projection {
 // the memory and bandwidth, 11 significant bits, rounded on the CPU) or
 // RGB32F. The optical-depth texture (the transmittance of every wavelength
 // triple) is RGB32F in both cases: it is small (a few hundred KB, no
-// bandwidth worth saving), and functions.glsl subtracts two of its values for
+// bandwidth worth saving), and the lookups subtract two of its values for
 // every transmittance along a ray: the depth of a short segment is the
 // difference of two long paths' depths (tens at the horizon), which half
 // floats' 11 bits would lose.

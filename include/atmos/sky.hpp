@@ -1,6 +1,6 @@
 // atmos — CPU evaluation of a precomputed atmosphere.
 //
-// Runs the very functions the GPU shader runs (src/physics/functions.glsl),
+// Runs the very functions the GPU shader runs (the GLSL of src/physics/),
 // for scientists, tests and `atmos sample`. Positions are planet-centred, in
 // metres; directions are unit vectors.
 #pragma once
