@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "atmos/atmosphere.hpp"
+#include "atmos/planet_file.hpp"
 
 namespace {
 
@@ -156,6 +157,37 @@ TEST(PlanetFile, BadInputsAreClearErrors) {
   expect_error("{\"format\": NaN}", "malformed JSON");
 }
 
+// Inputs a damaged or hand-edited file can hold beyond the ordinary mistakes
+// (fuzz/planet_file_fuzzer.cpp writes such inputs): each must be an
+// atmos::Error that names the file, like every other bad input.
+TEST(PlanetFile, NumbersBeyondRangeAndDerivedSpectraAreClearErrors) {
+  // A literal beyond the range of a double is malformed JSON, not another exception type.
+  expect_error("{\"format\": 1e400}", "malformed JSON");
+  expect_error(modified([](nlohmann::json& j) { j.erase("top_radius"); }).insert(1, "\"top_radius\": -1e309,"),
+               "malformed JSON");
+  // Repeated wavelengths that are not next to each other in the file.
+  expect_error(modified([](nlohmann::json& j) {
+                 j["ground_albedo"] = {{"unit", "1"}, {"wavelengths_nm", {500, 600, 500}}, {"values", {0.1, 0.2, 0.3}}};
+               }),
+               "ground_albedo: wavelengths must be distinct");
+  // Spectra whose values overflow to infinity when they are computed: a power
+  // law, an Angstrom aerosol, the E490 table at a tiny distance.
+  expect_error(modified([](nlohmann::json& j) {
+                 j["constituents"][0]["scattering"] = {
+                     {"unit", "1/m"}, {"power_law", {{"value", 1e300}, {"reference_nm", 1.0}, {"exponent", 4}}}};
+               }),
+               "constituents[0].scattering.power_law");
+  expect_error(modified([](nlohmann::json& j) {
+                 j["constituents"][1]["scattering"] = {
+                     {"angstrom", {{"alpha", 1.0}, {"beta", 1e300}, {"scale_height", {{"value", 1e-300}, {"unit", "m"}}}}}};
+               }),
+               "constituents[1].scattering.angstrom");
+  expect_error(modified([](nlohmann::json& j) {
+                 j["solar_irradiance"]["distance"] = {{"value", 1e-160}, {"unit", "au"}};
+               }),
+               "solar_irradiance");
+}
+
 // A sample out of bounds at a wavelength beyond the range of an int:
 // validate()'s message gives the wavelength as it is (converting it to int
 // would be undefined behaviour).
@@ -164,6 +196,20 @@ TEST(PlanetFile, SampleOutOfBoundsAtAHugeWavelengthIsNamedAsItIs) {
                  j["ground_albedo"] = {{"unit", "1"}, {"wavelengths_nm", {1e300}}, {"values", {2.0}}};
                }),
                "ground_albedo at 1e+300 nm is 2");
+}
+
+// Strings of the file that a message repeats (keys, units) are escaped as
+// JSON writes them, and names, which messages and reports show, are one line:
+// a newline in the file never splits a message.
+TEST(PlanetFile, MessagesStayOnOneLineWhateverTheStringsOfTheFile) {
+  expect_error(modified([](nlohmann::json& j) { j["constituents"][0]["scattering"]["bad\nkey"] = 1; }),
+               "unknown key \"bad\\nkey\"");
+  expect_error(modified([](nlohmann::json& j) { j["top_radius"]["unit"] = "k\nm"; }), "has unit \"k\\nm\"");
+  expect_error(modified([](nlohmann::json& j) { j["constituents"][0]["phase_function"]["g\r"] = 0.5; }),
+               "takes no parameters (got \"g\\r\")");
+  expect_error(modified([](nlohmann::json& j) { j["name"] = "earth\nsecond line"; }), "name \"earth\\nsecond line\"");
+  expect_error(modified([](nlohmann::json& j) { j["constituents"][1]["name"] = "aero\tsol"; }),
+               "constituents[1].name");
 }
 
 }  // namespace
