@@ -402,6 +402,31 @@ TEST_F(Gpu, ImageOrientationAndProjections) {
   EXPECT_TRUE(std::all_of(black.rgb.begin(), black.rgb.end(), [](float v) { return v == 0.0f; }));
 }
 
+// Below the ground a camera stands on it, moved out along its radius
+// (camera_above_ground); at the planet's very centre, where no radius has a
+// direction, it stands on the ground at the pole on +z, on the GPU as on
+// the CPU, and never produces NaN.
+TEST_F(Gpu, CameraAtThePlanetsCentreStandsOnTheGroundAtThePole) {
+  atmos::Renderer renderer(*earth_, *tables_);
+  Camera centre;
+  centre.position = {0.0, 0.0, 0.0};
+  centre.forward = {0.0, 1.0, 0.2};
+  centre.width = 16;
+  centre.height = 12;
+  Camera pole = centre;
+  pole.position = {0.0, 0.0, earth_->bottom_radius_m};
+  const glm::dvec3 sun = sun_at(15.0, 30.0);
+  const Image gpu_centre = renderer.render(centre, sun), gpu_pole = renderer.render(pole, sun);
+  const Image cpu_centre = atmos::render_cpu(*earth_, *tables_, centre, sun);
+  const Image cpu_pole = atmos::render_cpu(*earth_, *tables_, pole, sun);
+  for (size_t i = 0; i < gpu_pole.rgb.size(); ++i) {
+    ASSERT_TRUE(std::isfinite(gpu_centre.rgb[i]) && std::isfinite(cpu_centre.rgb[i])) << i;
+    EXPECT_EQ(gpu_centre.rgb[i], gpu_pole.rgb[i]) << i;
+    EXPECT_EQ(cpu_centre.rgb[i], cpu_pole.rgb[i]) << i;
+  }
+  EXPECT_GT(gpu_pole.rgb[1], 0.0f);
+}
+
 TEST_F(Gpu, LargeImagesAreTiled) {
   // Larger than one 2048-pixel tile: the tiles must land in the right place,
   // i.e. match the CPU twin everywhere. Thin strips keep it fast; each puts a

@@ -92,8 +92,12 @@ INLINE bool enter_atmosphere(IN(AtmosphereParams) atmosphere, INOUT(vec3) camera
 }
 
 // A camera below the ground counts as standing on it (as in
-// radiance_along_view_ray).
+// radiance_along_view_ray): moved out along its radius to the surface. At
+// the centre itself (r so small that bottom_radius / r would overflow a
+// float) no radius has a direction; the camera stands at the pole on +z.
 INLINE vec3 camera_above_ground(IN(AtmosphereParams) atmosphere, vec3 camera) {
   float r = length(camera);
-  return r < atmosphere.bottom_radius ? camera * (atmosphere.bottom_radius / r) : camera;
+  if (r >= atmosphere.bottom_radius) return camera;
+  if (r > 1e-30f * atmosphere.bottom_radius) return camera * (atmosphere.bottom_radius / r);
+  return vec3(0.0f, 0.0f, atmosphere.bottom_radius);
 }

@@ -1,0 +1,133 @@
+// The random sweep (tools/sweep, docs/hardening.md): its pixel check on images
+// with known contents, the reproducibility of its runs, and a fixed-seed
+// subset of 500 random configurations of the renderer and the plugin.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <sstream>
+
+#include "atmos/renderer.hpp"
+#include "sweep.hpp"
+
+namespace {
+
+using atmos::Image;
+namespace sweep = atmos::sweep;
+
+Image image_of(std::initializer_list<glm::vec3> pixels) {
+  Image image;
+  image.width = int(pixels.size());
+  image.height = 1;
+  for (const glm::vec3& p : pixels) image.rgb.insert(image.rgb.end(), {p.x, p.y, p.z});
+  return image;
+}
+
+TEST(SweepCheck, FlagsNanInfiniteAndNegativeLight) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  const glm::dmat3 xyz_only(0.0);
+  EXPECT_TRUE(sweep::check_image(image_of({{0.1f, 0.2f, 0.3f}, {0.0f, 0.0f, 0.0f}}), xyz_only).passed());
+
+  const sweep::PixelCheck with_nan = sweep::check_image(image_of({{0.1f, 0.2f, 0.3f}, {0.1f, nan, 0.3f}}), xyz_only);
+  EXPECT_EQ(with_nan.kind, "nan");
+  EXPECT_EQ(with_nan.nan, 1);
+  EXPECT_EQ(with_nan.x, 1);
+
+  const sweep::PixelCheck with_inf = sweep::check_image(image_of({{inf, 0.2f, 0.3f}}), xyz_only);
+  EXPECT_EQ(with_inf.kind, "inf");
+
+  // Negative in every channel: negative X, Y and Z.
+  const sweep::PixelCheck negative = sweep::check_image(image_of({{-0.1f, -0.1f, -0.1f}}), xyz_only);
+  EXPECT_EQ(negative.kind, "negative");
+}
+
+TEST(SweepCheck, OutOfGamutLightIsCountedNotFailed) {
+  // Monochromatic 520 nm light has XYZ ≈ (0.063, 0.710, 0.078) (CIE 1931):
+  // in linear sRGB its red and blue are negative, its XYZ is not.
+  const glm::dmat3 xyz_to_srgb(3.2406, -0.9689, 0.0557, -1.5372, 1.8758, -0.2040, -0.4986, 0.0415, 1.0570);
+  const glm::dvec3 rgb = xyz_to_srgb * glm::dvec3(0.063, 0.710, 0.078);
+  ASSERT_LT(std::min({rgb.x, rgb.y, rgb.z}), 0.0);
+  const sweep::PixelCheck c = sweep::check_image(image_of({glm::vec3(rgb)}), glm::dmat3(0.0));
+  EXPECT_TRUE(c.passed()) << c.kind;
+  EXPECT_EQ(c.out_of_gamut, 1);
+}
+
+TEST(SweepCheck, RoundingOfTheOutputFormatIsNotNegativeLight) {
+  // A pixel of R11F_G11F_B10F at the bottom of its subnormals: blue rounded
+  // to zero below 2^-20, red and green one or two steps of 2^-19 above it.
+  const glm::vec3 v(3.0f * 0x1.0p-20f, 2.0f * 0x1.0p-20f, 0.0f);
+  const glm::dmat3 to_radiance(1.2, -0.3, 0.1, -0.5, 1.4, -0.2, 0.05, -0.6, 1.3);
+  sweep::CheckPrecision exact;
+  EXPECT_EQ(sweep::check_image(image_of({v}), to_radiance, exact).kind, "negative");
+  sweep::CheckPrecision packed;
+  packed.epsilon = 0x1.0p-5;
+  packed.subnormal_spacing = 0x1.0p-19;
+  EXPECT_TRUE(sweep::check_image(image_of({v}), to_radiance, packed).passed());
+  // Far above the subnormals the same ratio of channels is negative light.
+  EXPECT_EQ(sweep::check_image(image_of({v * 1e6f}), to_radiance, packed).kind, "negative");
+}
+
+TEST(SweepCases, EveryRunIsReproducedFromItsSeedAndIndexAlone) {
+  for (int index : {0, 7, 123, 4711}) {
+    const sweep::PlanetCase a = sweep::make_planet(42, index / 100);
+    const sweep::PlanetCase b = sweep::make_planet(42, index / 100);
+    EXPECT_EQ(sweep::describe(a), sweep::describe(b));
+    EXPECT_EQ(sweep::describe(sweep::make_run(42, index, a, sweep::Targets::both)),
+              sweep::describe(sweep::make_run(42, index, b, sweep::Targets::both)));
+  }
+  EXPECT_NE(sweep::describe(sweep::make_planet(42, 0)), sweep::describe(sweep::make_planet(43, 0)));
+}
+
+TEST(SweepCases, PlanetsAreValidAndCoverPresetsAndRandomPlanets) {
+  int presets = 0, random = 0;
+  for (int i = 0; i < 64; ++i) {
+    const sweep::PlanetCase p = sweep::make_planet(1, i);
+    EXPECT_NO_THROW(p.atmosphere.validate()) << sweep::describe(p);
+    (p.recipe.rfind("preset", 0) == 0 ? presets : random) += 1;
+  }
+  EXPECT_GT(presets, 8);
+  EXPECT_GT(random, 8);
+}
+
+TEST(SweepCases, CamerasReachFromInsideTheGroundTo100PlanetRadii) {
+  const sweep::PlanetCase p = sweep::make_planet(1, 0);
+  const double bottom = p.atmosphere.bottom_radius_m;
+  double nearest = INFINITY, farthest = 0.0;
+  for (int i = 0; i < 2000; ++i) {
+    const sweep::RunCase run = sweep::make_run(1, i, p, sweep::Targets::renderer_only);
+    const double r = glm::length(run.renderer.camera.position);
+    nearest = std::min(nearest, r);
+    farthest = std::max(farthest, r);
+  }
+  EXPECT_LT(nearest, 0.5 * bottom);
+  EXPECT_GT(farthest, 50.0 * bottom);
+  EXPECT_LE(farthest, 100.0 * bottom * (1.0 + 1e-12));
+}
+
+// 500 runs of seed 1 on four planets (the Mars and Titan presets, varied,
+// and two random planets), half through atmos::Renderer and half through
+// atmos::AtmospherePass: no NaN, infinite or negative pixel, no error.
+TEST(Sweep, FixedSeedSubsetHasNoNanInfiniteOrNegativePixel) {
+  std::unique_ptr<atmos::GlContext> context;
+  try {
+    context = atmos::GlContext::create_headless();
+  } catch (const atmos::Error& e) {
+    FAIL() << e.what();
+  }
+  sweep::SweepOptions options;
+  options.seed = 1;
+  options.runs = 500;
+  options.runs_per_planet = 125;
+  const sweep::SweepResult result = sweep::run_sweep(options);
+  std::ostringstream failures;
+  for (const sweep::Failure& f : result.failures) failures << sweep::describe(f) << "\n";
+  EXPECT_EQ(result.runs, 500);
+  EXPECT_GT(result.renderer_runs, 200);
+  EXPECT_GT(result.plugin_runs, 200);
+  EXPECT_EQ(result.planets, 4);
+  EXPECT_TRUE(result.failures.empty()) << sweep::summary(result, options) << failures.str();
+}
+
+}  // namespace
