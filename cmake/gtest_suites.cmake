@@ -34,6 +34,7 @@ foreach(line IN LISTS lines)
       list(APPEND labels default full)
     endif()
     string(REPLACE "/" "_" key ${suite})
+    unset(seconds)
     if(DEFINED time_${PREFIX}${key})
       set(seconds ${time_${PREFIX}${key}})
       if(seconds LESS 10)
@@ -46,10 +47,16 @@ foreach(line IN LISTS lines)
     else()
       list(APPEND labels unmeasured)
     endif()
+    # COST: CTest starts the slowest tests first, so that a long suite does
+    # not run alone at the end of a parallel run.
+    set(cost "")
+    if(DEFINED seconds)
+      set(cost " COST ${seconds}")
+    endif()
     string(REPLACE ";" "\\;" environment_arg "${ENVIRONMENT}")
     string(APPEND script
       "add_test(\"${PREFIX}${key}\" \"${EXECUTABLE}\" \"--gtest_filter=${suite}.*\" \"--gtest_brief=1\")\n"
-      "set_tests_properties(\"${PREFIX}${key}\" PROPERTIES LABELS \"${labels}\" TIMEOUT ${TIMEOUT}"
+      "set_tests_properties(\"${PREFIX}${key}\" PROPERTIES LABELS \"${labels}\" TIMEOUT ${TIMEOUT}${cost}"
       " ENVIRONMENT \"${environment_arg}\")\n")
   endif()
 endforeach()

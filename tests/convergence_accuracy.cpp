@@ -42,7 +42,7 @@ using namespace atmos::precompute;
 TEST(ConvergenceAccuracy, VenusTailEqualsSixHundredOrders) {
   const atmos::Atmosphere venus = atmos::load_atmosphere("venus");
   atmos::TableSizes sizes{64, 16, 32, 8, 4, 16, 32, 8};
-  sizes.scattering_r = 32;  // see Presets.VenusAndTitanConvergeWithAutoOrders
+  sizes.scattering_r = 32;  // see ThickPresets.VenusAndTitanConvergeWithAutoOrders
 
   // 600 orders, one by one, as precompute_tables computes them.
   constexpr int kOrders = 600;

@@ -201,7 +201,7 @@ TEST(Convergence, EarthAutoOrdersAreUnchangedByTheSolver) {
 // (a basis of 2 fields, more vectors asked for than fit) solve the same
 // equation, so they must give the same tail wherever they converge, and
 // a run cut short must still be finite and no worse than its start.
-TEST(Convergence, TailSolverRestartsAgree) {
+TEST(ConvergenceTail, TailSolverRestartsAgree) {
   atmos::Atmosphere venus = atmos::load_atmosphere("venus");
   atmos::TableSizes sizes = small_sizes();
   sizes.scattering_r = 32;

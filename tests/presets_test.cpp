@@ -126,7 +126,7 @@ TEST(Presets, DerivedQuantities) {
 // solver converges, not the light (tests/venus_accuracy.cpp;
 // tests/convergence_accuracy.cpp checks 16 orders and the tail against 600
 // orders).
-TEST(Presets, VenusAndTitanConvergeWithAutoOrders) {
+TEST(ThickPresets, VenusAndTitanConvergeWithAutoOrders) {
   for (const char* name : {"titan", "venus"}) {
     SCOPED_TRACE(name);
     const bool venus = std::string(name) == "venus";
@@ -180,7 +180,7 @@ TEST(Presets, VenusAndTitanConvergeWithAutoOrders) {
 // few orders only, the light has not yet diffused down and the profile is
 // far steeper (with 8 orders the 440 nm sky light at 10 km is 27 times what
 // 128 rows give).
-TEST(Presets, VenusSkyLightOverTerrainNeedsFewIrradianceRows) {
+TEST(ThickPresets, VenusSkyLightOverTerrainNeedsFewIrradianceRows) {
   const atmos::Atmosphere venus = atmos::load_atmosphere("venus");
   atmos::PrecomputeOptions options;
   options.sizes = small_sizes();

@@ -59,14 +59,28 @@ TEST(SweepCheck, RoundingOfTheOutputFormatIsNotNegativeLight) {
   // to zero below 2^-20, red and green one or two steps of 2^-19 above it.
   const glm::vec3 v(3.0f * 0x1.0p-20f, 2.0f * 0x1.0p-20f, 0.0f);
   const glm::dmat3 to_radiance(1.2, -0.3, 0.1, -0.5, 1.4, -0.2, 0.05, -0.6, 1.3);
-  sweep::CheckPrecision exact;
-  EXPECT_EQ(sweep::check_image(image_of({v}), to_radiance, exact).kind, "negative");
+  sweep::CheckPrecision float32;
+  EXPECT_EQ(sweep::check_image(image_of({v}), to_radiance, float32).kind, "negative");
   sweep::CheckPrecision packed;
   packed.epsilon = 0x1.0p-5;
   packed.subnormal_spacing = 0x1.0p-19;
   EXPECT_TRUE(sweep::check_image(image_of({v}), to_radiance, packed).passed());
   // Far above the subnormals the same ratio of channels is negative light.
   EXPECT_EQ(sweep::check_image(image_of({v * 1e6f}), to_radiance, packed).kind, "negative");
+}
+
+TEST(SweepCheck, ClampedOutOfGamutLightIsCheckedInXyzOnly) {
+  // Light of the red and green working wavelengths whose sRGB blue is
+  // negative, clamped at zero as the plugin clamps it: its radiances from the
+  // clamped colour have a negative blue, its XYZ does not.
+  const glm::dmat3 to_radiance(1.2, -0.3, 0.1, -0.5, 1.4, -0.2, 0.05, -0.6, 1.3);
+  const glm::vec3 clamped(3.4e-3f, 1.2e-4f, 0.0f);
+  sweep::CheckPrecision unclamped;
+  EXPECT_EQ(sweep::check_image(image_of({clamped}), to_radiance, unclamped).kind, "negative");
+  sweep::CheckPrecision plugin;
+  plugin.clamped_at_zero = true;
+  EXPECT_TRUE(sweep::check_image(image_of({clamped}), to_radiance, plugin).passed());
+  EXPECT_EQ(sweep::check_image(image_of({{-3.4e-3f, -1.2e-4f, 0.0f}}), to_radiance, plugin).kind, "negative");
 }
 
 TEST(SweepCases, EveryRunIsReproducedFromItsSeedAndIndexAlone) {

@@ -181,14 +181,18 @@ Outcome run_plugin(AtmospherePass& pass, const PluginCase& c, const glm::dmat3& 
   std::vector<bool> sky(c.depth.size());
   const float clear = c.input.depth_encoding == DepthEncoding::reversed_z ? 0.0f : 1.0f;
   for (size_t i = 0; i < sky.size(); ++i) sky[i] = c.depth[i] == clear;
-  o.check = check_image(image, to_radiance, output_precision(c.output_format), sky);
+  CheckPrecision precision = output_precision(c.output_format);
+  precision.clamped_at_zero = true;
+  o.check = check_image(image, to_radiance, precision, sky);
   if (!o.check.passed() && reduced_precision(c.output_format) && o.check.nan == 0 && o.check.negative == 0) {
     // Infinite values in a half-float (or 11/10-bit float) output: light
     // beyond the format's range, the engine's to scale with nits_per_unit,
     // if the same frame rendered to RGBA32F is finite and that large there.
     std::string again_error;
     const Image full = render_plugin(pass, c, GL_RGBA32F, again_error);
-    const PixelCheck full_check = check_image(full, to_radiance, {}, sky);
+    CheckPrecision full_precision;
+    full_precision.clamped_at_zero = true;
+    const PixelCheck full_check = check_image(full, to_radiance, full_precision, sky);
     if (again_error.empty() && full_check.passed()) {
       bool overflow = true;
       int count = 0;
@@ -301,7 +305,9 @@ PixelCheck check_image(const Image& image, const glm::dmat3& to_radiance, const 
         kind = "inf";
       } else if (std::max({v.x, v.y, v.z}) < precision.saturation) {
         const glm::dvec3 rgb(v);
-        const bool radiance_check = three_wavelengths && (atmosphere_only.empty() || atmosphere_only[pixel]);
+        const bool clamped = precision.clamped_at_zero && (v.x == 0.0f || v.y == 0.0f || v.z == 0.0f);
+        const bool radiance_check =
+            three_wavelengths && !clamped && (atmosphere_only.empty() || atmosphere_only[pixel]);
         if (negative_coordinate(to_xyz, rgb, precision) ||
             (radiance_check && negative_coordinate(to_radiance, rgb, precision))) {
           ++c.negative;

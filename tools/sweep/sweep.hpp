@@ -136,7 +136,15 @@ std::string describe(const RunCase& run);
 // that pass are out of gamut: counted, not failed.
 struct CheckPrecision {
   double epsilon = 1e-4;                // relative rounding of the channels
-  double subnormal_spacing = 0.0;       // absolute rounding of the smallest channels
+  // Absolute rounding of the smallest channels. GLSL lets shaders flush
+  // float subnormals to zero (GLSL 4.50, §4.7.1), so even a 32-bit float
+  // channel is uncertain by the smallest normal float, 2^-126.
+  double subnormal_spacing = 0x1.0p-126;
+  // The image's renderer clamps linear sRGB at zero (the plugin clamps the
+  // atmosphere's light converted to sRGB, composite.glsl): a zero channel
+  // may stand for a negative one of out-of-gamut light, so the radiance
+  // check skips pixels with a zero channel (XYZ is still checked).
+  bool clamped_at_zero = false;
   double saturation = INFINITY;         // channels at or above it were clamped by the format: not checked
 };
 
