@@ -3,6 +3,7 @@
 # SetUpTestSuite), so they run in one process. Writes OUTPUT, a CTest script.
 #   -DEXECUTABLE=... -DOUTPUT=... -DPREFIX=... (test name prefix, may be empty)
 #   -DLABELS=label;... (for every suite) -DFULL_ONLY="regex of full-tier-only suites"
+#   -DGPU_SUITES="regex of the suites that compile shaders" (label gpu)
 #   -DTIMES=<file of "suite seconds" lines> -DTIMEOUT=seconds -DENVIRONMENT="VAR=value;..."
 execute_process(COMMAND ${EXECUTABLE} --gtest_list_tests OUTPUT_VARIABLE listing RESULT_VARIABLE result
                 ERROR_VARIABLE errors)
@@ -32,6 +33,9 @@ foreach(line IN LISTS lines)
       list(APPEND labels full)
     else()
       list(APPEND labels default full)
+    endif()
+    if(GPU_SUITES AND suite MATCHES "${GPU_SUITES}")
+      list(APPEND labels gpu)
     endif()
     string(REPLACE "/" "_" key ${suite})
     unset(seconds)

@@ -9,8 +9,9 @@
 #                                 the random sweep's fixed-seed subset), built with
 #                                 AddressSanitizer and UndefinedBehaviorSanitizer;
 #                                 with the release build, accuracy against the
-#                                 stored reference results (tests/data/reference/)
-#                                 and the installed package;
+#                                 stored reference results (tests/data/reference/),
+#                                 the installed package and the unit tests that
+#                                 compile shaders;
 #   bash scripts/test.sh --full   the full tier (at most 45 minutes): everything,
 #                                 the unit tests in both builds, the references
 #                                 recomputed and checked bit for bit against the
@@ -34,20 +35,22 @@ export ATMOS_CACHE_DIR="${ATMOS_CACHE_DIR:-$(mktemp -d)}"
 report="$(mktemp -d)"
 
 # The release build: everything in the full tier; in the default tier what
-# its tests need (the accuracy tests, and the CLI and libraries it installs).
+# its tests need (the tests, and the CLI and libraries the package installs).
 if [ "$tier" = full ]; then
   bash "$root/scripts/build.sh" -DATMOS_WERROR=ON
 else
   cmake -S "$root" -B "$root/build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DATMOS_WERROR=ON > /dev/null
-  cmake --build "$root/build" --parallel "$jobs" --target atmos_accuracy_tests atmos_cli
+  cmake --build "$root/build" --parallel "$jobs" --target atmos_tests atmos_accuracy_tests atmos_cli
 fi
 echo "test.sh: built in $(( $(date +%s) - start )) s; running the $tier tier"
 main_labels=(-L "^$tier$")
 if [ "$tier" = full ]; then
   export ATMOS_REFERENCE_MODE=verify
 else
-  # The unit tests run once, in the sanitizer build below.
-  main_labels+=(-LE '^unit$')
+  # The unit tests run in the sanitizer build below; of them, the release
+  # build runs those that compile shaders, filling Mesa's shader cache
+  # (tests/CMakeLists.txt, ATMOS_GPU_SUITES).
+  main_labels+=(-L '^(accuracy|package|gpu)$')
 fi
 status=0
 ctest --test-dir "$root/build" --output-on-failure --parallel "$jobs" "${main_labels[@]}" \
@@ -56,13 +59,13 @@ python3 "$root/scripts/slowest_tests.py" "$report/main.xml" --title "release bui
 unset ATMOS_REFERENCE_MODE
 [ "$status" -eq 0 ] || { echo "test.sh: the $tier tier failed" >&2; exit "$status"; }
 
-# Sanitizers: the unit tests of the tier. -O1, as the sanitizers' authors
-# advise: it compiles in 40 % less time than -O2 and keeps the reports'
-# stacks whole. This build has only the baseline x86-64 code of the
-# precomputation's hot loops (no AVX2 copy), so that with the release build
-# both copies are tested.
+# Sanitizers: the unit tests of the tier, built at -O1 (CMakeLists.txt). This
+# build has only the baseline x86-64 code of the precomputation's hot loops
+# (no AVX2 copy), so that with the release build both copies are tested.
 sanitize="$root/build-sanitize"
-cmake -S "$root" -B "$sanitize" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS_RELEASE="-O1 -DNDEBUG" \
+# Figures for the generated docs (scripts/docs.sh) come from the release build.
+unset ATMOS_FIGURES_FILE
+cmake -S "$root" -B "$sanitize" -G Ninja -DCMAKE_BUILD_TYPE=Release \
   -DATMOS_SANITIZE=ON -DATMOS_WERROR=ON -DATMOS_KERNEL_CLONES=OFF > /dev/null
 cmake --build "$sanitize" --parallel "$jobs" --target atmos_tests
 echo "test.sh: sanitizer build done at $(( $(date +%s) - start )) s"
