@@ -6,7 +6,7 @@ The numbers come from the library through `atmos plot-data`, which writes CSV
 files; this script only draws them with matplotlib (Debian: python3-matplotlib,
 installed by scripts/setup.sh).
 
-    python3 scripts/plots.py --atmos build/atmos --out docs/plots -- --planet earth --wavelengths 15
+    python3 scripts/plots.py --atmos build/apps/atmos --out docs/plots -- --planet earth --wavelengths 15
     python3 scripts/plots.py --csv DIR --out DIR2    # draw CSV files written before
 
 Arguments after `--` go to `atmos plot-data` (--planet, --wavelengths,
@@ -293,7 +293,7 @@ def main():
         argv, passthrough = argv[:cut], argv[cut + 1:]
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                      epilog="Arguments after -- are passed to `atmos plot-data`.")
-    parser.add_argument("--atmos", default=None, help="the atmos binary (default: build/atmos of this checkout)")
+    parser.add_argument("--atmos", default=None, help="the atmos binary (default: build/apps/atmos of this checkout)")
     parser.add_argument("--out", required=True, help="directory for the PNG files (created if missing)")
     parser.add_argument("--csv", default=None,
                         help="directory for the CSV files (kept); with --no-run, where to read them from")
@@ -313,7 +313,7 @@ def main():
     with tempfile.TemporaryDirectory(prefix="atmos-plots-") as scratch:
         data = args.csv or scratch
         if not args.no_run:
-            atmos = args.atmos or os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "build", "atmos")
+            atmos = args.atmos or os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "build", "apps", "atmos")
             command = [atmos, "plot-data", "--out", data] + passthrough
             print("running " + " ".join(command), flush=True)
             try:
