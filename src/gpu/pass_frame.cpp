@@ -71,10 +71,9 @@ bool sun_may_be_low(const physics::AtmosphereParams& atmosphere, const glm::dvec
   const double bottom = atmosphere.bottom_radius;
   const double r = std::max(glm::length(camera), bottom);
   const double reach = std::acos(bottom / r) + std::acos(bottom / (bottom + gpu::kMaxSurfaceAltitude));
-  // At the planet's centre the shaders' camera stands at the pole on +z
-  // (camera_above_ground).
-  const double distance = glm::length(camera);
-  const glm::dvec3 zenith = distance > 0.0 ? camera / distance : glm::dvec3(0.0, 0.0, 1.0);
+  // The zenith of the camera the shaders see (camera_above_ground: below the
+  // ground, and at the planet's centre, it stands on the ground).
+  const glm::dvec3 zenith = glm::normalize(glm::dvec3(physics::camera_above_ground(atmosphere, glm::vec3(camera))));
   const double sun_zenith = std::acos(std::clamp(glm::dot(zenith, glm::dvec3(sun)), -1.0, 1.0));
   const double low_sun_zenith = std::acos(double(LOW_SUN_MU_S_TABLE));
   return sun_zenith + reach >= low_sun_zenith;
