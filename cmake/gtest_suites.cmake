@@ -4,6 +4,8 @@
 #   -DEXECUTABLE=... -DOUTPUT=... -DPREFIX=... (test name prefix, may be empty)
 #   -DLABELS=label;... (for every suite) -DFULL_ONLY="regex of full-tier-only suites"
 #   -DGPU_SUITES="regex of the suites that compile shaders" (label gpu)
+#   -DAPP_SUITES="regex of the suites that run the CLI or the example" (label apps)
+#   -DSKIP_APP_SUITES=1 (those suites are not registered: their programs are not built)
 #   -DTIMES=<file of "suite seconds" lines> -DTIMEOUT=seconds -DENVIRONMENT="VAR=value;..."
 execute_process(COMMAND ${EXECUTABLE} --gtest_list_tests OUTPUT_VARIABLE listing RESULT_VARIABLE result
                 ERROR_VARIABLE errors)
@@ -28,6 +30,9 @@ foreach(line IN LISTS lines)
   # Suite lines end with '.', test lines are indented.
   if(line MATCHES "^([^ #][^ ]*)\\.( .*)?$")
     set(suite ${CMAKE_MATCH_1})
+    if(APP_SUITES AND suite MATCHES "${APP_SUITES}" AND SKIP_APP_SUITES)
+      continue()
+    endif()
     set(labels ${LABELS})
     if(FULL_ONLY AND suite MATCHES "${FULL_ONLY}")
       list(APPEND labels full)
@@ -36,6 +41,9 @@ foreach(line IN LISTS lines)
     endif()
     if(GPU_SUITES AND suite MATCHES "${GPU_SUITES}")
       list(APPEND labels gpu)
+    endif()
+    if(APP_SUITES AND suite MATCHES "${APP_SUITES}")
+      list(APPEND labels apps)
     endif()
     string(REPLACE "/" "_" key ${suite})
     unset(seconds)

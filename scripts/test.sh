@@ -2,16 +2,17 @@
 # Installs what is needed, builds with warnings as errors, and runs a tier of
 # the tests (CTest, one test per GoogleTest suite; tests/CMakeLists.txt):
 #
-#   bash scripts/test.sh          the default tier (about 20 minutes from a fresh
-#                                 clone on 2 cores): the unit tests (invariants, fast
-#                                 paths against the shared definitions, cache, CLI,
-#                                 post, plugin, example, GPU against the CPU twins,
-#                                 the random sweep's fixed-seed subset), built with
-#                                 AddressSanitizer and UndefinedBehaviorSanitizer;
-#                                 with the release build, accuracy against the
-#                                 stored reference results (tests/data/reference/),
-#                                 the installed package and the unit tests that
-#                                 compile shaders;
+#   bash scripts/test.sh          the default tier (at most 15 minutes from a
+#                                 fresh clone on 2 cores): the unit tests
+#                                 (invariants, fast paths against the shared
+#                                 definitions, cache, post, plugin, GPU against
+#                                 the CPU twins, the random sweep's fixed-seed
+#                                 subset), built with AddressSanitizer and
+#                                 UndefinedBehaviorSanitizer; with the release
+#                                 build, accuracy against the stored reference
+#                                 results (tests/data/reference/), the installed
+#                                 package, the unit tests that compile shaders and
+#                                 those that run the CLI and the example;
 #   bash scripts/test.sh --full   the full tier (at most 45 minutes): everything,
 #                                 the unit tests in both builds, the references
 #                                 recomputed and checked bit for bit against the
@@ -49,8 +50,10 @@ if [ "$tier" = full ]; then
 else
   # The unit tests run in the sanitizer build below; of them, the release
   # build runs those that compile shaders, filling Mesa's shader cache
-  # (tests/CMakeLists.txt, ATMOS_GPU_SUITES).
-  main_labels+=(-L '^(accuracy|package|gpu)$')
+  # (tests/CMakeLists.txt, ATMOS_GPU_SUITES), and those that run the CLI and
+  # the example, which the sanitizer build of this tier leaves out
+  # (ATMOS_APP_SUITES).
+  main_labels+=(-L '^(accuracy|package|gpu|apps)$')
 fi
 status=0
 ctest --test-dir "$root/build" --output-on-failure --parallel "$jobs" "${main_labels[@]}" \
@@ -65,8 +68,10 @@ unset ATMOS_REFERENCE_MODE
 sanitize="$root/build-sanitize"
 # Figures for the generated docs (scripts/docs.sh) come from the release build.
 unset ATMOS_FIGURES_FILE
+test_apps=OFF
+[ "$tier" = full ] && test_apps=ON
 cmake -S "$root" -B "$sanitize" -G Ninja -DCMAKE_BUILD_TYPE=Release \
-  -DATMOS_SANITIZE=ON -DATMOS_WERROR=ON -DATMOS_KERNEL_CLONES=OFF > /dev/null
+  -DATMOS_SANITIZE=ON -DATMOS_WERROR=ON -DATMOS_KERNEL_CLONES=OFF -DATMOS_TEST_APPS="$test_apps" > /dev/null
 cmake --build "$sanitize" --parallel "$jobs" --target atmos_tests
 echo "test.sh: sanitizer build done at $(( $(date +%s) - start )) s"
 ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1 \

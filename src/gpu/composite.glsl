@@ -772,7 +772,11 @@ INLINE vec3 composite_surface_pixel(IN(AtmosphereParams) atmosphere, IN(Spectral
       sky_irradiance *= diffuse_light_visible_fraction(spectral.set[0], spectral_transmittance_texture, frame.moons,
                                                        point, frame.sun_direction);
     }
-    surface = albedo * (1.0f / PI) * (frame.radiance_to_srgb * (sun_irradiance + sky_irradiance)) * frame.light_scale;
+    // The light's sRGB is clamped at zero, as the sky's is: a saturated
+    // spectrum lies outside the sRGB gamut, and a negative channel times the
+    // albedo would give a negative surface radiance.
+    vec3 light = max(frame.radiance_to_srgb * (sun_irradiance + sky_irradiance), vec3(0.0f));
+    surface = albedo * (1.0f / PI) * light * frame.light_scale;
   }
   return surface * srgb_transmittance(atmosphere, frame, s.transmittance) +
          max(frame.radiance_to_srgb * in_scatter, vec3(0.0f)) * frame.light_scale;
