@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "atmos/eclipse.hpp"
+#include "atmos/globe.hpp"
 #include "atmos/post.hpp"
 #include "atmos/sky.hpp"
 
@@ -27,7 +28,8 @@ std::string size_suffix(int width, int height) { return "." + std::to_string(wid
 
 std::string format_figure(const Figure& figure) {
   char value[64];
-  std::snprintf(value, sizeof value, figure.unit == "s" ? "%.3f" : "%.1f", figure.value);
+  const char* format = figure.unit == "s" || figure.unit == "ratio" ? "%.3f" : (figure.unit == "count" ? "%.0f" : "%.1f");
+  std::snprintf(value, sizeof value, format, figure.value);
   return figure.name + "\t" + value + "\t" + figure.unit;
 }
 
@@ -183,6 +185,125 @@ void time_plugin(const atmos::Atmosphere& atmosphere, const atmos::Tables& table
   }
 }
 
+namespace {
+
+// A camera `altitude_m` above the ground at latitude 20°, longitude 30°,
+// looking at the planet's centre from afar and towards the horizon (8°
+// down) below 1 km, as examples/globe does; sun 25° up in the north.
+atmos::GlobeView globe_view(const atmos::Globe& globe, const atmos::Atmosphere& atmosphere, double altitude_m,
+                            int width, int height) {
+  const double lat = 20.0 * M_PI / 180.0, lon = 30.0 * M_PI / 180.0;
+  const glm::dvec3 up(std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat));
+  const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), up));
+  const glm::dvec3 north = glm::cross(up, east);
+  const double radius = atmosphere.bottom_radius_m;
+  const double ground = radius + globe.height_m(up * radius);
+  const double far = 2.5 * radius;
+  const double w = std::clamp(std::log10(altitude_m / 1e3) / std::log10(far / 1e3), 0.0, 1.0);
+  const double pitch = (-8.0 + (-90.0 + 8.0) * w) * M_PI / 180.0;
+  const glm::dvec3 forward = glm::normalize(north * std::cos(pitch) + up * std::sin(pitch));
+  const glm::dvec3 camera = up * (ground + altitude_m);
+  atmos::GlobeView view;
+  view.view = glm::lookAt(camera, camera + forward, std::abs(pitch) > 1.5 ? north : up);
+  view.projection = atmos::reversed_z_projection(60.0 * M_PI / 180.0, double(width) / height, 0.05);
+  view.width = width;
+  view.height = height;
+  const double sun_el = 25.0 * M_PI / 180.0;
+  view.sun_direction = glm::normalize(north * std::cos(sun_el) + up * std::sin(sun_el));
+  view.nits_per_unit = 1000.0;
+  return view;
+}
+
+}  // namespace
+
+void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, int width, int height,
+                const FigureSink& sink) {
+  atmos::AtmospherePass pass(atmosphere, tables, atmos::PlanetFrame{});
+  GLuint colour = 0, depth = 0, output = 0, framebuffer = 0;
+  glCreateTextures(GL_TEXTURE_2D, 1, &colour);
+  glTextureStorage2D(colour, 1, GL_RGBA16F, width, height);
+  glCreateTextures(GL_TEXTURE_2D, 1, &depth);
+  glTextureStorage2D(depth, 1, GL_DEPTH_COMPONENT32F, width, height);
+  glCreateTextures(GL_TEXTURE_2D, 1, &output);
+  glTextureStorage2D(output, 1, GL_RGBA16F, width, height);
+  glCreateFramebuffers(1, &framebuffer);
+  glNamedFramebufferTexture(framebuffer, GL_COLOR_ATTACHMENT0, colour, 0);
+  glNamedFramebufferTexture(framebuffer, GL_DEPTH_ATTACHMENT, depth, 0);
+  using Clock = std::chrono::steady_clock;
+  const auto ms_since = [](Clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  };
+  // One frame: the terrain into the engine's targets, then the pass.
+  const auto frame = [&](atmos::Globe& globe, const atmos::GlobeView& view, double& terrain_ms) {
+    const auto t0 = Clock::now();
+    const float clear_colour[4] = {0, 0, 0, 0}, clear_depth = 0.0f;
+    glClearNamedFramebufferfv(framebuffer, GL_COLOR, 0, clear_colour);
+    glClearNamedFramebufferfv(framebuffer, GL_DEPTH, 0, &clear_depth);
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+    globe.draw(view);
+    glFinish();
+    terrain_ms = ms_since(t0);
+    atmos::FrameInput input;
+    input.colour = colour;
+    input.depth = depth;
+    input.width = width;
+    input.height = height;
+    input.depth_encoding = atmos::DepthEncoding::reversed_z;
+    input.view = view.view;
+    input.projection = view.projection;
+    input.sun_direction = view.sun_direction;
+    input.nits_per_unit = view.nits_per_unit;
+    input.output = output;
+    pass.render(input);
+    glFinish();
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    return ms_since(t0);
+  };
+  {
+    atmos::GlobeSettings settings;
+    settings.complete_every_frame = true;
+    atmos::Globe globe(atmosphere, atmos::GlobeSurface{}, pass, settings);
+    const double radius = atmosphere.bottom_radius_m;
+    const std::pair<const char*, double> altitudes[] = {
+        {"2m", 2.0}, {"10km", 10e3}, {"400km", 400e3}, {"2.5R", 2.5 * radius}};
+    for (const auto& [name, altitude] : altitudes) {
+      const atmos::GlobeView view = globe_view(globe, atmosphere, altitude, width, height);
+      double terrain_ms = 0.0;
+      frame(globe, view, terrain_ms);  // generates the tiles, compiles the pass's variant
+      std::vector<double> frames, terrain, selection;
+      for (int i = 0; i < 3; ++i) {
+        frames.push_back(frame(globe, view, terrain_ms));
+        terrain.push_back(terrain_ms);
+        selection.push_back(globe.last_stats().selection_ms);
+      }
+      const std::string prefix = std::string("globe.") + name;
+      sink({prefix + ".frame", median(frames), "ms"});
+      sink({prefix + ".terrain", median(terrain), "ms"});
+      sink({prefix + ".selection", median(selection), "ms"});
+      sink({prefix + ".triangles", double(globe.last_stats().triangles), "count"});
+      sink({prefix + ".tiles", double(globe.last_stats().tiles_drawn), "count"});
+    }
+  }
+  {
+    // The descent: tiles streamed as a viewer would.
+    atmos::Globe globe(atmosphere, atmos::GlobeSurface{}, pass, atmos::GlobeSettings{});
+    const double first = 2.5 * atmosphere.bottom_radius_m, last = 2.0;
+    const int frames = 40;
+    std::vector<double> times;
+    for (int f = 0; f < frames; ++f) {
+      const double altitude = std::exp(std::log(first) + (std::log(last) - std::log(first)) * f / (frames - 1));
+      double terrain_ms = 0.0;
+      times.push_back(frame(globe, globe_view(globe, atmosphere, altitude, width, height), terrain_ms));
+    }
+    const double longest = *std::max_element(times.begin(), times.end());
+    sink({"globe.descent.max_over_median", longest / median(times), "ratio"});
+  }
+  glDeleteFramebuffers(1, &framebuffer);
+  glDeleteTextures(1, &colour);
+  glDeleteTextures(1, &depth);
+  glDeleteTextures(1, &output);
+}
+
 void time_post(atmos::Renderer& renderer, const atmos::Camera& camera, const FigureSink& sink) {
   const int w = camera.width, h = camera.height;
   const atmos::Image hdr = renderer.render(camera, atmos::direction_from_azimuth_elevation(180.0, 12.0));
@@ -245,6 +366,7 @@ void run_all(const atmos::Atmosphere& atmosphere, const atmos::PrecomputeOptions
               "render.spectral15.twilight", sink);
   time_plugin(atmosphere, tables, width, height, sink);
   time_post(renderer, camera, sink);
+  time_globe(atmosphere, tables, width, height, sink);
 }
 
 }  // namespace atmos_bench

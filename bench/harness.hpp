@@ -29,14 +29,16 @@
 
 namespace atmos_bench {
 
-// One measured value: unit "s" (precomputation) or "ms" (frames).
+// One measured value: unit "s" (precomputation), "ms" (frames), "count"
+// (triangles, tiles) or "ratio".
 struct Figure {
   std::string name;
   double value = 0.0;
   std::string unit;
 };
 
-// `name<TAB>value<TAB>unit`, seconds with 3 decimals, milliseconds with 1.
+// `name<TAB>value<TAB>unit`: seconds and ratios with 3 decimals, milliseconds
+// with 1, counts with none.
 std::string format_figure(const Figure& figure);
 
 // Receives each figure as soon as it is measured.
@@ -107,11 +109,24 @@ void time_plugin(const atmos::Atmosphere& atmosphere, const atmos::Tables& table
 // `post.tonemap.*`).
 void time_post(atmos::Renderer& renderer, const atmos::Camera& camera, const FigureSink& sink);
 
+// The terrain globe (atmos::Globe, Earth style) under the atmosphere's
+// plugin at width x height, from 2 m, 10 km, 400 km and 2.5 planet radii
+// above the ground (`globe.2m.*`, `globe.10km.*`, `globe.400km.*`,
+// `globe.2.5R.*`): the whole frame (the globe's draw and the pass,
+// wall-clock up to glFinish), the terrain's draw alone, the CPU selection
+// (the quadtree traversal and culling), drawn triangles and tiles; medians
+// of 3 frames after one that generates the tiles. Then a descent of 40
+// frames from 2.5 radii to 2 m with tiles streamed (at most
+// GlobeSettings::max_tiles_per_frame new tiles a frame):
+// `globe.descent.max_over_median`, the longest frame over the median one.
+void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, int width, int height,
+                const FigureSink& sink);
+
 // Everything `atmos bench` reports, in its order: the precomputation of
 // `atmosphere` with `options`, the spectral one, the renderer (sun 20° up;
 // a total eclipse, sun 40° up, seen from the centre of the shadow; twilight
-// with the spectral tables, sun 3° below the horizon), the plugin and the
-// post-processing, frames of width x height. Creates a headless OpenGL
+// with the spectral tables, sun 3° below the horizon), the plugin, the
+// post-processing and the globe, frames of width x height. Creates a headless OpenGL
 // context (atmos::Error without one).
 void run_all(const atmos::Atmosphere& atmosphere, const atmos::PrecomputeOptions& options, int width, int height,
              const FigureSink& sink);

@@ -1,6 +1,7 @@
 # Checks that every #include "..." in the library follows the layer order:
 #
 #   data -> physics -> io, tables -> gpu -> post          reference -> physics
+#   planet -> the public headers of post and below, and data (its GLSL text)
 #
 # (an arrow points from a layer to one that may use it; see docs/architecture.md).
 # A file of a layer may include its own layer's files and those of the layers it
@@ -26,6 +27,8 @@ function(layer_of path out)
     set(layer post)
   elseif(path MATCHES "^src/reference/")
     set(layer reference)
+  elseif(path MATCHES "^src/planet/" OR path MATCHES "^include/atmos/globe\\.hpp$")
+    set(layer planet)
   endif()
   set(${out} "${layer}" PARENT_SCOPE)
 endfunction()
@@ -38,6 +41,9 @@ set(uses_tables physics data)
 set(uses_gpu tables io physics data)
 set(uses_post gpu tables io physics data)
 set(uses_reference physics)
+# The globe uses the library as an engine does: public headers only (checked
+# below), and the data layer's embedded GLSL text.
+set(uses_planet post gpu tables io physics data)
 
 file(GLOB_RECURSE files RELATIVE ${ROOT}
   ${ROOT}/src/*.cpp ${ROOT}/src/*.hpp ${ROOT}/src/*.glsl ${ROOT}/include/atmos/*.hpp)
@@ -66,6 +72,10 @@ foreach(file IN LISTS files)
     endif()
     layer_of(${target_path} used)
     if(used STREQUAL "" OR used STREQUAL layer)
+      continue()
+    endif()
+    if(layer STREQUAL "planet" AND target_path MATCHES "^src/" AND NOT target_path MATCHES "^src/data/")
+      string(APPEND errors "  ${file} (layer planet) includes ${target_path}: the globe uses only public headers\n")
       continue()
     endif()
     list(FIND uses_${layer} ${used} allowed)

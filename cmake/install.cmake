@@ -5,7 +5,7 @@
 #   target_link_libraries(engine PRIVATE atmos::atmos)
 include(CMakePackageConfigHelpers)
 
-install(TARGETS atmos_data atmos_physics atmos_io atmos_tables atmos_gpu atmos_post atmos
+install(TARGETS atmos_data atmos_physics atmos_io atmos_tables atmos_gpu atmos_post atmos_planet atmos
         EXPORT atmosTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
@@ -14,7 +14,7 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/atmos DESTINATION ${CMAKE_INSTAL
 
 # The shared GLSL (the physics, the renderer's and the post-processing's
 # shaders) for engines that build their own shaders on top of it, and the data.
-foreach(dir physics gpu post)
+foreach(dir physics gpu post planet)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/src/${dir}/ DESTINATION ${CMAKE_INSTALL_DATADIR}/atmos/glsl/${dir}
           FILES_MATCHING PATTERN "*.glsl")
 endforeach()

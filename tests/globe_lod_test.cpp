@@ -289,9 +289,27 @@ std::vector<Scene> scenes() {
           {"2.5 R", {0.3, -0.4, 0.8}, 1.5 * kRadius, -90.0}};
 }
 
-// The selected tile holding `direction`, or nullptr.
-const SelectedTile* holding(const std::vector<SelectedTile>& tiles, const std::set<std::uint64_t>& keys,
-                            const glm::dvec3& direction) {
+// What a selection draws: each selected tile whole, or its drawn quadrants
+// (the areas of its children, at the tile's level).
+struct Area {
+  TileKey key;               // the area's footprint
+  const SelectedTile* tile;  // the tile whose mesh covers it (level: tile->key.level)
+};
+std::vector<Area> drawn_areas(const std::vector<SelectedTile>& tiles) {
+  std::vector<Area> areas;
+  for (const SelectedTile& t : tiles) {
+    if (t.quadrants == 0xFu) {
+      areas.push_back({t.key, &t});
+      continue;
+    }
+    for (int q = 0; q < 4; ++q)
+      if (t.quadrants & (1u << q)) areas.push_back({planet::child(t.key, q), &t});
+  }
+  return areas;
+}
+
+// The drawn area holding `direction`, or nullptr.
+const Area* holding(const std::vector<Area>& areas, const std::set<std::uint64_t>& keys, const glm::dvec3& direction) {
   int face = 0;
   double u = 0, v = 0;
   planet::face_coordinates(direction, face, u, v);
@@ -300,8 +318,8 @@ const SelectedTile* holding(const std::vector<SelectedTile>& tiles, const std::s
     const TileKey key{face, level, std::uint32_t(std::min(std::floor(u * n), n - 1)),
                       std::uint32_t(std::min(std::floor(v * n), n - 1))};
     if (keys.count(key.packed()))
-      for (const SelectedTile& t : tiles)
-        if (t.key == key) return &t;
+      for (const Area& a : areas)
+        if (a.key == key) return &a;
   }
   return nullptr;
 }
@@ -333,14 +351,15 @@ TEST(GlobeLod, RangesMeetTheErrorAndMorphInequalities) {
         EXPECT_GE(r[std::size_t(level)], e_own / fraction * k / tau * (1 - 1e-12));
         if (level >= 2) {
           EXPECT_GE(fraction * r[std::size_t(level - 1)] * (1 + 1e-12),
-                    r[std::size_t(level)] + planet::level_diameter_m(level - 1, settings, bounds))
+                    r[std::size_t(level)] + planet::level_diameter_m(level, settings, bounds))
               << "f " << fraction << " tau " << tau << " level " << level;
         }
       }
     }
 }
 
-// Every selection: tiles unique and disjoint; neighbours within one level;
+// Every selection: tiles unique, their drawn areas (whole tiles or
+// quadrants) disjoint; neighbours within one level;
 // where a tile meets a coarser one, its shared vertices are fully morphed
 // and the coarser tile's are not morphing; the screen-space error of the
 // (blended) mesh at every sampled vertex within tau.
@@ -356,22 +375,31 @@ void check_selection(const LodCamera& camera, const LodSettings& settings, const
   const double k_px = camera.viewport_height_px / (2.0 * camera.tan_half_fov_y);
   const double f = settings.morph_start_fraction;
 
+  std::set<std::uint64_t> tile_keys;
+  for (const SelectedTile& t : sel.tiles) {
+    ASSERT_TRUE(tile_keys.insert(t.key.packed()).second) << name;
+    ASSERT_NE(t.quadrants, 0u) << name << ": a selected tile draws nothing";
+    ASSERT_EQ(t.quadrants & ~0xFu, 0u) << name;
+  }
+  const std::vector<Area> areas = drawn_areas(sel.tiles);
   std::set<std::uint64_t> keys;
-  for (const SelectedTile& t : sel.tiles) ASSERT_TRUE(keys.insert(t.key.packed()).second) << name;
-  for (const SelectedTile& t : sel.tiles)
-    for (TileKey a = t.key; a.level > 0;) {
+  for (const Area& a : areas) ASSERT_TRUE(keys.insert(a.key.packed()).second) << name << ": an area drawn twice";
+  for (const Area& area : areas)
+    for (TileKey a = area.key; a.level > 0;) {
       a = planet::parent(a);
-      ASSERT_EQ(keys.count(a.packed()), 0u) << name << ": a tile and its ancestor are both selected";
+      ASSERT_EQ(keys.count(a.packed()), 0u) << name << ": an area and its ancestor are both drawn";
     }
 
   const auto surface = [&](const glm::dvec3& d) { return d * (bounds.radius_m + (relief ? relief->height(d) : 0.0)); };
-  int coarser_edges = 0;
-  for (const SelectedTile& t : sel.tiles) {
+  int coarser_edges = 0, partial_tiles = 0;
+  for (const SelectedTile& t : sel.tiles) partial_tiles += t.quadrants != 0xFu ? 1 : 0;
+  for (const Area& area : areas) {
+    const SelectedTile& t = *area.tile;
     const int level = t.key.level;
-    // Screen-space error at the tile's vertices (every 4th).
+    // Screen-space error at the area's points (every 4th of 32 steps).
     for (int j = 0; j <= 32; j += 4)
       for (int i = 0; i <= 32; i += 4) {
-        const glm::dvec3 p = surface(planet::tile_direction(t.key, i / 32.0, j / 32.0));
+        const glm::dvec3 p = surface(planet::tile_direction(area.key, i / 32.0, j / 32.0));
         const double d = glm::length(p - camera.position);
         const double k = morph_factor(t, d);
         const double e_own = earth_error(planet::level_spacing_m(level, settings, bounds));
@@ -383,24 +411,35 @@ void check_selection(const LodCamera& camera, const LodSettings& settings, const
       }
     // Neighbours.
     for (int edge = 0; edge < 4; ++edge) {
-      const TileKey other = planet::neighbour(t.key, edge);
+      const TileKey other = planet::neighbour(area.key, edge);
       const glm::dvec3 other_centre = planet::tile_direction(other, 0.5, 0.5);
       for (const double s : {0.0625, 0.5, 0.9375}) {
-        const glm::dvec3 p = edge_point(t.key, edge, s);
-        const SelectedTile* n = holding(sel.tiles, keys, glm::normalize(p + 1e-3 * (other_centre - p)));
+        const glm::dvec3 p = edge_point(area.key, edge, s);
+        const Area* n = holding(areas, keys, glm::normalize(p + 1e-3 * (other_centre - p)));
         if (!n) continue;  // culled
-        ASSERT_LE(std::abs(n->key.level - level), 1) << name << ": neighbours two levels apart";
-        if (n->key.level == level - 1) {
+        const int other_level = n->tile->key.level;
+        ASSERT_LE(std::abs(other_level - level), 1) << name << ": neighbours two levels apart";
+        if (other_level == level - 1) {
           ++coarser_edges;
           for (int i = 0; i <= 32; ++i) {
-            const double d = glm::length(surface(edge_point(t.key, edge, i / 32.0)) - camera.position);
+            const double d = glm::length(surface(edge_point(area.key, edge, i / 32.0)) - camera.position);
             ASSERT_EQ(morph_factor(t, d), 1.0) << name << ": the finer tile's edge is not fully morphed";
-            ASSERT_EQ(morph_factor(*n, d), 0.0) << name << ": the coarser tile's edge is morphing";
+            ASSERT_EQ(morph_factor(*n->tile, d), 0.0) << name << ": the coarser tile's edge is morphing";
             ASSERT_LE(d, f * r[std::size_t(level - 1)]);
           }
         }
       }
     }
+  }
+  int min_level = planet::kMaxTileLevel, max_level = 0;
+  for (const SelectedTile& t : sel.tiles) {
+    min_level = std::min(min_level, t.key.level);
+    max_level = std::max(max_level, t.key.level);
+  }
+  if (max_level > min_level) {
+    EXPECT_GT(partial_tiles, 0) << name << ": no tile drawn in part";
+  } else {
+    coarser_edges = 1;  // one level: no level change to check
   }
   EXPECT_GT(coarser_edges, 0) << name << ": no level change to check";
 }

@@ -141,11 +141,12 @@ double power_shape(double u, double exponent, double shape) { return 1.0 + u * (
 // 0.84 km, mean ocean depth 3.7 km, shelves to about -130 m) as a C2 function
 // of t = c - c_coast, c the continent field in [-1, 1]: the abyssal floor at
 // -4800 m, the continental slope and rise over t in [-0.08, -0.02], the shelf
-// from -120 m to +20 m over [-0.02, 0], the land rising 1400 m inland.
+// from -120 m to +20 m over [-0.02, 0], the land rising 1400 m inland over
+// [0, 0.08].
 struct Step {
   double height_m, start, width;
 };
-constexpr Step kEarthSteps[] = {{4680.0, -0.08, 0.06}, {140.0, -0.02, 0.02}, {1400.0, 0.0, 0.2}};
+constexpr Step kEarthSteps[] = {{4680.0, -0.08, 0.06}, {140.0, -0.02, 0.02}, {1400.0, 0.0, 0.08}};
 constexpr double kEarthAbyss_m = -4800.0;
 
 double earth_hypsometry(double t) {
@@ -211,13 +212,13 @@ Relief::Relief(const ReliefSettings& settings) : settings_(settings) {
     case ReliefStyle::flat:
       break;
     case ReliefStyle::earth: {
-      // Continents: fBm of wavelengths 8000..500 km, thresholded so that 29 %
+      // Continents: fBm of wavelengths 16000..1000 km, thresholded so that 29 %
       // of the sphere is land (Eakins & Sharman 2012); the field's threshold
-      // is put at 69 % because the detail noise floods about 2 % of the area
-      // next to the coasts.
-      large_scale_ = make_octaves(seed, 1, 8000e3, 1.0, 0.5, 5);
+      // is put at 74 % because the detail noise raises about 3 % of the area
+      // next to the coasts above the sea.
+      large_scale_ = make_octaves(seed, 1, 16000e3, 1.0, 0.5, 5);
       normalise(large_scale_, 1.0);
-      calibrate_threshold(0.69);
+      calibrate_threshold(0.74);
       // Mountain belts: a 3000 km field selects belts on and near land;
       // ridged octaves 1000..7.8 km (Musgrave et al. 1989), (1 - |n|)^4 each,
       // 3.6 km for the first: peaks of the belts to about 7-9 km.

@@ -210,34 +210,57 @@ struct Traversal {
     return far;
   }
 
+  // The height range of child c of a tile of range [h_lo, h_hi].
+  void child_range(const TileKey& c, double h_lo, double h_hi, double& lo, double& hi) const {
+    lo = h_lo;
+    hi = h_hi;
+    if (*known && (*known)(c, lo, hi)) {
+      if (!std::isfinite(lo) || !std::isfinite(hi) || lo > hi || bounds->radius_m + lo <= 0.0)
+        throw Error("select_tiles: the height range of a tile is not finite and ordered");
+    } else {
+      lo = h_lo;
+      hi = h_hi;
+    }
+  }
+
+  double nearest(const TileKey& key, const Footprint& f, double s_lo, double s_hi) const {
+    return distance_at_chord(camera_radius, nearest_chord_squared(camera_direction, key, f), s_lo, s_hi);
+  }
+
+  // CDLOD (Strugar 2009): a node nearer than the finer level's range is
+  // refined, and each of its children is either in that range itself (it is
+  // visited) or drawn as a quadrant of the node at the node's level. So a
+  // selected tile of level L lies within r_L + D_L of the camera, the
+  // bound the ranges' seam inequality is built on (level_ranges_m).
   void visit(const TileKey& key, double h_lo, double h_hi) {
     ++out->nodes_visited;
     const double s_lo = bounds->radius_m + h_lo, s_hi = bounds->radius_m + h_hi;
     const Footprint f = footprint(key);
     if (culled(camera, planes, key, f, s_lo, s_hi, occluder_radius)) return;
-    if (key.level < finest) {
-      const double chi2 = nearest_chord_squared(camera_direction, key, f);
-      const double nearest = distance_at_chord(camera_radius, chi2, s_lo, s_hi);
-      if (nearest < ranges[std::size_t(key.level + 1)]) {
-        for (int q = 0; q < 4; ++q) {
-          const TileKey c = child(key, q);
-          double lo = h_lo, hi = h_hi;
-          if (*known && (*known)(c, lo, hi)) {
-            if (!std::isfinite(lo) || !std::isfinite(hi) || lo > hi || bounds->radius_m + lo <= 0.0)
-              throw Error("select_tiles: the height range of a tile is not finite and ordered");
-          } else {
-            lo = h_lo;
-            hi = h_hi;
-          }
+    unsigned quadrants = 0xFu;
+    if (key.level < finest && nearest(key, f, s_lo, s_hi) < ranges[std::size_t(key.level + 1)]) {
+      quadrants = 0u;
+      for (int q = 0; q < 4; ++q) {
+        const TileKey c = child(key, q);
+        double lo = 0.0, hi = 0.0;
+        child_range(c, h_lo, h_hi, lo, hi);
+        const Footprint cf = footprint(c);
+        const double c_lo = bounds->radius_m + lo, c_hi = bounds->radius_m + hi;
+        if (nearest(c, cf, c_lo, c_hi) < ranges[std::size_t(key.level + 1)]) {
           visit(c, lo, hi);
+        } else {
+          // The quadrant shows this node's mesh: culled with its height range.
+          ++out->nodes_visited;
+          if (!culled(camera, planes, c, cf, s_lo, s_hi, occluder_radius)) quadrants |= 1u << q;
         }
-        return;
       }
+      if (quadrants == 0u) return;
     }
     SelectedTile tile;
     tile.key = key;
     tile.min_height_m = h_lo;
     tile.max_height_m = h_hi;
+    tile.quadrants = quadrants;
     if (key.level == 0) {
       tile.morph_start_m = tile.morph_end_m = kInfinity;
     } else {
@@ -284,7 +307,7 @@ std::vector<double> level_ranges_m(const LodCamera& camera, const LodSettings& s
     const double coarser = checked_error(bounds, level_spacing_m(level - 1, settings, bounds));
     const double own = checked_error(bounds, level_spacing_m(level, settings, bounds));
     const double by_error = std::max(coarser, own / f) * k / settings.max_screen_error_px;
-    const double by_morph = level == finest ? 0.0 : (finer + level_diameter_m(level, settings, bounds)) / f;
+    const double by_morph = level == finest ? 0.0 : (finer + level_diameter_m(level + 1, settings, bounds)) / f;
     r[std::size_t(level)] = std::max(by_error, by_morph);
     finer = r[std::size_t(level)];
   }

@@ -6,38 +6,41 @@
 // grid as its camera distance d goes from morph_start = f r_L to
 // morph_end = r_L (f = morph_start_fraction; k = clamp((d - f r_L) /
 // ((1 - f) r_L), 0, 1)); beyond r_L it is its parent's surface. A node of
-// level L - 1 is refined (its four children visited) while the nearest
-// point of its bounding volume is nearer than r_L. So the geometry of level
-// L - 1 is shown only at d >= f r_L, blended with level L's, and the
-// screen-space error of a mesh of geometric error e at distance d,
-// e K / d (K = viewport_height_px / (2 tan_half_fov_y) px per rad; Ulrich
-// 2002), stays below tau if
+// level L - 1 is refined while the nearest point of its bounding volume is
+// nearer than r_L; then each child nearer than r_L itself is visited, and the
+// area of each other child is drawn as a quadrant of the node, at level
+// L - 1 (Strugar 2009). So the geometry of level L - 1 is shown only at
+// d >= f r_L, blended with level L's, and the screen-space error of a mesh
+// of geometric error e at distance d, e K / d (K = viewport_height_px /
+// (2 tan_half_fov_y) px per rad; Ulrich 2002), stays below tau if
 //   r_L >= max(e_{L-1}, e_L / f) K / tau                        (1)
 // In the morph zone the blended mesh is within (1 - k) e_L + k e_{L-1} of
 // the surface at d = (f + k (1 - f)) r_L; the ratio of the two, linear in
 // k, is extreme at k = 0 (e_L / (f r_L)) and k = 1 (e_{L-1} / r_L). Level
 // L's own tiles beyond r_{L+1} are bounded by (1) of level L + 1.
 //
-// Seamless edges. Let tile A of level L meet tile B of level L - 1 along an
-// edge. B was not refined, so every point of B, the shared edge included,
-// is at least r_L away: A's edge vertices are fully morphed to the coarser
-// grid, which is B's. A was selected because its parent P was refined, so
-// its vertices are nearer than nearest(P) + diam(P) < r_L + D_{L-1}, D the
-// largest bounding-volume diameter of a level: B's vertices there are not
-// morphing if
-//   f r_{L-1} >= r_L + D_{L-1}.                                 (2)
-// (2) also keeps neighbours within one level: a selected tile of level
-// M <= L - 2 next to A would be nearer than r_{M+2} + D_{M+1} <= f r_{M+1}
-// < r_{M+1}, so it would have been refined. level_ranges_m() takes the
-// smallest ranges that satisfy (1) and (2), from the finest level up:
-//   r_L = max(max(e_{L-1}, e_L / f) K / tau, (r_{L+1} + D_L) / f).
+// Seamless edges. Let an area A drawn at level L meet an area B drawn at
+// level L - 1 along an edge. B is a quadrant of a refined node whose child
+// there was not nearer than r_L, or a node that was not refined: every point
+// of B, the shared edge included, is at least r_L away, and A's edge
+// vertices are fully morphed to the coarser grid, which is B's. A belongs to
+// a tile T of level L that was visited because it was nearer than r_L, so
+// A's vertices are nearer than r_L + D_L, D the largest bounding-volume
+// diameter of a level: B's vertices there are not morphing if
+//   f r_{L-1} >= r_L + D_L.                                     (2)
+// (2) also keeps neighbours within one level: an area of level M <= L - 2
+// next to A would be nearer than r_L + D_L <= f r_{L-1} < r_{M+1}, so its
+// node would have been refined and that child visited. level_ranges_m()
+// takes the smallest ranges that satisfy (1) and (2), from the finest level
+// up:
+//   r_L = max(max(e_{L-1}, e_L / f) K / tau, (r_{L+1} + D_{L+1}) / f).
 // Where (1) decides, ranges halve per level with the error; where (2)
-// decides, r_L tends to c D_L with c = 1 / (f - 1/2) (5 for f = 0.7), since
-// D halves per level. D_L is the diameter of a level-L tile's footprint at
-// the planet's highest radius combined with a relief of at most
-// max_tile_relief_ratio times that footprint (a tile with more relief than
-// this can let its coarser neighbour start morphing: Selection counts such
-// tiles, and skirts hide the gap).
+// decides, r_L tends to c D_L with c = 1 / (2 f - 1) (2.5 for f = 0.7),
+// since D halves per level. D_L is the diameter of a level-L tile's
+// footprint at the planet's highest radius combined with a relief of at
+// most max_tile_relief_ratio times that footprint (a tile with more relief
+// than this can let its coarser neighbour start morphing: Selection counts
+// such tiles, and skirts hide the gap).
 #pragma once
 
 #include <glm/mat4x4.hpp>
@@ -86,6 +89,9 @@ struct SelectedTile {
   // (start = end = infinity).
   double morph_start_m = 0, morph_end_m = 0;
   double min_height_m = 0, max_height_m = 0;  // the height range its bounds used
+  // The quadrants of the tile to draw (bit q: the area of child(key, q));
+  // the others are drawn by finer tiles or culled. 0xF: the whole tile.
+  unsigned quadrants = 0xFu;
 };
 
 struct Selection {

@@ -1,0 +1,220 @@
+// atmos_example_globe: a whole planet under its atmosphere, as an engine
+// would draw it with atmos. The terrain globe (atmos::Globe) draws the
+// planet's surface lit by the atmosphere into the engine's colour and
+// reversed-Z depth textures; atmos::AtmospherePass adds the aerial
+// perspective and the sky. Only atmos's public headers are used.
+//
+//   atmos_example_globe --planet mars --style mars --descent 5 --out-dir frames
+//
+// renders a descent of 5 frames from 2.5 planet radii to 2 m above the
+// ground (logarithmic in altitude), each a PNG, and prints per frame the
+// globe's tiles, triangles, CPU selection time and the frame's time.
+#include <epoxy/gl.h>
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <atmos/atmosphere.hpp>
+#include <atmos/globe.hpp>
+#include <atmos/planet_file.hpp>
+#include <atmos/plugin.hpp>
+#include <atmos/post.hpp>
+#include <atmos/renderer.hpp>
+#include <atmos/tables.hpp>
+
+namespace {
+
+struct Options {
+  std::string planet = "earth";
+  std::string style;  // default: the planet's own
+  std::uint64_t seed = 1;
+  int width = 960, height = 540;
+  int descent = 5;
+  double from_radii = 2.5;   // first altitude, planet radii
+  double to_m = 2.0;         // last altitude, m
+  double sun_elevation = 20.0;  // degrees, at the descent's ground point
+  double latitude = 20.0, longitude = 30.0;  // degrees, the ground point
+  double exposure = 13.0;  // EV100 of the PNGs
+  double max_screen_error_px = 1.0;
+  std::string out_dir = ".";
+};
+
+atmos::SurfaceStyle style_of(const std::string& name) {
+  if (name == "earth") return atmos::SurfaceStyle::earth;
+  if (name == "mars") return atmos::SurfaceStyle::mars;
+  if (name == "venus") return atmos::SurfaceStyle::venus;
+  if (name == "titan") return atmos::SurfaceStyle::titan;
+  if (name == "flat") return atmos::SurfaceStyle::flat;
+  throw atmos::Error("unknown surface style \"" + name + "\" (earth, mars, venus, titan, flat)");
+}
+
+// The engine's texture as an atmos::Image: RGB in cd/m², rows top-down.
+atmos::Image read_image(GLuint texture, int width, int height, double nits_per_unit) {
+  std::vector<float> rgba(size_t(width) * size_t(height) * 4);
+  glGetTextureImage(texture, 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)), rgba.data());
+  atmos::Image image;
+  image.width = width;
+  image.height = height;
+  image.rgb.resize(size_t(width) * size_t(height) * 3);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      for (int c = 0; c < 3; ++c)
+        image.rgb[(size_t(y) * size_t(width) + size_t(x)) * 3 + size_t(c)] =
+            float(rgba[(size_t(height - 1 - y) * size_t(width) + size_t(x)) * 4 + size_t(c)] * nits_per_unit);
+  return image;
+}
+
+int run(const Options& o) {
+  auto context = atmos::GlContext::create_headless();
+  const atmos::Atmosphere planet = atmos::load_atmosphere(o.planet);
+  const atmos::CacheResult cached =
+      atmos::load_or_precompute_tables(planet, atmos::PrecomputeOptions{}, atmos::default_cache_directory());
+  // The engine's world: kilometres, planet centred at the origin.
+  atmos::PlanetFrame frame;
+  frame.units_per_metre = 1e-3;
+  atmos::AtmospherePass pass(planet, cached.tables, frame);
+  atmos::GlobeSettings settings;
+  settings.complete_every_frame = true;
+  settings.max_screen_error_px = o.max_screen_error_px;
+  atmos::GlobeSurface surface;
+  surface.style = style_of(o.style.empty() ? (o.planet == "earth" || o.planet == "mars" || o.planet == "venus" ||
+                                                      o.planet == "titan"
+                                                  ? o.planet
+                                                  : std::string("flat"))
+                                           : o.style);
+  surface.seed = o.seed;
+  atmos::Globe globe(planet, surface, pass, settings);
+
+  // The engine's render targets: lit colour (RGBA32F) and reversed-Z depth.
+  GLuint colour = 0, depth = 0, target = 0, output = 0;
+  glCreateTextures(GL_TEXTURE_2D, 1, &colour);
+  glTextureStorage2D(colour, 1, GL_RGBA32F, o.width, o.height);
+  glCreateTextures(GL_TEXTURE_2D, 1, &depth);
+  glTextureStorage2D(depth, 1, GL_DEPTH_COMPONENT32F, o.width, o.height);
+  glCreateTextures(GL_TEXTURE_2D, 1, &output);
+  glTextureStorage2D(output, 1, GL_RGBA32F, o.width, o.height);
+  glCreateFramebuffers(1, &target);
+  glNamedFramebufferTexture(target, GL_COLOR_ATTACHMENT0, colour, 0);
+  glNamedFramebufferTexture(target, GL_DEPTH_ATTACHMENT, depth, 0);
+
+  // The ground point and its local frame (east, north, up).
+  const double lat = glm::radians(o.latitude), lon = glm::radians(o.longitude);
+  const glm::dvec3 up(std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat));
+  const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), up));
+  const glm::dvec3 north = glm::cross(up, east);
+  const double radius = planet.bottom_radius_m;
+  const double ground = radius + globe.height_m(frame.centre + up * radius * frame.units_per_metre);
+  const double sun_el = glm::radians(o.sun_elevation);
+  const glm::dvec3 sun = glm::normalize(north * std::cos(sun_el) + up * std::sin(sun_el));
+  const double nits_per_unit = 1000.0;
+
+  std::filesystem::create_directories(o.out_dir);
+  const double first = o.from_radii * radius, last = o.to_m;
+  for (int f = 0; f < o.descent; ++f) {
+    const double t = o.descent > 1 ? double(f) / double(o.descent - 1) : 0.0;
+    const double altitude = std::exp(std::log(first) + (std::log(last) - std::log(first)) * t);
+    // From far away the camera looks at the planet's centre; near the ground
+    // it looks towards the sun's azimuth, 8 degrees down.
+    const double w = std::clamp(std::log10(altitude / 1e3) / std::log10(first / 1e3), 0.0, 1.0);
+    const double pitch = glm::radians(-8.0 + (-90.0 + 8.0) * w);
+    const glm::dvec3 forward = glm::normalize(north * std::cos(pitch) + up * std::sin(pitch));
+    const glm::dvec3 camera_m = up * (ground + altitude);
+    const glm::dvec3 camera = frame.centre + camera_m * frame.units_per_metre;
+
+    atmos::GlobeView view;
+    view.view = glm::lookAt(camera, camera + forward, std::abs(pitch) > 1.5 ? north : up);
+    view.projection = atmos::reversed_z_projection(glm::radians(60.0), double(o.width) / o.height, 1e-6);
+    view.width = o.width;
+    view.height = o.height;
+    view.sun_direction = sun;
+    view.nits_per_unit = nits_per_unit;
+
+    const auto start = std::chrono::steady_clock::now();
+    const float clear_colour[4] = {0, 0, 0, 0};
+    const float clear_depth = 0.0f;
+    glClearNamedFramebufferfv(target, GL_COLOR, 0, clear_colour);
+    glClearNamedFramebufferfv(target, GL_DEPTH, 0, &clear_depth);
+    glBindFramebuffer(GL_FRAMEBUFFER, target);
+    globe.draw(view);
+    glFinish();
+    const double terrain_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+
+    atmos::FrameInput input;
+    input.colour = colour;
+    input.depth = depth;
+    input.width = o.width;
+    input.height = o.height;
+    input.depth_encoding = atmos::DepthEncoding::reversed_z;
+    input.view = view.view;
+    input.projection = view.projection;
+    input.sun_direction = sun;
+    input.nits_per_unit = nits_per_unit;
+    input.output = output;
+    pass.render(input);
+    glFinish();
+    const double frame_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+
+    const atmos::GlobeStats& s = globe.last_stats();
+    char name[64];
+    std::snprintf(name, sizeof name, "globe-%02d.png", f);
+    const std::string path = (std::filesystem::path(o.out_dir) / name).string();
+    atmos::write_png(read_image(output, o.width, o.height, nits_per_unit), path, o.exposure);
+    std::printf(
+        "%s: altitude %.6g m, %d tiles (%d generated in %.1f ms), %lld triangles, selection %.3f ms (%d nodes), "
+        "terrain %.1f ms, frame %.1f ms, resident %.1f MiB\n",
+        path.c_str(), altitude, s.tiles_drawn, s.tiles_generated, s.generation_ms, s.triangles, s.selection_ms,
+        s.nodes_visited, terrain_ms, frame_ms, double(s.resident_bytes) / (1024.0 * 1024.0));
+  }
+  glDeleteFramebuffers(1, &target);
+  glDeleteTextures(1, &colour);
+  glDeleteTextures(1, &depth);
+  glDeleteTextures(1, &output);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  CLI::App app{"atmos_example_globe: a descent from orbit to the ground of a whole planet under its atmosphere"};
+  app.add_option("--planet", o.planet, "Planet preset or planet file")->capture_default_str();
+  app.add_option("--style", o.style, "Relief style: earth, mars, venus, titan or flat (default: the planet's)");
+  app.add_option("--seed", o.seed, "Seed of the procedural relief")->capture_default_str();
+  app.add_option("--width", o.width, "Image width, pixels")->capture_default_str()->check(CLI::Range(16, 8192));
+  app.add_option("--height", o.height, "Image height, pixels")->capture_default_str()->check(CLI::Range(16, 8192));
+  app.add_option("--descent", o.descent, "Frames of the descent")->capture_default_str()->check(CLI::Range(1, 1000));
+  app.add_option("--from-radii", o.from_radii, "First altitude, planet radii")
+      ->capture_default_str()
+      ->check(CLI::Range(1e-6, 100.0));
+  app.add_option("--to", o.to_m, "Last altitude, metres")->capture_default_str()->check(CLI::Range(0.5, 1e9));
+  app.add_option("--sun-elevation", o.sun_elevation, "Sun elevation at the ground point, degrees")
+      ->capture_default_str()
+      ->check(CLI::Range(-90.0, 90.0));
+  app.add_option("--latitude", o.latitude, "Latitude of the ground point, degrees")
+      ->capture_default_str()
+      ->check(CLI::Range(-89.0, 89.0));
+  app.add_option("--longitude", o.longitude, "Longitude of the ground point, degrees")
+      ->capture_default_str()
+      ->check(CLI::Range(-180.0, 180.0));
+  app.add_option("--exposure", o.exposure, "Exposure of the PNGs, EV100")->capture_default_str();
+  app.add_option("--max-error", o.max_screen_error_px, "Screen-space error bound of the terrain, pixels")
+      ->capture_default_str()
+      ->check(CLI::Range(0.05, 100.0));
+  app.add_option("--out-dir", o.out_dir, "Directory of the PNG frames")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  try {
+    return run(o);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "atmos_example_globe: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,138 @@
+// atmos — the planet's surface: a terrain globe drawn under the atmosphere.
+//
+// The globe is a quadtree of terrain tiles on the equal-angle cube-sphere
+// (Ronchi, Iacono & Paolucci 1996), refined where a tile's geometric error
+// would exceed a screen-space bound (Ulrich 2002), with vertices that morph
+// towards their parent's grid before the parent takes over (Strugar 2009),
+// so that levels change without popping and neighbours of different levels
+// meet without cracks; skirts hide what rounding leaves. Tile positions are
+// kept in double precision and drawn relative to the camera (Cozzi & Ring
+// 2011, ch. 5), with reversed-Z depth (Reed 2015), so that nothing jitters at
+// a metre above the ground nor at a hundred planet radii.
+//
+// The globe uses atmos as an engine does: it lights its surface in its own
+// shaders with the GLSL library of an AtmospherePass (the sun's transmittance
+// and the sky's irradiance at each point's own altitude; the planet's
+// shadow), and writes lit colour and depth that the engine hands to
+// AtmospherePass::render() (SurfaceMode::lit_colour,
+// DepthEncoding::reversed_z), which adds the aerial perspective and the sky.
+//
+// Units: positions in the engine's world frame and units (PlanetFrame of the
+// pass), heights in metres, radiance as FrameInput (cd/m² divided by
+// nits_per_unit, linear sRGB).
+//
+// Threading and GL state: as AtmospherePass (plugin.hpp): construct, draw
+// and destroy with the engine's OpenGL 4.5 core context current. draw()
+// changes the bound program, vertex array, buffers, texture units
+// first_unit..first_unit+4 of the pass's library, the clip control (left at
+// GL_LOWER_LEFT, GL_ZERO_TO_ONE), the depth function (GL_GREATER) and test
+// (enabled), and disables face culling and blending.
+#pragma once
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+
+#include "atmos/atmosphere.hpp"
+#include "atmos/plugin.hpp"
+
+namespace atmos {
+
+// The planet's relief and colours when no elevation data is given: a
+// deterministic procedural planet in the manner of one of the presets.
+enum class SurfaceStyle {
+  earth,  // continents and ocean basins, mountain belts
+  mars,   // cratered southern highlands, smooth northern lowlands
+  venus,  // volcanic plains and a few highlands, few large craters
+  titan,  // low relief, linear dunes
+  flat,   // the datum sphere (bottom_radius), grey
+};
+
+struct GlobeSurface {
+  SurfaceStyle style = SurfaceStyle::earth;
+  std::uint64_t seed = 1;  // the same seed gives the same planet, bit for bit
+};
+
+struct GlobeSettings {
+  // The largest screen-space geometric error of the drawn mesh, in pixels of
+  // the viewport's height (the bound refines tiles until it holds, down to
+  // the finest level).
+  double max_screen_error_px = 1.0;
+  // Tiles generated and uploaded per draw() at most (bounds a frame's CPU
+  // time): until its tile is ready an area is drawn by its nearest resident
+  // ancestor, never left open.
+  int max_tiles_per_frame = 48;
+  // GPU memory of the resident tiles, bytes: least recently drawn tiles are
+  // evicted above it (the tiles of the current frame are kept).
+  std::size_t memory_cap_bytes = std::size_t(256) << 20;
+  // Generate every tile the view needs before drawing (stills, tests,
+  // benchmarks): no ancestor stands in.
+  bool complete_every_frame = false;
+  // The texture units of the atmosphere's GLSL library: first_unit..first_unit+4.
+  int first_unit = 0;
+};
+
+// One view: the same frame as the FrameInput that follows it.
+struct GlobeView {
+  glm::dmat4 view{1.0};        // world -> view, engine units (rigid)
+  glm::dmat4 projection{1.0};  // view -> clip, reversed-Z (near plane at depth 1): reversed_z_projection()
+  int width = 0;               // viewport, pixels
+  int height = 0;
+  glm::dvec3 sun_direction{0.0, 0.0, 1.0};  // world frame, towards the sun
+  double sun_illuminance_lux = 0.0;          // as FrameInput: 0 = the atmosphere's own sun
+  double nits_per_unit = 1.0;                // cd/m² per unit of the colour written
+};
+
+struct GlobeStats {
+  int tiles_drawn = 0;      // including ancestors standing in for pending tiles
+  int tiles_pending = 0;    // selected but not yet resident
+  int tiles_generated = 0;  // this draw
+  int nodes_visited = 0;    // quadtree nodes visited by the selection
+  long long triangles = 0;  // drawn, skirts included
+  double selection_ms = 0.0;   // CPU: the quadtree traversal and culling
+  double generation_ms = 0.0;  // CPU: this draw's new tiles (relief and meshes) and their upload
+  std::size_t resident_bytes = 0;  // GPU memory of the resident tiles after the draw
+};
+
+class Globe {
+ public:
+  // Builds the globe of `atmosphere`'s planet (its datum is the atmosphere's
+  // bottom radius) lit through `pass`, which must outlive the globe. Throws
+  // atmos::Error on invalid settings or without a current OpenGL 4.5 context.
+  Globe(const Atmosphere& atmosphere, const GlobeSurface& surface, const AtmospherePass& pass,
+        const GlobeSettings& settings = {});
+  ~Globe();
+  Globe(const Globe&) = delete;
+  Globe& operator=(const Globe&) = delete;
+
+  // Draws the surface into the bound framebuffer's colour attachment 0 (lit
+  // colour, RGB) and depth attachment (reversed-Z: clear it to 0 first).
+  // Throws atmos::Error, with nothing drawn, on non-finite or singular
+  // matrices, an empty viewport or a zero sun direction.
+  void draw(const GlobeView& view);
+
+  // Height of the drawn surface's relief above the datum, metres, below the
+  // world position `position` (engine units): what a camera must stay above.
+  double height_m(const glm::dvec3& position) const;
+  // The lowest and highest surface of the planet above the datum, metres.
+  double min_height_m() const;
+  double max_height_m() const;
+
+  const GlobeStats& last_stats() const;
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+// An infinite perspective projection with reversed-Z depth (OpenGL with
+// glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE)): the near plane at depth 1,
+// infinity at 0 (depth = near / distance along the view axis). fov_y in
+// radians, near in engine units.
+glm::dmat4 reversed_z_projection(double fov_y_rad, double aspect, double near);
+
+}  // namespace atmos
