@@ -6,6 +6,7 @@
 #   -DGPU_SUITES="regex of the suites that compile shaders" (label gpu)
 #   -DAPP_SUITES="regex of the suites that run the CLI or the example" (label apps)
 #   -DSKIP_APP_SUITES=1 (those suites are not registered: their programs are not built)
+#   -DSLOW_SUITES="regex of the unit suites slow under the sanitizers" (label slow)
 #   -DTIMES=<file of "suite seconds" lines> -DTIMEOUT=seconds -DENVIRONMENT="VAR=value;..."
 execute_process(COMMAND ${EXECUTABLE} --gtest_list_tests OUTPUT_VARIABLE listing RESULT_VARIABLE result
                 ERROR_VARIABLE errors)
@@ -44,6 +45,9 @@ foreach(line IN LISTS lines)
     endif()
     if(APP_SUITES AND suite MATCHES "${APP_SUITES}")
       list(APPEND labels apps)
+    endif()
+    if(SLOW_SUITES AND suite MATCHES "${SLOW_SUITES}")
+      list(APPEND labels slow)
     endif()
     string(REPLACE "/" "_" key ${suite})
     unset(seconds)

@@ -2,17 +2,20 @@
 # Installs what is needed, builds with warnings as errors, and runs a tier of
 # the tests (CTest, one test per GoogleTest suite; tests/CMakeLists.txt):
 #
-#   bash scripts/test.sh          the default tier (at most 15 minutes from a
+#   bash scripts/test.sh          the default tier (about 15 minutes from a
 #                                 fresh clone on 2 cores): the unit tests
 #                                 (invariants, fast paths against the shared
-#                                 definitions, cache, post, plugin, GPU against
-#                                 the CPU twins, the random sweep's fixed-seed
-#                                 subset), built with AddressSanitizer and
-#                                 UndefinedBehaviorSanitizer; with the release
-#                                 build, accuracy against the stored reference
-#                                 results (tests/data/reference/), the installed
-#                                 package, the unit tests that compile shaders and
-#                                 those that run the CLI and the example;
+#                                 definitions, cache, post, plugin, globe, GPU
+#                                 against the CPU twins, the random sweep's
+#                                 fixed-seed subset), built with AddressSanitizer
+#                                 and UndefinedBehaviorSanitizer; with the
+#                                 release build, accuracy against the stored
+#                                 reference results (tests/data/reference/), the
+#                                 installed package, the unit tests that compile
+#                                 shaders, those that run the CLI and the
+#                                 example, and the few that take minutes under
+#                                 the sanitizers (label slow), which this tier
+#                                 leaves out of the sanitizer build;
 #   bash scripts/test.sh --full   the full tier (at most 45 minutes): everything,
 #                                 the unit tests in both builds, the references
 #                                 recomputed and checked bit for bit against the
@@ -52,8 +55,9 @@ else
   # build runs those that compile shaders, filling Mesa's shader cache
   # (tests/CMakeLists.txt, ATMOS_GPU_SUITES), and those that run the CLI and
   # the example, which the sanitizer build of this tier leaves out
-  # (ATMOS_APP_SUITES).
-  main_labels+=(-L '^(accuracy|package|gpu|apps)$')
+  # (ATMOS_APP_SUITES), and the unit suites slow under the sanitizers
+  # (ATMOS_SLOW_UNIT_SUITES), which it leaves out too.
+  main_labels+=(-L '^(accuracy|package|gpu|apps|slow)$')
 fi
 status=0
 ctest --test-dir "$root/build" --output-on-failure --parallel "$jobs" "${main_labels[@]}" \
@@ -74,8 +78,12 @@ cmake -S "$root" -B "$sanitize" -G Ninja -DCMAKE_BUILD_TYPE=Release \
   -DATMOS_SANITIZE=ON -DATMOS_WERROR=ON -DATMOS_KERNEL_CLONES=OFF -DATMOS_TEST_APPS="$test_apps" > /dev/null
 cmake --build "$sanitize" --parallel "$jobs" --target atmos_tests
 echo "test.sh: sanitizer build done at $(( $(date +%s) - start )) s"
+sanitize_labels=(-L '^unit$' -L "^$tier$")
+[ "$tier" = full ] || sanitize_labels+=(-LE '^slow$')
+status=0
 ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1 \
-  ctest --test-dir "$sanitize" --output-on-failure --parallel "$jobs" -L '^unit$' -L "^$tier$" \
-  --output-junit "$report/sanitize.xml"
+  ctest --test-dir "$sanitize" --output-on-failure --parallel "$jobs" "${sanitize_labels[@]}" \
+  --output-junit "$report/sanitize.xml" || status=$?
 python3 "$root/scripts/slowest_tests.py" "$report/sanitize.xml" --title "sanitizer build" || true
+[ "$status" -eq 0 ] || { echo "test.sh: the $tier tier failed in the sanitizer build" >&2; exit "$status"; }
 echo "test.sh: the $tier tier passed in $(( $(date +%s) - start )) s (reports: $report)"
