@@ -54,10 +54,11 @@ for scene in noon-valley sunset-shafts orbit-400km; do
     "$example" --scene "$scene" --no-atmosphere -o "$scene-raw.png")
 done
 # The terrain globe (atmos::Globe, examples/globe) under the plugin: a
-# descent of five frames from 2.5 planet radii to 2 m, Earth and Mars in
-# their procedural styles, 960x540.
+# descent of five frames from 2.5 planet radii to 2 m, Earth and Mars (its
+# southern highlands) in their procedural styles, 960x540.
 globe="${ATMOS_BUILD_DIR:-$root/build}/examples/atmos_example_globe"
 mkdir -p "$out/globe/earth" "$out/globe/mars"
 "$globe" --planet earth --descent 5 --out-dir "$out/globe/earth"
-"$globe" --planet mars --descent 5 --sun-elevation 12 --exposure 12 --out-dir "$out/globe/mars"
+"$globe" --planet mars --latitude -35 --longitude 60 --descent 5 --sun-elevation 12 --exposure 12 \
+  --out-dir "$out/globe/mars"
 echo "gallery: $out"

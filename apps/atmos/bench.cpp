@@ -37,8 +37,10 @@ Command add_bench_command(CLI::App& app) {
       "Time the library and print name<TAB>value<TAB>unit lines: each precomputation step of the tables "
       "(precompute.*, s; always computed, never from the cache), 15-wavelength tables with 6 orders, and the GPU "
       "times (ms, medians after a warm-up) of the renderer's frames (by day, in a total eclipse, at twilight with "
-      "the spectral tables), of the engine plugin (by day, at sunset, in a total eclipse) and of the "
-      "post-processing passes");
+      "the spectral tables), of the engine plugin (by day, at sunset, in a total eclipse), of the "
+      "post-processing passes, and of the terrain globe under the plugin (globe.*: the frame, the terrain, the "
+      "CPU selection, triangles and tiles from 2 m, 10 km, 400 km and 2.5 planet radii; the longest over the "
+      "median frame of a streamed descent)");
   o->planet.add(*cmd);
   o->tables.add(*cmd);
   o->size.add(*cmd, "Size of the timed frames (the frame figures are named after it)");

@@ -123,15 +123,16 @@ int run(const Options& o) {
     const double t = o.descent > 1 ? double(f) / double(o.descent - 1) : 0.0;
     const double altitude = std::exp(std::log(first) + (std::log(last) - std::log(first)) * t);
     // From far away the camera looks at the planet's centre; near the ground
-    // it looks towards the sun's azimuth, 8 degrees down.
+    // it looks east, 8 degrees down, with the sun on its left (north): the
+    // relief lit from the side.
     const double w = std::clamp(std::log10(altitude / 1e3) / std::log10(first / 1e3), 0.0, 1.0);
     const double pitch = glm::radians(-8.0 + (-90.0 + 8.0) * w);
-    const glm::dvec3 forward = glm::normalize(north * std::cos(pitch) + up * std::sin(pitch));
+    const glm::dvec3 forward = glm::normalize(east * std::cos(pitch) + up * std::sin(pitch));
     const glm::dvec3 camera_m = up * (ground + altitude);
     const glm::dvec3 camera = frame.centre + camera_m * frame.units_per_metre;
 
     atmos::GlobeView view;
-    view.view = glm::lookAt(camera, camera + forward, std::abs(pitch) > 1.5 ? north : up);
+    view.view = glm::lookAt(camera, camera + forward, std::abs(pitch) > 1.5 ? east : up);
     view.projection = atmos::reversed_z_projection(glm::radians(60.0), double(o.width) / o.height, 1e-6);
     view.width = o.width;
     view.height = o.height;

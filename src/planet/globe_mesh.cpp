@@ -13,6 +13,8 @@ namespace atmos::planet {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+// Vertex spacing above which the albedo is averaged over the vertex's cell.
+constexpr double kAlbedoFilterSpacing_m = 2000.0;
 
 // The grid extended by a ring of two vertices on every side, for the normals
 // of this level and of the parent's (central differences over 1 and 2 cells).
@@ -49,10 +51,13 @@ MeshBuilder::MeshBuilder(const Relief& relief, double radius_m) : relief_(relief
   measure_level_errors();
   // The mesh's error against the true surface: the relief's deviation from
   // the mesh's triangles, plus the sagitta of a chord of the datum sphere,
-  // spacing^2 / (8 R), by which a flat triangle falls below the sphere.
+  // spacing^2 / (8 R), by which a flat triangle falls below the sphere. At
+  // least 1/16 of the spacing: the albedo and the normals are sampled at the
+  // vertices, so the vertices must not be more than 16 error bounds (16 px at
+  // 1 px) apart on the screen, even where the relief is smooth (the sea).
   const double r = radius_m;
   bounds_.error_m = [this, r](double spacing_m) {
-    return measured_error_m(spacing_m) + spacing_m * spacing_m / (8.0 * r);
+    return std::max(measured_error_m(spacing_m) + spacing_m * spacing_m / (8.0 * r), spacing_m / 16.0);
   };
 
   // The triangles: a run per quadrant (bit 0: the upper half in s, bit 1:
@@ -160,6 +165,21 @@ double MeshBuilder::measured_error_m(double spacing) const {
   return std::exp(std::log(a) + f * (std::log(b) - std::log(a)));
 }
 
+glm::vec3 MeshBuilder::vertex_albedo(const TileKey& key, int i, int j) const {
+  const double scale = 1.0 / double(kTileQuads);
+  // Where the vertices are farther apart than the albedo's finest features,
+  // the albedo is averaged over the vertex's cell (a 3 x 3 box filter,
+  // Heckbert 1989 on prefiltering), not sampled at one point: point samples
+  // of a pattern finer than the grid alias into blocks.
+  if (spacing_m(key.level) < kAlbedoFilterSpacing_m)
+    return surface_albedo(tile_direction(key, double(i) * scale, double(j) * scale));
+  glm::vec3 sum(0.0f);
+  for (int b = -1; b <= 1; ++b)
+    for (int a = -1; a <= 1; ++a)
+      sum += surface_albedo(tile_direction(key, (double(i) + a / 3.0) * scale, (double(j) + b / 3.0) * scale));
+  return sum / 9.0f;
+}
+
 double MeshBuilder::surface_height_m(const glm::dvec3& direction) const {
   return std::max(relief_.height_m(direction), relief_.sea_level_m());
 }
@@ -254,7 +274,7 @@ TileMesh MeshBuilder::build(const TileKey& key) const {
       store(v.morph_offset, parent - position);
       store(v.normal, normal(i, j, 1));
       store(v.parent_normal, parent_normal);
-      const glm::vec3 albedo = surface_albedo(up_at(i, j));
+      const glm::vec3 albedo = vertex_albedo(key, i, j);
       v.albedo[0] = albedo.x;
       v.albedo[1] = albedo.y;
       v.albedo[2] = albedo.z;

@@ -96,6 +96,10 @@ class MeshBuilder {
   double skirt_depth_m(int level) const;
 
  private:
+  // The albedo of grid vertex (i, j) of a tile: the surface's, averaged
+  // over the vertex's cell on coarse levels.
+  glm::vec3 vertex_albedo(const TileKey& key, int i, int j) const;
+
   // The measured error of each level's mesh at its mean spacing, m,
   // non-increasing with the level.
   void measure_level_errors();
