@@ -45,6 +45,16 @@ TEST(SweepCheck, FlagsNanInfiniteAndNegativeLight) {
   EXPECT_EQ(negative.kind, "negative");
 }
 
+// Light at the bottom of the float range (seed 2026, 250 runs per planet,
+// run 1265: a sun 0.003 degrees below the horizon, a pixel of 5.6e-34 with a
+// blue of -1.2e-35) is underflow noise, not negative light; the same colour
+// a billion billion times brighter is.
+TEST(SweepCheck, UnderflowNoiseIsNotNegativeLight) {
+  const glm::dmat3 xyz_only(0.0);
+  EXPECT_TRUE(sweep::check_image(image_of({{5.58458448e-34f, 0.0f, -1.21054681e-35f}}), xyz_only).passed());
+  EXPECT_EQ(sweep::check_image(image_of({{5.58458448e-16f, 0.0f, -1.21054681e-17f}}), xyz_only).kind, "negative");
+}
+
 TEST(SweepCheck, OutOfGamutLightIsCountedNotFailed) {
   // Monochromatic 520 nm light has XYZ ≈ (0.063, 0.710, 0.078) (CIE 1931):
   // in linear sRGB its red and blue are negative, its XYZ is not.

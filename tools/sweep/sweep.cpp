@@ -272,10 +272,12 @@ glm::dmat3 radiance_from_srgb(const Atmosphere& atmosphere) {
 namespace {
 
 // Whether q = T c has a coordinate below -Σ_j |T_ij| (ε |c_j| + δ): each
-// channel is off by at most ε relative or δ absolute (subnormals).
+// channel is off by at most ε relative or δ absolute (subnormals, or the
+// underflow of the values it was computed from).
 bool negative_coordinate(const glm::dmat3& t, const glm::dvec3& c, const CheckPrecision& precision) {
   const glm::dvec3 q = t * c;
-  const glm::dvec3 channel_error = precision.epsilon * glm::abs(c) + glm::dvec3(precision.subnormal_spacing);
+  const double delta = std::max(precision.subnormal_spacing, precision.underflow_floor);
+  const glm::dvec3 channel_error = precision.epsilon * glm::abs(c) + glm::dvec3(delta);
   const glm::dvec3 bound = glm::dmat3(glm::abs(t[0]), glm::abs(t[1]), glm::abs(t[2])) * channel_error;
   return q.x < -bound.x || q.y < -bound.y || q.z < -bound.z;
 }

@@ -140,6 +140,13 @@ struct CheckPrecision {
   // float subnormals to zero (GLSL 4.50, §4.7.1), so even a 32-bit float
   // channel is uncertain by the smallest normal float, 2^-126.
   double subnormal_spacing = 0x1.0p-126;
+  // Absolute uncertainty of a channel from the shaders' intermediate values
+  // near the bottom of the float range (spectral radiances of a sun deep
+  // below the horizon, ~1e-38, flushed or rounded before the sun's
+  // irradiance and the colour matrix scale them by up to ~1e4): 1e-30 in
+  // output units, 24 orders of magnitude below the faintest stars' light
+  // (~1e-6 cd/m2).
+  double underflow_floor = 1e-30;
   // The image's renderer clamps linear sRGB at zero (the plugin clamps the
   // atmosphere's light converted to sRGB, composite.glsl): a zero channel
   // may stand for a negative one of out-of-gamut light, so the radiance
