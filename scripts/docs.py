@@ -126,7 +126,7 @@ def format_value(value, spec=None):
 
 
 def with_unit(text, unit):
-    if not unit:
+    if not unit or unit in ("count", "ratio"):  # plain numbers
         return text
     if unit == "%":
         return f"{text} %"

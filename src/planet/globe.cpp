@@ -190,8 +190,8 @@ Globe::Globe(const Atmosphere& atmosphere, const GlobeSurface& surface, const At
                 " holds less than the six root tiles");
 
   const std::string version = "#version 450 core\n";
-  p.program = link(version + shader_text("src/planet/globe.vert.glsl"),
-                   version + pass.glsl_library(settings.first_unit) + "\n" + shader_text("src/planet/globe.frag.glsl"));
+  p.program = link(version + pass.glsl_library(settings.first_unit) + "\n" + shader_text("src/planet/globe.vert.glsl"),
+                   version + shader_text("src/planet/globe.frag.glsl"));
   p.u_origin = glGetUniformLocation(p.program, "origin_from_camera");
   p.u_morph = glGetUniformLocation(p.program, "morph_range");
   p.u_clip = glGetUniformLocation(p.program, "clip_from_offset");

@@ -12,6 +12,18 @@
 // fully morphed is its parent's surface, so a level hands over to the next
 // without a visible change, and an edge shared with a coarser neighbour
 // (always fully morphed there, tile_selection.hpp) matches it.
+//
+// Lighting, per vertex (Gouraud 1971), appended after "#version 450 core"
+// and AtmospherePass::glsl_library(): a Lambertian surface lit by the sun's
+// light transmitted to the vertex's own altitude (zero in the planet's
+// shadow) and by the sky's irradiance there, both from the atmosphere's
+// tables (Bruneton & Neyret 2008, §4; Collienne 2013, §4.3.3). The mesh's
+// vertices are at most 16 error bounds apart on the screen
+// (globe_mesh.cpp), and the irradiance varies slowly along the ground, so
+// the fragment shader interpolates the vertices' radiance: a software
+// rasteriser shades 5-10 times fewer vertices than pixels. The colour
+// written is radiance / nits_per_unit; the engine plugin then adds the
+// aerial perspective in front of it.
 
 layout(location = 0) in vec3 local_position;  // m, from the tile's origin
 layout(location = 1) in vec3 morph_offset;    // m, to the parent's surface
@@ -22,17 +34,20 @@ layout(location = 4) in vec3 albedo;          // linear reflectance
 uniform vec3 origin_from_camera;  // m, the tile's origin minus the camera (planet axes)
 uniform vec2 morph_range;         // m: where the morph starts and ends
 uniform mat4 clip_from_offset;    // projection x view rotation x (engine units per metre)
+uniform vec3 camera_planet;       // m, planet-centred
+uniform vec3 sun_direction;       // unit, planet axes
+uniform float light_scale;        // (sun illuminance / the atmosphere's own) / nits_per_unit
 
-out vec3 v_offset;  // m, from the camera to the vertex (planet axes)
-out vec3 v_normal;
-out vec3 v_albedo;
+out vec3 v_radiance;  // linear sRGB, cd/m2 / nits_per_unit
 
 void main() {
   vec3 offset = origin_from_camera + local_position;
   float k = clamp((length(offset) - morph_range.x) / max(morph_range.y - morph_range.x, 1e-30), 0.0, 1.0);
   offset += k * morph_offset;
-  v_offset = offset;
-  v_normal = mix(normal, parent_normal, k);
-  v_albedo = albedo;
+  vec3 point = camera_planet + offset;
+  vec3 n = normalize(mix(normal, parent_normal, k));
+  vec3 sky_irradiance;
+  vec3 sun_irradiance = atmos_sun_and_sky_irradiance(point, n, sun_direction, sky_irradiance);
+  v_radiance = albedo * (1.0 / 3.14159265358979) * (sun_irradiance + sky_irradiance) * light_scale;
   gl_Position = clip_from_offset * vec4(offset, 1.0);
 }
