@@ -157,6 +157,55 @@ TEST(PlanetFile, BadInputsAreClearErrors) {
   expect_error("{\"format\": NaN}", "malformed JSON");
 }
 
+// The optional "surface" object (docs/planet-format.md): every preset has
+// its relief style; a file without one is the flat datum sphere; a sea level
+// is a length; mistakes are one-line errors naming the file and the key.
+TEST(PlanetFile, SurfaceFieldsLoadAndBadOnesAreClearErrors) {
+  EXPECT_EQ(atmos::load_surface("earth").style, atmos::SurfaceStyle::earth);
+  EXPECT_EQ(atmos::load_surface("mars").style, atmos::SurfaceStyle::mars);
+  EXPECT_EQ(atmos::load_surface("mars-thesis").style, atmos::SurfaceStyle::mars);
+  EXPECT_EQ(atmos::load_surface("venus").style, atmos::SurfaceStyle::venus);
+  EXPECT_EQ(atmos::load_surface("titan").style, atmos::SurfaceStyle::titan);
+  const atmos::PlanetSurface none = atmos::parse_surface(modified([](nlohmann::json& j) { j.erase("surface"); }), "x");
+  EXPECT_EQ(none.style, atmos::SurfaceStyle::flat);
+  EXPECT_FALSE(none.sea_level_m.has_value());
+  const std::string custom = modified([](nlohmann::json& j) {
+    j["surface"] = {{"relief", {{"style", "mars"}, {"seed", 42}}}, {"sea_level", {{"value", -2.5}, {"unit", "km"}}}};
+  });
+  const atmos::PlanetSurface s = atmos::parse_surface(custom, "x");
+  EXPECT_EQ(s.style, atmos::SurfaceStyle::mars);
+  EXPECT_EQ(s.seed, 42u);
+  ASSERT_TRUE(s.sea_level_m.has_value());
+  EXPECT_DOUBLE_EQ(*s.sea_level_m, -2500.0);
+  EXPECT_NO_THROW(atmos::parse_atmosphere(custom, "x"));  // the atmosphere accepts the key
+
+  const auto expect_surface_error = [](const std::string& text, const std::string& needle) {
+    try {
+      atmos::parse_surface(text, "test.json");
+      FAIL() << "no error for: " << needle;
+    } catch (const atmos::Error& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find(needle), std::string::npos) << message;
+      EXPECT_EQ(message.rfind("test.json", 0), 0u) << message;
+      EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    }
+  };
+  expect_surface_error(modified([](nlohmann::json& j) { j["surface"]["relief"]["style"] = "jupiter"; }),
+                       "surface.relief.style");
+  expect_surface_error(modified([](nlohmann::json& j) { j["surface"]["relief"]["seed"] = -3; }), "seed");
+  expect_surface_error(modified([](nlohmann::json& j) { j["surface"]["relief"]["seed"] = 1.5; }), "seed");
+  expect_surface_error(modified([](nlohmann::json& j) { j["surface"]["relief"].erase("style"); }), "style");
+  expect_surface_error(modified([](nlohmann::json& j) { j["surface"]["lakes"] = true; }), "unknown key \"lakes\"");
+  expect_surface_error(modified([](nlohmann::json& j) { j["surface"]["sea_level"] = {{"value", 1}, {"unit", "s"}}; }),
+                       "sea_level");
+  expect_surface_error(modified([](nlohmann::json& j) { j["surface"] = 3; }), "surface must be an object");
+  EXPECT_THROW(atmos::surface_style_from_name("gas giant"), atmos::Error);
+  // The atmosphere's reader checks the surface too: a bad file fails wherever it is read.
+  EXPECT_THROW(atmos::parse_atmosphere(modified([](nlohmann::json& j) { j["surface"]["relief"]["seed"] = "x"; }),
+                                       "x"),
+               atmos::Error);
+}
+
 // Inputs a damaged or hand-edited file can hold beyond the ordinary mistakes
 // (fuzz/planet_file_fuzzer.cpp writes such inputs): each must be an
 // atmos::Error that names the file, like every other bad input.

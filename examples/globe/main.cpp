@@ -4,7 +4,7 @@
 // reversed-Z depth textures; atmos::AtmospherePass adds the aerial
 // perspective and the sky. Only atmos's public headers are used.
 //
-//   atmos_example_globe --planet mars --style mars --descent 5 --out-dir frames
+//   atmos_example_globe --planet mars --descent 5 --out-dir frames
 //
 // renders a descent of 5 frames from 2.5 planet radii to 2 m above the
 // ground (logarithmic in altitude), each a PNG, and prints per frame the
@@ -35,8 +35,9 @@ namespace {
 
 struct Options {
   std::string planet = "earth";
-  std::string style;  // default: the planet's own
+  std::string style;  // default: the planet file's surface style
   std::uint64_t seed = 1;
+  bool seed_given = false;
   int width = 960, height = 540;
   int descent = 5;
   double from_radii = 2.5;   // first altitude, planet radii
@@ -47,15 +48,6 @@ struct Options {
   double max_screen_error_px = 1.0;
   std::string out_dir = ".";
 };
-
-atmos::SurfaceStyle style_of(const std::string& name) {
-  if (name == "earth") return atmos::SurfaceStyle::earth;
-  if (name == "mars") return atmos::SurfaceStyle::mars;
-  if (name == "venus") return atmos::SurfaceStyle::venus;
-  if (name == "titan") return atmos::SurfaceStyle::titan;
-  if (name == "flat") return atmos::SurfaceStyle::flat;
-  throw atmos::Error("unknown surface style \"" + name + "\" (earth, mars, venus, titan, flat)");
-}
 
 // The engine's texture as an atmos::Image: RGB in cd/m², rows top-down.
 atmos::Image read_image(GLuint texture, int width, int height, double nits_per_unit) {
@@ -85,13 +77,11 @@ int run(const Options& o) {
   atmos::GlobeSettings settings;
   settings.complete_every_frame = true;
   settings.max_screen_error_px = o.max_screen_error_px;
-  atmos::GlobeSurface surface;
-  surface.style = style_of(o.style.empty() ? (o.planet == "earth" || o.planet == "mars" || o.planet == "venus" ||
-                                                      o.planet == "titan"
-                                                  ? o.planet
-                                                  : std::string("flat"))
-                                           : o.style);
-  surface.seed = o.seed;
+  // The planet file's surface (its "surface" object), the style and seed
+  // of the command line replacing its own.
+  atmos::PlanetSurface surface = atmos::load_surface(o.planet);
+  if (!o.style.empty()) surface.style = atmos::surface_style_from_name(o.style);
+  if (o.seed_given) surface.seed = o.seed;
   atmos::Globe globe(planet, surface, pass, settings);
 
   // The engine's render targets: lit colour (RGBA32F) and reversed-Z depth.
@@ -188,8 +178,9 @@ int main(int argc, char** argv) {
   Options o;
   CLI::App app{"atmos_example_globe: a descent from orbit to the ground of a whole planet under its atmosphere"};
   app.add_option("--planet", o.planet, "Planet preset or planet file")->capture_default_str();
-  app.add_option("--style", o.style, "Relief style: earth, mars, venus, titan or flat (default: the planet's)");
-  app.add_option("--seed", o.seed, "Seed of the procedural relief")->capture_default_str();
+  app.add_option("--style", o.style,
+                 "Relief style: earth, mars, venus, titan or flat (default: the planet file's \"surface\")");
+  auto* seed = app.add_option("--seed", o.seed, "Seed of the procedural relief (default: the planet file's)");
   app.add_option("--width", o.width, "Image width, pixels")->capture_default_str()->check(CLI::Range(16, 8192));
   app.add_option("--height", o.height, "Image height, pixels")->capture_default_str()->check(CLI::Range(16, 8192));
   app.add_option("--descent", o.descent, "Frames of the descent")->capture_default_str()->check(CLI::Range(1, 1000));
@@ -212,6 +203,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.05, 100.0));
   app.add_option("--out-dir", o.out_dir, "Directory of the PNG frames")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  o.seed_given = seed->count() > 0;
   try {
     return run(o);
   } catch (const std::exception& e) {

@@ -37,24 +37,10 @@
 #include <memory>
 
 #include "atmos/atmosphere.hpp"
+#include "atmos/planet_file.hpp"
 #include "atmos/plugin.hpp"
 
 namespace atmos {
-
-// The planet's relief and colours when no elevation data is given: a
-// deterministic procedural planet in the manner of one of the presets.
-enum class SurfaceStyle {
-  earth,  // continents and ocean basins, mountain belts
-  mars,   // cratered southern highlands, smooth northern lowlands
-  venus,  // volcanic plains and a few highlands, few large craters
-  titan,  // low relief, linear dunes
-  flat,   // the datum sphere (bottom_radius), grey
-};
-
-struct GlobeSurface {
-  SurfaceStyle style = SurfaceStyle::earth;
-  std::uint64_t seed = 1;  // the same seed gives the same planet, bit for bit
-};
 
 struct GlobeSettings {
   // The largest screen-space geometric error of the drawn mesh, in pixels of
@@ -100,9 +86,12 @@ struct GlobeStats {
 class Globe {
  public:
   // Builds the globe of `atmosphere`'s planet (its datum is the atmosphere's
-  // bottom radius) lit through `pass`, which must outlive the globe. Throws
-  // atmos::Error on invalid settings or without a current OpenGL 4.5 context.
-  Globe(const Atmosphere& atmosphere, const GlobeSurface& surface, const AtmospherePass& pass,
+  // bottom radius) with the relief of `surface` (load_surface: a planet
+  // file's "surface"), lit through `pass`, which must outlive the globe.
+  // Throws atmos::Error on invalid settings, a sea level outside the
+  // atmosphere (below the planet's centre or above its top), or without a
+  // current OpenGL 4.5 context.
+  Globe(const Atmosphere& atmosphere, const PlanetSurface& surface, const AtmospherePass& pass,
         const GlobeSettings& settings = {});
   ~Globe();
   Globe(const Globe&) = delete;

@@ -2,6 +2,8 @@
 // built-in presets.
 #pragma once
 
+#include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,4 +20,33 @@ Atmosphere load_atmosphere(const std::string& name_or_path);
 
 // Parses planet JSON text; `origin` names the source in error messages.
 Atmosphere parse_atmosphere(const std::string& json_text, const std::string& origin);
+
+// The planet's surface when no elevation data is given: a deterministic
+// procedural relief in the manner of one of the presets (atmos::Globe,
+// atmos/globe.hpp).
+enum class SurfaceStyle {
+  earth,  // continents and ocean basins, mountain belts
+  mars,   // cratered southern highlands, smooth northern lowlands
+  venus,  // volcanic plains and a few highlands, few large craters
+  titan,  // low relief, linear dunes
+  flat,   // the datum sphere (bottom_radius)
+};
+
+// The optional "surface" object of a planet file (docs/planet-format.md).
+struct PlanetSurface {
+  SurfaceStyle style = SurfaceStyle::flat;
+  std::uint64_t seed = 1;  // the same seed gives the same relief, bit for bit
+  // Height of the sea above the datum (bottom_radius), m; none: the
+  // style's (Earth: 0; the other styles have no sea).
+  std::optional<double> sea_level_m;
+};
+
+// The surface of a preset or planet file: its "surface" object, or the flat
+// style when it has none. Throws atmos::Error as load_atmosphere does, and
+// on an unknown style, a seed that is not a non-negative integer or a sea
+// level that is not a finite length.
+PlanetSurface load_surface(const std::string& name_or_path);
+PlanetSurface parse_surface(const std::string& json_text, const std::string& origin);
+// "earth", "mars", "venus", "titan", "flat" (atmos::Error for another name).
+SurfaceStyle surface_style_from_name(const std::string& name);
 }  // namespace atmos

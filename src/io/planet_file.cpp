@@ -319,6 +319,32 @@ std::vector<std::string> preset_names() {
   return names;
 }
 
+// The "surface" object of a parsed planet file (the flat style without one).
+PlanetSurface surface_of(const json& doc, const std::string& origin) {
+  PlanetSurface surface;
+  if (!doc.is_object() || !doc.contains("surface")) return surface;
+  const json& s = doc.at("surface");
+  check_keys(s, {"relief", "sea_level"}, origin, "surface");
+  if (s.contains("relief")) {
+    const json& relief = s.at("relief");
+    check_keys(relief, {"style", "seed"}, origin, "surface.relief");
+    const json& style = require(relief, "style", origin, "surface.relief");
+    if (!style.is_string()) fail(origin, "surface.relief.style must be a string");
+    try {
+      surface.style = surface_style_from_name(style.get<std::string>());
+    } catch (const Error& e) {
+      fail(origin, std::string("surface.relief.style: ") + e.what());
+    }
+    if (relief.contains("seed")) {
+      const json& seed = relief.at("seed");
+      if (!seed.is_number_unsigned()) fail(origin, "surface.relief.seed must be a non-negative integer");
+      surface.seed = seed.get<std::uint64_t>();
+    }
+  }
+  if (s.contains("sea_level")) surface.sea_level_m = scalar(s, "sea_level", "length", origin, "surface");
+  return surface;
+}
+
 Atmosphere parse_atmosphere(const std::string& json_text, const std::string& origin) {
   json doc;
   try {
@@ -330,7 +356,7 @@ Atmosphere parse_atmosphere(const std::string& json_text, const std::string& ori
     fail(origin, std::string("malformed JSON: ") + e.what());
   }
   check_keys(doc, {"format", "name", "description", "sources", "wavelengths", "bottom_radius", "top_radius",
-                   "sun_angular_radius", "solar_irradiance", "ground_albedo", "constituents"},
+                   "sun_angular_radius", "solar_irradiance", "ground_albedo", "constituents", "surface"},
              origin, "the planet file");
   const json& format = require(doc, "format", origin, "the planet file");
   if (!format.is_string() || format.get<std::string>() != "atmos-planet-1")
@@ -369,11 +395,15 @@ Atmosphere parse_atmosphere(const std::string& json_text, const std::string& ori
     a.constituents.push_back(std::move(k));
   }
   a.validate();
+  surface_of(doc, origin);  // a planet file's surface is checked wherever the file is read
   return a;
 }
 
-Atmosphere load_atmosphere(const std::string& name_or_path) {
-  if (const char* text = data::embedded_planet(name_or_path)) return parse_atmosphere(text, name_or_path);
+namespace {
+
+// The text of a preset or of a planet file.
+std::string planet_text(const std::string& name_or_path) {
+  if (const char* text = data::embedded_planet(name_or_path)) return text;
   std::ifstream in(name_or_path, std::ios::binary);
   if (!in) {
     std::string names;
@@ -382,7 +412,36 @@ Atmosphere load_atmosphere(const std::string& name_or_path) {
   }
   std::stringstream ss;
   ss << in.rdbuf();
-  return parse_atmosphere(ss.str(), name_or_path);
+  return ss.str();
+}
+
+}  // namespace
+
+Atmosphere load_atmosphere(const std::string& name_or_path) {
+  return parse_atmosphere(planet_text(name_or_path), name_or_path);
+}
+
+SurfaceStyle surface_style_from_name(const std::string& name) {
+  if (name == "earth") return SurfaceStyle::earth;
+  if (name == "mars") return SurfaceStyle::mars;
+  if (name == "venus") return SurfaceStyle::venus;
+  if (name == "titan") return SurfaceStyle::titan;
+  if (name == "flat") return SurfaceStyle::flat;
+  throw Error("surface style \"" + name + "\" is not one of earth, mars, venus, titan, flat");
+}
+
+PlanetSurface parse_surface(const std::string& json_text, const std::string& origin) {
+  json doc;
+  try {
+    doc = json::parse(json_text);
+  } catch (const json::exception& e) {
+    fail(origin, std::string("malformed JSON: ") + e.what());
+  }
+  return surface_of(doc, origin);
+}
+
+PlanetSurface load_surface(const std::string& name_or_path) {
+  return parse_surface(planet_text(name_or_path), name_or_path);
 }
 
 }  // namespace atmos

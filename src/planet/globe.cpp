@@ -116,7 +116,7 @@ struct Resident {
 
 struct Globe::Impl {
   Atmosphere atmosphere;
-  GlobeSurface surface;
+  PlanetSurface surface;
   const AtmospherePass* pass = nullptr;
   GlobeSettings settings;
   planet::Relief relief;
@@ -130,12 +130,12 @@ struct Globe::Impl {
   long long frame = 0;
   GlobeStats stats;
 
-  Impl(const Atmosphere& a, const GlobeSurface& s, const AtmospherePass& p, const GlobeSettings& g)
+  Impl(const Atmosphere& a, const PlanetSurface& s, const AtmospherePass& p, const GlobeSettings& g)
       : atmosphere(a),
         surface(s),
         pass(&p),
         settings(g),
-        relief(planet::ReliefSettings{relief_style(s.style), s.seed, a.bottom_radius_m}),
+        relief(planet::ReliefSettings{relief_style(s.style), s.seed, a.bottom_radius_m, s.sea_level_m}),
         builder(relief, a.bottom_radius_m) {}
 
   ~Impl() {
@@ -176,9 +176,15 @@ struct Globe::Impl {
   }
 };
 
-Globe::Globe(const Atmosphere& atmosphere, const GlobeSurface& surface, const AtmospherePass& pass,
+Globe::Globe(const Atmosphere& atmosphere, const PlanetSurface& surface, const AtmospherePass& pass,
              const GlobeSettings& settings) {
   if (epoxy_gl_version() < 45) throw Error("globe: needs a current OpenGL 4.5 core context");
+  if (surface.sea_level_m &&
+      !(std::isfinite(*surface.sea_level_m) && *surface.sea_level_m > -atmosphere.bottom_radius_m &&
+        *surface.sea_level_m < atmosphere.top_radius_m - atmosphere.bottom_radius_m))
+    throw Error("globe: the sea level " + std::to_string(*surface.sea_level_m) +
+                " m lies outside the atmosphere (below the planet's centre or above its top, " +
+                std::to_string(atmosphere.top_radius_m - atmosphere.bottom_radius_m) + " m)");
   if (!(settings.max_screen_error_px > 0.0) || !std::isfinite(settings.max_screen_error_px))
     throw Error("globe settings: max_screen_error_px must be a positive number of pixels");
   if (settings.max_tiles_per_frame < 1) throw Error("globe settings: max_tiles_per_frame must be at least 1");

@@ -672,6 +672,10 @@ void Relief::finish_bounds() {
     max_height_m_ += b.high_m;
   }
   if (settings_.style != ReliefStyle::earth) sea_level_m_ = min_height_m_ - 1.0;
+  if (settings_.sea_level_m) {
+    if (!std::isfinite(*settings_.sea_level_m)) throw Error("relief: the sea level must be a finite height");
+    sea_level_m_ = *settings_.sea_level_m;
+  }
 }
 
 double Relief::error_below_spacing_m(double spacing_m) const {

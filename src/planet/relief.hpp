@@ -14,6 +14,7 @@
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,9 @@ struct ReliefSettings {
   ReliefStyle style = ReliefStyle::earth;
   std::uint64_t seed = 1;
   double radius_m = 6360e3;  // the datum sphere (the atmosphere's bottom_radius)
+  // The sea's height above the datum, m; none: the style's (Earth 0, the
+  // others below their lowest ground: no sea).
+  std::optional<double> sea_level_m;
 };
 
 class Relief {
