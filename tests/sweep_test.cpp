@@ -201,7 +201,33 @@ void expect_clean_subset(std::uint64_t seed, int runs, int runs_per_planet) {
   EXPECT_GT(result.renderer_runs, runs / 3);
   EXPECT_GT(result.plugin_runs, runs / 3);
   EXPECT_EQ(result.planets, (runs + runs_per_planet - 1) / runs_per_planet);
+  EXPECT_EQ(result.refused_runs, 0);
   EXPECT_TRUE(result.failures.empty()) << sweep::summary(result, options) << failures.str();
+}
+
+// A planet the library refuses with a clear error (seed 2026, 250 runs per
+// planet, planet 2: the Venus preset at 9 wavelengths with coarse random
+// tables, whose third scattering order would add more light than the
+// second) is a refusal, not a failure: its runs are counted apart.
+TEST(Sweep, ThickPlanetOnCoarseTablesIsRefusedWithAClearErrorNotAFailure) {
+  std::unique_ptr<atmos::GlContext> context;
+  try {
+    context = atmos::GlContext::create_headless();
+  } catch (const atmos::Error& e) {
+    FAIL() << e.what();
+  }
+  sweep::SweepOptions options;
+  options.seed = 2026;
+  options.runs = 10000;
+  options.runs_per_planet = 250;
+  options.replay = 500;
+  const sweep::SweepResult result = sweep::run_sweep(options);
+  EXPECT_EQ(result.runs, 1);
+  EXPECT_EQ(result.refused_runs, 1);
+  ASSERT_EQ(result.refusals.size(), 1u);
+  EXPECT_NE(result.refusals[0].find("venus"), std::string::npos) << result.refusals[0];
+  EXPECT_NE(result.refusals[0].find("cannot represent"), std::string::npos) << result.refusals[0];
+  EXPECT_TRUE(result.failures.empty());
 }
 
 // The default tier's subset: 60 runs on two planets (the Mars preset at 2 %

@@ -241,6 +241,7 @@ struct PlanetState {
   std::unique_ptr<AtmospherePass> pass;
   glm::dmat3 to_radiance{0.0};
   std::string error_kind;  // the planet could not be prepared: every run of it fails with this
+  bool refused = false;    // the precomputation refused the planet with an atmos::Error
   std::string error;
 };
 
@@ -365,7 +366,12 @@ SweepResult run_sweep(const SweepOptions& options) {
         catching([&] { state->tables = precompute_tables(state->planet.atmosphere, state->planet.options); }, kind,
                  message);
         result.precompute_seconds += seconds_since(t0);
-        if (!kind.empty()) {
+        if (kind == "error") {
+          state->refused = true;
+          state->error_kind = "refused";
+          state->error = message;
+          result.refusals.push_back("planet " + std::to_string(planet) + " (" + state->planet.recipe + "): " + message);
+        } else if (!kind.empty()) {
           state->error_kind = "precompute " + kind;
           state->error = message;
         } else {
@@ -436,11 +442,12 @@ SweepResult run_sweep(const SweepOptions& options) {
         failure.kind = outcome.kind;
         failure.message = outcome.message;
       }
-    } else {
+    } else if (!state->refused) {
       failure.kind = state->error_kind;
       failure.message = state->error;
     }
     failure.target = run.target;
+    if (state->refused) ++result.refused_runs;
     ++result.runs;
     (run.target == Target::renderer ? result.renderer_runs : result.plugin_runs) += 1;
     if (!failure.kind.empty()) {
@@ -464,6 +471,11 @@ std::string summary(const SweepResult& r, const SweepOptions& options) {
     << r.plugin_runs << " plugin) on " << r.planets << " planets, " << r.pixels << " pixels\n";
   o << "  failures: " << r.failures.size();
   for (const auto& [kind, count] : r.failures_by_kind) o << "; " << kind << " " << count;
+  if (r.refused_runs > 0) {
+    o << "\n  refused by the library with a clear error (not failures): " << r.refused_runs << " runs on "
+      << r.refusals.size() << " planets";
+    for (const std::string& line : r.refusals) o << "\n    " << line;
+  }
   o << "\n  out-of-gamut pixels (negative linear sRGB of non-negative light, not failures): "
     << r.out_of_gamut_pixels << "\n";
   o << "  half-float overflow pixels (infinite in a 16-bit output, finite above its range in RGBA32F): "

@@ -204,6 +204,13 @@ struct SweepResult {
   int planets = 0;
   std::map<std::string, int> failures_by_kind;
   std::vector<Failure> failures;
+  // Planets whose tables the library refuses with an atmos::Error (e.g. a
+  // thick atmosphere its coarse random tables cannot represent): a clear
+  // error is the library's answer to an impossible combination, so their
+  // runs are counted here, not as failures. One line per planet: its index,
+  // recipe and the error.
+  int refused_runs = 0;
+  std::vector<std::string> refusals;
   long long pixels = 0;
   long long out_of_gamut_pixels = 0;
   long long half_overflow_pixels = 0;  // infinite in an RGBA16F output whose RGBA32F render exceeds 65504
@@ -215,7 +222,8 @@ struct SweepResult {
 
 // Runs the sweep with an OpenGL 4.5 context current on the calling thread
 // (GlContext::create_headless()). Never throws for the library's errors:
-// every atmos::Error or other exception of a run is a Failure.
+// every atmos::Error or other exception of a run is a Failure, except the
+// precomputation's atmos::Error for a planet (SweepResult::refusals).
 SweepResult run_sweep(const SweepOptions& options);
 
 // One line per failure kind, the counts and the times.
