@@ -180,16 +180,22 @@ TEST(SweepCases, GbufferLightOutsideTheSrgbGamutGivesNoNegativeSurface) {
   EXPECT_GT(surface_pixels, 0);
 }
 
+// The sweep's OpenGL context; a failure (never a skip) without one.
+std::unique_ptr<atmos::GlContext> headless_context() {
+  try {
+    return atmos::GlContext::create_headless();
+  } catch (const atmos::Error& e) {
+    ADD_FAILURE() << e.what();
+    return nullptr;
+  }
+}
+
 // A fixed-seed subset: `runs` runs of `seed`, half through atmos::Renderer
 // and half through atmos::AtmospherePass, with no NaN, infinite or negative
 // pixel and no error.
 void expect_clean_subset(std::uint64_t seed, int runs, int runs_per_planet) {
-  std::unique_ptr<atmos::GlContext> context;
-  try {
-    context = atmos::GlContext::create_headless();
-  } catch (const atmos::Error& e) {
-    FAIL() << e.what();
-  }
+  const std::unique_ptr<atmos::GlContext> context = headless_context();
+  ASSERT_TRUE(context != nullptr);
   sweep::SweepOptions options;
   options.seed = seed;
   options.runs = runs;
@@ -210,12 +216,8 @@ void expect_clean_subset(std::uint64_t seed, int runs, int runs_per_planet) {
 // tables, whose third scattering order would add more light than the
 // second) is a refusal, not a failure: its runs are counted apart.
 TEST(Sweep, ThickPlanetOnCoarseTablesIsRefusedWithAClearErrorNotAFailure) {
-  std::unique_ptr<atmos::GlContext> context;
-  try {
-    context = atmos::GlContext::create_headless();
-  } catch (const atmos::Error& e) {
-    FAIL() << e.what();
-  }
+  const std::unique_ptr<atmos::GlContext> context = headless_context();
+  ASSERT_TRUE(context != nullptr);
   sweep::SweepOptions options;
   options.seed = 2026;
   options.runs = 10000;
