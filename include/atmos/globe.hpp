@@ -51,11 +51,13 @@ struct GlobeSettings {
   // time): until its tile is ready an area is drawn by its nearest resident
   // ancestor, never left open.
   int max_tiles_per_frame = 48;
-  // GPU memory of the resident tiles, bytes: least recently drawn tiles are
-  // evicted above it (the tiles of the current frame are kept).
+  // GPU memory of the resident tiles, bytes, never exceeded: the least
+  // recently drawn tiles are evicted, and new tiles that would not fit
+  // beside the current frame's stay pending, drawn by their ancestors (a
+  // coarser view, not more memory).
   std::size_t memory_cap_bytes = std::size_t(256) << 20;
   // Generate every tile the view needs before drawing (stills, tests,
-  // benchmarks): no ancestor stands in.
+  // benchmarks), within the memory cap: no ancestor stands in.
   bool complete_every_frame = false;
   // The texture units of the atmosphere's GLSL library: first_unit..first_unit+4.
   int first_unit = 0;
