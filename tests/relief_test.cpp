@@ -334,8 +334,8 @@ TEST(Relief, AlbedoFollowsThePresetsGroundColours) {
 TEST(Relief, InvalidSettingsAreReported) {
   for (double radius : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()})
     EXPECT_THROW(make(ReliefStyle::earth, 1, radius), atmos::Error);
-  EXPECT_THROW(atmos::planet::relief_style_from_name("pluto"), atmos::Error);
-  EXPECT_EQ(atmos::planet::relief_style_from_name("mars"), ReliefStyle::mars);
+  EXPECT_THROW(atmos::surface_style_from_name("pluto"), atmos::Error);
+  EXPECT_EQ(atmos::surface_style_from_name("mars"), ReliefStyle::mars);
   EXPECT_THROW(make(ReliefStyle::earth).error_below_spacing_m(-1.0), atmos::Error);
   EXPECT_THROW(make(ReliefStyle::earth).error_below_spacing_m(std::numeric_limits<double>::quiet_NaN()), atmos::Error);
   // A small body keeps only the crater classes whose lattice fits.

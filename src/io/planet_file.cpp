@@ -319,6 +319,17 @@ std::vector<std::string> preset_names() {
   return names;
 }
 
+// The JSON of a planet file. A syntax error (json::parse_error) or a number
+// beyond the range of a double (json::out_of_range) is reported on one line
+// (nlohmann's message names the byte position).
+json parse_json(const std::string& json_text, const std::string& origin) {
+  try {
+    return json::parse(json_text);
+  } catch (const json::exception& e) {
+    fail(origin, std::string("malformed JSON: ") + e.what());
+  }
+}
+
 // The "surface" object of a parsed planet file (the flat style without one).
 PlanetSurface surface_of(const json& doc, const std::string& origin) {
   PlanetSurface surface;
@@ -346,15 +357,7 @@ PlanetSurface surface_of(const json& doc, const std::string& origin) {
 }
 
 Atmosphere parse_atmosphere(const std::string& json_text, const std::string& origin) {
-  json doc;
-  try {
-    doc = json::parse(json_text);
-  } catch (const json::exception& e) {
-    // A syntax error (json::parse_error) or a number beyond the range of a
-    // double (json::out_of_range). nlohmann's message names the byte
-    // position; keep it on one line.
-    fail(origin, std::string("malformed JSON: ") + e.what());
-  }
+  const json doc = parse_json(json_text, origin);
   check_keys(doc, {"format", "name", "description", "sources", "wavelengths", "bottom_radius", "top_radius",
                    "sun_angular_radius", "solar_irradiance", "ground_albedo", "constituents", "surface"},
              origin, "the planet file");
@@ -431,12 +434,7 @@ SurfaceStyle surface_style_from_name(const std::string& name) {
 }
 
 PlanetSurface parse_surface(const std::string& json_text, const std::string& origin) {
-  json doc;
-  try {
-    doc = json::parse(json_text);
-  } catch (const json::exception& e) {
-    fail(origin, std::string("malformed JSON: ") + e.what());
-  }
+  const json doc = parse_json(json_text, origin);
   return surface_of(doc, origin);
 }
 

@@ -33,17 +33,6 @@ using Clock = std::chrono::steady_clock;
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
-planet::ReliefStyle relief_style(SurfaceStyle s) {
-  switch (s) {
-    case SurfaceStyle::earth: return planet::ReliefStyle::earth;
-    case SurfaceStyle::mars: return planet::ReliefStyle::mars;
-    case SurfaceStyle::venus: return planet::ReliefStyle::venus;
-    case SurfaceStyle::titan: return planet::ReliefStyle::titan;
-    case SurfaceStyle::flat: return planet::ReliefStyle::flat;
-  }
-  throw Error("globe: unknown surface style " + std::to_string(int(s)));
-}
-
 const char* shader_text(const char* path) {
   const char* text = data::embedded_file(path);
   if (text == nullptr) throw Error(std::string("globe: shader source ") + path + " is not embedded");
@@ -115,8 +104,6 @@ struct Resident {
 }  // namespace
 
 struct Globe::Impl {
-  Atmosphere atmosphere;
-  PlanetSurface surface;
   const AtmospherePass* pass = nullptr;
   GlobeSettings settings;
   planet::Relief relief;
@@ -131,11 +118,9 @@ struct Globe::Impl {
   GlobeStats stats;
 
   Impl(const Atmosphere& a, const PlanetSurface& s, const AtmospherePass& p, const GlobeSettings& g)
-      : atmosphere(a),
-        surface(s),
-        pass(&p),
+      : pass(&p),
         settings(g),
-        relief(planet::ReliefSettings{relief_style(s.style), s.seed, a.bottom_radius_m, s.sea_level_m}),
+        relief(planet::ReliefSettings{s.style, s.seed, a.bottom_radius_m, s.sea_level_m}),
         builder(relief, a.bottom_radius_m) {}
 
   ~Impl() {
@@ -269,8 +254,11 @@ void Globe::draw(const GlobeView& view) {
   const planet::TileHeightRange known_range = [&](const TileKey& key, double& lo, double& hi) {
     const auto it = p.resident.find(key.packed());
     if (it == p.resident.end()) return false;
-    lo = it->second.min_height_m;
-    hi = it->second.max_height_m;
+    // The range must bound the surface of every finer level too
+    // (tile_selection.hpp): the tile's vertices, widened by its mesh error.
+    const double error = p.builder.bounds().error_m(p.builder.spacing_m(key.level));
+    lo = it->second.min_height_m - error;
+    hi = it->second.max_height_m + error;
     return true;
   };
   const planet::Selection selection =

@@ -183,15 +183,6 @@ double crater_profile(double r, double depth_m, double rim_m, double floor_fract
 
 }  // namespace
 
-ReliefStyle relief_style_from_name(const std::string& name) {
-  if (name == "earth") return ReliefStyle::earth;
-  if (name == "mars") return ReliefStyle::mars;
-  if (name == "venus") return ReliefStyle::venus;
-  if (name == "titan") return ReliefStyle::titan;
-  if (name == "flat") return ReliefStyle::flat;
-  throw Error("relief style \"" + name + "\" is not one of earth, mars, venus, titan, flat");
-}
-
 const char* relief_style_name(ReliefStyle style) {
   switch (style) {
     case ReliefStyle::earth: return "earth";

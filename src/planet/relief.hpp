@@ -18,12 +18,13 @@
 #include <string>
 #include <vector>
 
+#include "atmos/planet_file.hpp"
+
 namespace atmos::planet {
 
-enum class ReliefStyle { earth, mars, venus, titan, flat };
+// The styles are those of a planet file's surface (atmos/planet_file.hpp).
+using ReliefStyle = SurfaceStyle;
 
-// "earth", "mars", "venus", "titan", "flat"; atmos::Error for another name.
-ReliefStyle relief_style_from_name(const std::string& name);
 const char* relief_style_name(ReliefStyle style);
 
 struct ReliefSettings {
