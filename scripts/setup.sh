@@ -11,6 +11,8 @@ packages=(
   libtbb-dev libgtest-dev libgmock-dev libbenchmark-dev
   libepoxy-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev
   libeigen3-dev python3-matplotlib
+  libgdal-dev libnetcdf-dev
+  xplanet-images gmt-gshhg-low
 )
 
 for arg in "$@"; do
