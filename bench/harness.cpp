@@ -262,7 +262,7 @@ void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables
   {
     atmos::GlobeSettings settings;
     settings.complete_every_frame = true;
-    atmos::Globe globe(atmosphere, atmos::PlanetSurface{atmos::SurfaceStyle::earth, 1, {}}, pass, settings);
+    atmos::Globe globe(atmosphere, atmos::load_surface("earth"), pass, settings);
     const double radius = atmosphere.bottom_radius_m;
     const std::pair<const char*, double> altitudes[] = {
         {"2m", 2.0}, {"10km", 10e3}, {"400km", 400e3}, {"2.5R", 2.5 * radius}};
@@ -286,7 +286,7 @@ void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables
   }
   {
     // The descent: tiles streamed as a viewer would.
-    atmos::Globe globe(atmosphere, atmos::PlanetSurface{atmos::SurfaceStyle::earth, 1, {}}, pass, atmos::GlobeSettings{});
+    atmos::Globe globe(atmosphere, atmos::load_surface("earth"), pass, atmos::GlobeSettings{});
     const double first = 2.5 * atmosphere.bottom_radius_m, last = 2.0;
     const int frames = 40;
     std::vector<double> times;

@@ -200,6 +200,53 @@ TEST(PlanetFile, SurfaceFieldsLoadAndBadOnesAreClearErrors) {
                        "sea_level");
   expect_surface_error(modified([](nlohmann::json& j) { j["surface"] = 3; }), "surface must be an object");
   EXPECT_THROW(atmos::surface_style_from_name("gas giant"), atmos::Error);
+
+  // Data sources: relative paths are relative to the planet file; units,
+  // CRS and bounds as given; contradictions and malformed fields are errors.
+  const std::string data = modified([](nlohmann::json& j) {
+    j["surface"]["elevation"] = {{"source", "dem/mola.tif"}, {"unit", "km"}, {"crs", "IAU_2015:49900"}};
+    j["surface"]["imagery"] = {{"source", "/abs/colour.jpg"}, {"bounds_deg", {-180, -90, 180, 90}}};
+    j["surface"]["coastline"] = {{"source", "shore.nc"}};
+  });
+  const atmos::PlanetSurface d = atmos::parse_surface(data, "/planets/my/earth.json");
+  EXPECT_EQ(d.elevation.source, "/planets/my/dem/mola.tif");
+  EXPECT_DOUBLE_EQ(d.elevation.metres_per_unit, 1000.0);
+  EXPECT_EQ(d.elevation.crs, "IAU_2015:49900");
+  EXPECT_EQ(d.imagery.source, "/abs/colour.jpg");
+  ASSERT_TRUE(d.imagery.bounds_deg.has_value());
+  EXPECT_DOUBLE_EQ((*d.imagery.bounds_deg)[2], 180.0);
+  EXPECT_EQ(d.coastline, "/planets/my/shore.nc");
+  EXPECT_FALSE(atmos::load_surface("earth").imagery.source.empty());
+  EXPECT_FALSE(atmos::load_surface("earth").coastline.empty());
+  expect_surface_error(modified([](nlohmann::json& j) { j["surface"]["elevation"] = {{"unit", "m"}}; }),
+                       "surface.elevation");
+  expect_surface_error(modified([](nlohmann::json& j) { j["surface"]["elevation"] = {{"source", ""}}; }),
+                       "surface.elevation.source");
+  expect_surface_error(
+      modified([](nlohmann::json& j) { j["surface"]["elevation"] = {{"source", "a.tif"}, {"unit", "furlong"}}; }),
+      "surface.elevation.unit");
+  expect_surface_error(
+      modified([](nlohmann::json& j) { j["surface"]["imagery"] = {{"source", "a.jpg"}, {"unit", "m"}}; }),
+      "unknown key \"unit\"");
+  expect_surface_error(modified([](nlohmann::json& j) {
+                         j["surface"]["imagery"] = {{"source", "a.jpg"}, {"bounds_deg", {10, 0, -10, 5}}};
+                       }),
+                       "bounds_deg");
+  expect_surface_error(modified([](nlohmann::json& j) {
+                         j["surface"]["imagery"] = {{"source", "a.jpg"}, {"bounds_deg", {-10, 0, 10}}};
+                       }),
+                       "bounds_deg");
+  expect_surface_error(modified([](nlohmann::json& j) {
+                         j["surface"]["relief"]["style"] = "mars";
+                         j["surface"]["coastline"] = {{"source", "shore.nc"}};
+                       }),
+                       "coastline");
+  expect_surface_error(modified([](nlohmann::json& j) {
+                         j["surface"]["relief"]["style"] = "earth";
+                         j["surface"]["coastline"] = {{"source", "shore.nc"}};
+                         j["surface"]["sea_level"] = {{"value", 100}, {"unit", "m"}};
+                       }),
+                       "contradicts surface.sea_level");
   // The atmosphere's reader checks the surface too: a bad file fails wherever it is read.
   EXPECT_THROW(atmos::parse_atmosphere(modified([](nlohmann::json& j) { j["surface"]["relief"]["seed"] = "x"; }),
                                        "x"),

@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,13 +30,20 @@ using atmos::planet::kSkirtVertices;
 using atmos::planet::kTileQuads;
 using atmos::planet::kTileSide;
 using atmos::planet::MeshBuilder;
-using atmos::planet::Relief;
-using atmos::planet::ReliefSettings;
-using atmos::planet::ReliefStyle;
+using atmos::planet::Surface;
 using atmos::planet::TileKey;
 using atmos::planet::TileMesh;
 
 constexpr double kEarthRadius = 6360e3;
+
+atmos::PlanetSurface surface_of(atmos::SurfaceStyle style, std::uint64_t seed,
+                                std::optional<double> sea_level_m = std::nullopt) {
+  atmos::PlanetSurface s;
+  s.style = style;
+  s.seed = seed;
+  s.sea_level_m = sea_level_m;
+  return s;
+}
 
 glm::dvec3 position_of(const TileMesh& mesh, int i, int j) {
   const auto& v = mesh.vertices[size_t(j * kTileSide + i)];
@@ -60,8 +68,8 @@ glm::dvec3 parent_surface(const TileMesh& parent, double a, double b) {
 
 class GlobeMesh : public ::testing::Test {
  protected:
-  GlobeMesh() : relief_(ReliefSettings{ReliefStyle::mars, 7, 3389.5e3, {}}), builder_(relief_, 3389.5e3) {}
-  Relief relief_;
+  GlobeMesh() : surface_(surface_of(atmos::SurfaceStyle::mars, 7), 3389.5e3), builder_(surface_, 3389.5e3) {}
+  Surface surface_;
   MeshBuilder builder_;
 };
 
@@ -152,7 +160,7 @@ TEST_F(GlobeMesh, SkirtsHangBelowTheEdges) {
 // matrix) against the double-precision projection, for a camera moved in
 // millimetre steps. The bound is a quarter of a pixel at 1080p.
 TEST_F(GlobeMesh, VerticesDoNotJitterAtAMetreAboveTheGround) {
-  Relief earth(ReliefSettings{ReliefStyle::earth, 1, kEarthRadius, {}});
+  const Surface earth(surface_of(atmos::SurfaceStyle::earth, 1), kEarthRadius);
   MeshBuilder builder(earth, kEarthRadius);
   const glm::dvec3 ground_direction = glm::normalize(glm::dvec3(0.3, 0.5, 0.8));
   int face = 0;
@@ -297,7 +305,7 @@ bool ray_hits_sphere(const glm::dvec3& origin, const glm::dvec3& ray, double rad
 TEST_F(GlobeGpu, DescentFromOrbitToTheGroundHasNoHoles) {
   atmos::GlobeSettings settings;
   settings.complete_every_frame = true;
-  atmos::Globe globe(*earth_, atmos::PlanetSurface{atmos::SurfaceStyle::earth, 1, {}}, *pass_, settings);
+  atmos::Globe globe(*earth_, surface_of(atmos::SurfaceStyle::earth, 1), *pass_, settings);
   const int width = 160, height = 90;
   Target target(width, height);
   const glm::dvec3 up = glm::normalize(glm::dvec3(0.2, -0.6, 0.77));
@@ -345,7 +353,7 @@ TEST_F(GlobeGpu, StreamedTilesLeaveNoHoleAndStayUnderTheMemoryCap) {
   atmos::GlobeSettings settings;
   settings.max_tiles_per_frame = 12;
   settings.memory_cap_bytes = std::size_t(4) << 20;
-  atmos::Globe globe(*earth_, atmos::PlanetSurface{atmos::SurfaceStyle::mars, 5, {}}, *pass_, settings);
+  atmos::Globe globe(*earth_, surface_of(atmos::SurfaceStyle::mars, 5), *pass_, settings);
   const int width = 128, height = 72;
   Target target(width, height);
   const double radius = earth_->bottom_radius_m;
@@ -387,7 +395,7 @@ TEST_F(GlobeGpu, StreamedTilesLeaveNoHoleAndStayUnderTheMemoryCap) {
 TEST_F(GlobeGpu, DaySideIsLitAndNightSideIsDark) {
   atmos::GlobeSettings settings;
   settings.complete_every_frame = true;
-  atmos::Globe globe(*earth_, atmos::PlanetSurface{atmos::SurfaceStyle::mars, 3, {}}, *pass_, settings);
+  atmos::Globe globe(*earth_, surface_of(atmos::SurfaceStyle::mars, 3), *pass_, settings);
   const int width = 96, height = 96;
   Target target(width, height);
   const double radius = earth_->bottom_radius_m;
@@ -428,11 +436,11 @@ TEST_F(GlobeGpu, RejectsBadInput) {
   // A sea level above the top of the atmosphere, or below the planet's centre.
   for (const double sea : {earth_->top_radius_m - earth_->bottom_radius_m + 1.0, -earth_->bottom_radius_m - 1.0,
                            std::numeric_limits<double>::infinity()})
-    EXPECT_THROW(atmos::Globe(*earth_, atmos::PlanetSurface{atmos::SurfaceStyle::earth, 1, sea}, *pass_, {}),
+    EXPECT_THROW(atmos::Globe(*earth_, surface_of(atmos::SurfaceStyle::earth, 1, sea), *pass_, {}),
                  atmos::Error)
         << sea;
 
-  atmos::Globe globe(*earth_, atmos::PlanetSurface{atmos::SurfaceStyle::flat, 1, {}}, *pass_, {});
+  atmos::Globe globe(*earth_, surface_of(atmos::SurfaceStyle::flat, 1), *pass_, {});
   const double radius = earth_->bottom_radius_m;
   atmos::GlobeView view = view_from(glm::dvec3(0, -2 * radius, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1), 32, 32);
   atmos::GlobeView nan_view = view;

@@ -2,6 +2,7 @@
 // built-in presets.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -33,18 +34,45 @@ enum class SurfaceStyle {
 };
 
 // The optional "surface" object of a planet file (docs/planet-format.md).
+// A raster the globe reads with GDAL (any format and CRS GDAL and PROJ read).
+struct SurfaceRaster {
+  // A path (relative paths are relative to the planet file) or a GDAL
+  // dataset description (VRT XML, /vsi… paths); "" = none.
+  std::string source;
+  // A CRS that replaces the raster's own ("EPSG:4326", "IAU_2015:49900",
+  // WKT, a PROJ string); "" = the raster's.
+  std::string crs;
+  // Elevation: metres per raster unit from the planet file's "unit"
+  // ("m", "km", "ft"); 0 = the raster's own unit.
+  double metres_per_unit = 0.0;
+  // For an image with no georeferencing (a plain equirectangular JPEG or
+  // PNG): the longitudes and latitudes of its edges, degrees, west, south,
+  // east, north. None: the raster's own georeferencing.
+  std::optional<std::array<double, 4>> bounds_deg;
+};
+
 struct PlanetSurface {
   SurfaceStyle style = SurfaceStyle::flat;
   std::uint64_t seed = 1;  // the same seed gives the same relief, bit for bit
   // Height of the sea above the datum (bottom_radius), m; none: the
   // style's (Earth: 0; the other styles have no sea).
   std::optional<double> sea_level_m;
+  // Heights above the datum (one band); procedural detail of the style is
+  // added below its resolution, and the style's relief fills its nodata.
+  SurfaceRaster elevation;
+  // The ground's colour (three bands, sRGB-encoded), used as its albedo.
+  SurfaceRaster imagery;
+  // Where the land is, from GMT's binned GSHHG shorelines (Wessel & Smith
+  // 1996; Debian's gmt-gshhg-* packages): the style's relief is drawn
+  // inside the real coastlines. "" = none.
+  std::string coastline;
 };
 
 // The surface of a preset or planet file: its "surface" object, or the flat
 // style when it has none. Throws atmos::Error as load_atmosphere does, and
-// on an unknown style, a seed that is not a non-negative integer or a sea
-// level that is not a finite length.
+// on an unknown style, a seed that is not a non-negative integer, a sea
+// level that is not a finite length, or raster fields that are malformed
+// or contradict each other (files are opened by the globe, not here).
 PlanetSurface load_surface(const std::string& name_or_path);
 PlanetSurface parse_surface(const std::string& json_text, const std::string& origin);
 // "earth", "mars", "venus", "titan", "flat" (atmos::Error for another name).

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -85,6 +86,7 @@ double unit_factor(const std::string& kind, const std::string& unit, const std::
                    const std::string& path) {
   static const std::map<std::string, std::map<std::string, double>> table = {
       {"length", {{"m", 1.0}, {"km", 1e3}}},
+      {"height", {{"m", 1.0}, {"km", 1e3}, {"ft", 0.3048}}},
       {"inverse_length", {{"1/m", 1.0}, {"1/km", 1e-3}, {"1/Mm", 1e-6}}},
       {"angle", {{"rad", 1.0}, {"deg", M_PI / 180.0}, {"arcmin", M_PI / 10800.0}}},
       {"spectral_irradiance", {{"W/m^2/nm", 1.0}}},
@@ -330,12 +332,59 @@ json parse_json(const std::string& json_text, const std::string& origin) {
   }
 }
 
+// A source path relative to the planet file's directory (a preset's sources
+// are absolute); GDAL dataset descriptions (XML, /vsi paths) as they are.
+std::string resolve_source(const std::string& source, const std::string& origin) {
+  if (source.empty() || source.front() == '<' || source.rfind("/vsi", 0) == 0) return source;
+  const std::filesystem::path path(source);
+  if (path.is_absolute() || origin.find('/') == std::string::npos) return source;
+  return (std::filesystem::path(origin).parent_path() / path).string();
+}
+
+// {"source": …, "crs": …, "unit": "m" | "km" | "ft" (elevation only),
+//  "bounds_deg": [west, south, east, north]}
+SurfaceRaster surface_raster(const json& r, bool elevation, const std::string& origin, const std::string& path) {
+  if (elevation) check_keys(r, {"source", "crs", "unit", "bounds_deg"}, origin, path);
+  else check_keys(r, {"source", "crs", "bounds_deg"}, origin, path);
+  SurfaceRaster raster;
+  const json& source = require(r, "source", origin, path);
+  if (!source.is_string() || source.get<std::string>().empty()) fail(origin, path + ".source must be a non-empty string");
+  raster.source = resolve_source(source.get<std::string>(), origin);
+  if (r.contains("crs")) {
+    if (!r.at("crs").is_string() || r.at("crs").get<std::string>().empty())
+      fail(origin, path + ".crs must be a non-empty string");
+    raster.crs = r.at("crs").get<std::string>();
+  }
+  if (r.contains("unit")) {
+    if (!r.at("unit").is_string()) fail(origin, path + ".unit must be a string");
+    raster.metres_per_unit = unit_factor("height", r.at("unit").get<std::string>(), origin, path + ".unit");
+  }
+  if (r.contains("bounds_deg")) {
+    const std::vector<double> b = number_list(r.at("bounds_deg"), origin, path + ".bounds_deg");
+    if (b.size() != 4) fail(origin, path + ".bounds_deg must be [west, south, east, north] in degrees");
+    if (!(b[0] < b[2] && b[2] - b[0] <= 360.0 && b[1] < b[3] && b[1] >= -90.0 && b[3] <= 90.0))
+      fail(origin, path + ".bounds_deg must have west < east (at most 360 degrees apart) and -90 <= south < north <= 90");
+    raster.bounds_deg = std::array<double, 4>{b[0], b[1], b[2], b[3]};
+  }
+  return raster;
+}
+
 // The "surface" object of a parsed planet file (the flat style without one).
 PlanetSurface surface_of(const json& doc, const std::string& origin) {
   PlanetSurface surface;
   if (!doc.is_object() || !doc.contains("surface")) return surface;
   const json& s = doc.at("surface");
-  check_keys(s, {"relief", "sea_level"}, origin, "surface");
+  check_keys(s, {"relief", "sea_level", "elevation", "imagery", "coastline"}, origin, "surface");
+  if (s.contains("elevation")) surface.elevation = surface_raster(s.at("elevation"), true, origin, "surface.elevation");
+  if (s.contains("imagery")) surface.imagery = surface_raster(s.at("imagery"), false, origin, "surface.imagery");
+  if (s.contains("coastline")) {
+    const json& c = s.at("coastline");
+    check_keys(c, {"source"}, origin, "surface.coastline");
+    const json& source = require(c, "source", origin, "surface.coastline");
+    if (!source.is_string() || source.get<std::string>().empty())
+      fail(origin, "surface.coastline.source must be a non-empty string");
+    surface.coastline = resolve_source(source.get<std::string>(), origin);
+  }
   if (s.contains("relief")) {
     const json& relief = s.at("relief");
     check_keys(relief, {"style", "seed"}, origin, "surface.relief");
@@ -353,6 +402,10 @@ PlanetSurface surface_of(const json& doc, const std::string& origin) {
     }
   }
   if (s.contains("sea_level")) surface.sea_level_m = scalar(s, "sea_level", "length", origin, "surface");
+  if (!surface.coastline.empty() && surface.style != SurfaceStyle::earth)
+    fail(origin, "surface.coastline draws the earth style's land and sea: it needs surface.relief.style \"earth\"");
+  if (!surface.coastline.empty() && surface.sea_level_m && *surface.sea_level_m != 0.0)
+    fail(origin, "surface.coastline is the coast at sea level 0: it contradicts surface.sea_level");
   return surface;
 }
 

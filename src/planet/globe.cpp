@@ -21,7 +21,7 @@
 #include "data/embedded_files.hpp"
 #include "planet/cube_sphere.hpp"
 #include "planet/globe_mesh.hpp"
-#include "planet/relief.hpp"
+#include "planet/surface.hpp"
 #include "planet/tile_selection.hpp"
 
 namespace atmos {
@@ -106,7 +106,7 @@ struct Resident {
 struct Globe::Impl {
   const AtmospherePass* pass = nullptr;
   GlobeSettings settings;
-  planet::Relief relief;
+  planet::Surface surface;
   planet::MeshBuilder builder;
   GLuint program = 0;
   GLuint vertex_array = 0;
@@ -120,8 +120,8 @@ struct Globe::Impl {
   Impl(const Atmosphere& a, const PlanetSurface& s, const AtmospherePass& p, const GlobeSettings& g)
       : pass(&p),
         settings(g),
-        relief(planet::ReliefSettings{s.style, s.seed, a.bottom_radius_m, s.sea_level_m}),
-        builder(relief, a.bottom_radius_m) {}
+        surface(s, a.bottom_radius_m),
+        builder(surface, a.bottom_radius_m) {}
 
   ~Impl() {
     for (auto& [key, tile] : resident) glDeleteBuffers(1, &tile.buffer);

@@ -44,10 +44,10 @@ void store(float out[3], const glm::dvec3& v) {
 
 }  // namespace
 
-MeshBuilder::MeshBuilder(const Relief& relief, double radius_m) : relief_(relief), radius_m_(radius_m) {
+MeshBuilder::MeshBuilder(const Surface& surface, double radius_m) : surface_(surface), radius_m_(radius_m) {
   bounds_.radius_m = radius_m;
-  bounds_.min_height_m = std::max(relief.min_height_m(), relief.sea_level_m());
-  bounds_.max_height_m = std::max(relief.max_height_m(), relief.sea_level_m());
+  bounds_.min_height_m = surface.min_height_m();
+  bounds_.max_height_m = surface.max_height_m();
   measure_level_errors();
   // The mesh's error against the true surface: the relief's deviation from
   // the mesh's triangles, plus the sagitta of a chord of the datum sphere,
@@ -55,9 +55,12 @@ MeshBuilder::MeshBuilder(const Relief& relief, double radius_m) : relief_(relief
   // least 1/16 of the spacing: the albedo and the normals are sampled at the
   // vertices, so the vertices must not be more than 16 error bounds (16 px at
   // 1 px) apart on the screen, even where the relief is smooth (the sea).
-  const double r = radius_m;
-  bounds_.error_m = [this, r](double spacing_m) {
-    return std::max(measured_error_m(spacing_m) + spacing_m * spacing_m / (8.0 * r), spacing_m / 16.0);
+  // Where imagery holds detail finer than the spacing, at least 1/4 of it:
+  // its colours then stay within 4 px of where they belong.
+  const double r = radius_m, imagery_pixel = surface.imagery_pixel_m();
+  bounds_.error_m = [this, r, imagery_pixel](double spacing_m) {
+    const double floor = imagery_pixel > 0.0 && spacing_m > 2.0 * imagery_pixel ? spacing_m / 4.0 : spacing_m / 16.0;
+    return std::max(measured_error_m(spacing_m) + spacing_m * spacing_m / (8.0 * r), floor);
   };
 
   // The triangles: a run per quadrant (bit 0: the upper half in s, bit 1:
@@ -105,7 +108,8 @@ void MeshBuilder::measure_level_errors() {
   // corner heights)| over a 4 x 4 lattice inside it; the level's error is
   // kMargin times the largest over the cells. Gradient-noise relief is
   // statistically the same everywhere a style places it, so a few hundred
-  // cells see its steepest terrain.
+  // cells see its steepest terrain; with elevation data, half the cells lie
+  // inside the data's extent.
   constexpr int kLevels = 30;
   constexpr int kCells = 256;
   constexpr double kMargin = 1.5;
@@ -117,10 +121,8 @@ void MeshBuilder::measure_level_errors() {
     return double(state >> 11) * 0x1.0p-53;
   };
   for (int c = 0; c < kCells; ++c) {
-    glm::dvec3 p;
-    do p = glm::dvec3(uniform(), uniform(), uniform()) * 2.0 - 1.0;
-    while (glm::dot(p, p) > 1.0 || glm::dot(p, p) < 1e-6);
-    points[size_t(c)] = glm::normalize(p);
+    const double u = uniform(), v = uniform();
+    points[size_t(c)] = glm::normalize(surface_.sample_direction(u, v, double(c % 2) * 0.75));
     const glm::dvec3 helper = std::abs(points[size_t(c)].z) < 0.9 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0);
     tangent_a[size_t(c)] = glm::normalize(glm::cross(helper, points[size_t(c)]));
     tangent_b[size_t(c)] = glm::cross(points[size_t(c)], tangent_a[size_t(c)]);
@@ -165,30 +167,30 @@ double MeshBuilder::measured_error_m(double spacing) const {
   return std::exp(std::log(a) + f * (std::log(b) - std::log(a)));
 }
 
-glm::vec3 MeshBuilder::vertex_albedo(const TileKey& key, int i, int j) const {
+std::vector<glm::vec3> MeshBuilder::vertex_albedos(const TileKey& key) const {
   const double scale = 1.0 / double(kTileQuads);
+  const double spacing = spacing_m(key.level);
   // Where the vertices are farther apart than the albedo's finest features,
-  // the albedo is averaged over the vertex's cell (a 3 x 3 box filter,
-  // Heckbert 1989 on prefiltering), not sampled at one point: point samples
-  // of a pattern finer than the grid alias into blocks.
-  if (spacing_m(key.level) < kAlbedoFilterSpacing_m)
-    return surface_albedo(tile_direction(key, double(i) * scale, double(j) * scale));
-  glm::vec3 sum(0.0f);
-  for (int b = -1; b <= 1; ++b)
-    for (int a = -1; a <= 1; ++a)
-      sum += surface_albedo(tile_direction(key, (double(i) + a / 3.0) * scale, (double(j) + b / 3.0) * scale));
-  return sum / 9.0f;
-}
-
-double MeshBuilder::surface_height_m(const glm::dvec3& direction) const {
-  return std::max(relief_.height_m(direction), relief_.sea_level_m());
-}
-
-glm::vec3 MeshBuilder::surface_albedo(const glm::dvec3& direction) const {
-  // The open ocean's albedo, about 0.06 for the sun above 25 degrees (Payne
-  // 1972), slightly blue from the light the water sends back up.
-  if (relief_.is_ocean(direction)) return glm::vec3(0.045f, 0.06f, 0.08f);
-  return relief_.albedo(direction);
+  // the albedo is averaged over the vertex's cell (a 3 x 3 box filter of
+  // samples of the surface prefiltered to a third of the spacing; Heckbert
+  // 1989 on prefiltering), not sampled at one point: point samples of a
+  // pattern finer than the grid alias into blocks.
+  const int taps = spacing < kAlbedoFilterSpacing_m ? 1 : 3;
+  std::vector<glm::dvec3> directions;
+  directions.reserve(std::size_t(kGridVertices * taps * taps));
+  for (int j = 0; j < kTileSide; ++j)
+    for (int i = 0; i < kTileSide; ++i)
+      for (int b = 0; b < taps; ++b)
+        for (int a = 0; a < taps; ++a) {
+          const double da = taps == 1 ? 0.0 : (a - 1) / 3.0, db = taps == 1 ? 0.0 : (b - 1) / 3.0;
+          directions.push_back(tile_direction(key, (double(i) + da) * scale, (double(j) + db) * scale));
+        }
+  std::vector<glm::vec3> samples(directions.size());
+  surface_.albedos(directions.data(), directions.size(), spacing / double(taps), samples.data());
+  std::vector<glm::vec3> albedo(std::size_t(kGridVertices), glm::vec3(0.0f));
+  for (std::size_t k = 0; k < samples.size(); ++k) albedo[k / std::size_t(taps * taps)] += samples[k];
+  for (glm::vec3& a : albedo) a /= float(taps * taps);
+  return albedo;
 }
 
 double MeshBuilder::spacing_m(int level) const {
@@ -224,12 +226,15 @@ TileMesh MeshBuilder::build(const TileKey& key) const {
   mesh.min_height_m = INFINITY;
   mesh.max_height_m = -INFINITY;
   for (int j = -kRing; j < kTileSide + kRing; ++j)
+    for (int i = -kRing; i < kTileSide + kRing; ++i)
+      up[size_t((j + kRing) * kExtended + (i + kRing))] = tile_direction(key, double(i) * scale, double(j) * scale);
+  std::vector<double> heights(up.size());
+  surface_.heights_m(up.data(), up.size(), heights.data());
+  for (int j = -kRing; j < kTileSide + kRing; ++j)
     for (int i = -kRing; i < kTileSide + kRing; ++i) {
-      const glm::dvec3 direction = tile_direction(key, double(i) * scale, double(j) * scale);
-      const double h = surface_height_m(direction);
       const size_t n = size_t((j + kRing) * kExtended + (i + kRing));
-      p[n] = direction * (radius_m_ + h);
-      up[n] = direction;
+      const double h = heights[n];
+      p[n] = up[n] * (radius_m_ + h);
       if (i >= 0 && i < kTileSide && j >= 0 && j < kTileSide) {
         mesh.min_height_m = std::min(mesh.min_height_m, h);
         mesh.max_height_m = std::max(mesh.max_height_m, h);
@@ -248,6 +253,7 @@ TileMesh MeshBuilder::build(const TileKey& key) const {
     return length > 0.0 ? n / length : up_at(i, j);
   };
 
+  const std::vector<glm::vec3> albedos = vertex_albedos(key);
   mesh.vertices.resize(vertex_count());
   const bool has_parent = key.level > 0;
   for (int j = 0; j < kTileSide; ++j)
@@ -274,7 +280,7 @@ TileMesh MeshBuilder::build(const TileKey& key) const {
       store(v.morph_offset, parent - position);
       store(v.normal, normal(i, j, 1));
       store(v.parent_normal, parent_normal);
-      const glm::vec3 albedo = vertex_albedo(key, i, j);
+      const glm::vec3& albedo = albedos[size_t(grid_index(i, j))];
       v.albedo[0] = albedo.x;
       v.albedo[1] = albedo.y;
       v.albedo[2] = albedo.z;

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "planet/cube_sphere.hpp"
-#include "planet/relief.hpp"
+#include "planet/surface.hpp"
 #include "planet/tile_selection.hpp"
 
 namespace atmos::planet {
@@ -41,7 +41,7 @@ struct TileMesh {
 
 class MeshBuilder {
  public:
-  MeshBuilder(const Relief& relief, double radius_m);
+  MeshBuilder(const Surface& surface, double radius_m);
   MeshBuilder(const MeshBuilder&) = delete;
   MeshBuilder& operator=(const MeshBuilder&) = delete;
 
@@ -82,11 +82,10 @@ class MeshBuilder {
   const ReliefBounds& bounds() const { return bounds_; }
   LodSettings lod_settings(double max_screen_error_px) const;
 
-  // The height of the drawn surface above the datum, m: the relief's, or
-  // the sea level where the relief lies below it. Until water is drawn the
-  // sea is a Lambertian surface of the ocean's mean albedo (sea_albedo).
-  double surface_height_m(const glm::dvec3& direction) const;
-  glm::vec3 surface_albedo(const glm::dvec3& direction) const;
+  // The height of the drawn surface above the datum, m (Surface: the
+  // ground, or the sea level where the ground lies below it; until water is
+  // drawn the sea is a Lambertian surface of the ocean's albedo).
+  double surface_height_m(const glm::dvec3& direction) const { return surface_.height_m(direction); }
   double min_surface_height_m() const { return bounds_.min_height_m; }
   double max_surface_height_m() const { return bounds_.max_height_m; }
 
@@ -96,16 +95,16 @@ class MeshBuilder {
   double skirt_depth_m(int level) const;
 
  private:
-  // The albedo of grid vertex (i, j) of a tile: the surface's, averaged
-  // over the vertex's cell on coarse levels.
-  glm::vec3 vertex_albedo(const TileKey& key, int i, int j) const;
+  // The albedo of the grid's vertices of a tile (row-major): the
+  // surface's, averaged over each vertex's cell on coarse levels.
+  std::vector<glm::vec3> vertex_albedos(const TileKey& key) const;
 
   // The measured error of each level's mesh at its mean spacing, m,
   // non-increasing with the level.
   void measure_level_errors();
   double measured_error_m(double spacing) const;
 
-  const Relief& relief_;
+  const Surface& surface_;
   double radius_m_;
   std::vector<double> level_errors_m_;
   ReliefBounds bounds_;

@@ -169,8 +169,14 @@ struct RasterSource::Impl {
     bands = settings.kind == RasterKind::imagery ? 3 : 1;
     if (count < bands) fail("imagery needs three bands (red, green, blue), it has " + std::to_string(count));
 
-    if (GDALGetGeoTransform(dataset, geotransform) != CE_None)
-      fail("has no georeferencing (no geotransform): give it one, for example with a VRT");
+    if (settings.bounds_deg) {
+      const auto& b = *settings.bounds_deg;
+      const double g[6] = {b[0], (b[2] - b[0]) / double(width), 0.0, b[3], 0.0, -(b[3] - b[1]) / double(height)};
+      std::copy(g, g + 6, geotransform);
+      if (settings.crs.empty()) settings.crs = "EPSG:4326";
+    } else if (GDALGetGeoTransform(dataset, geotransform) != CE_None) {
+      fail("has no georeferencing (no geotransform): give \"bounds_deg\" in the planet file, or a VRT");
+    }
     if (!GDALInvGeoTransform(geotransform, inverse)) fail("has a singular geotransform");
 
     open_crs();

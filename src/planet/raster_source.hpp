@@ -29,9 +29,11 @@
 
 #include <glm/vec3.hpp>
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace atmos::planet {
@@ -49,6 +51,11 @@ struct RasterSettings {
   // The CRS to use instead of the raster's own (any string PROJ accepts:
   // "EPSG:4326", "IAU_2015:49900", WKT, PROJ strings); "" = the raster's.
   std::string crs;
+  // For an image with no georeferencing: its edges' longitudes and
+  // latitudes, degrees (west, south, east, north); it is then a plate
+  // carree in `crs`, or in EPSG:4326 when that is "". None: the raster's
+  // own georeferencing.
+  std::optional<std::array<double, 4>> bounds_deg;
   // What the planet file calls this source, for error messages.
   std::string role = "elevation";
 };

@@ -53,6 +53,7 @@ namespace atmos::planet {
 
 namespace {
 
+constexpr double kNoiseBound = 1.0;        // |n| (the octaves' value bounds below)
 constexpr double kNoiseSlope = 7.44;       // |D_e n| per lattice unit (above)
 constexpr double kNoiseCurvature = 52.0;   // |D_e^2 n| per lattice unit^2
 constexpr double kFadeSlope = 1.875;       // max s'
@@ -148,6 +149,12 @@ struct Step {
 };
 constexpr Step kEarthSteps[] = {{4680.0, -0.08, 0.06}, {140.0, -0.02, 0.02}, {1400.0, 0.0, 0.08}};
 constexpr double kEarthAbyss_m = -4800.0;
+// With a data coast: the distance from the coast over which the continent
+// coordinate changes by one (t = -0.08, the foot of the continental slope,
+// lies 300 km offshore; the land reaches its mean height 300 km inland),
+// and the least height of land (and depth of sea) next to the coast, m.
+constexpr double kCoastProfile_m = 3750e3;
+constexpr double kCoastLand_m = 2.0;
 
 double earth_hypsometry(double t) {
   double h = kEarthAbyss_m;
@@ -218,6 +225,15 @@ Relief::Relief(const ReliefSettings& settings) : settings_(settings) {
       ridges_ = make_octaves(seed, 3, 1000e3, 3600.0, 0.5, 8);
       // Detail: fBm with H = 0.7 from 250 km (600 m) to below 0.5 m.
       detail_ = make_octaves(seed, 4, 250e3, 600.0, kGainHurst070, octaves_down_to(250e3, min_wavelength_m));
+      // A data coast's wiggle: octaves from twice the data's resolution
+      // down to 100 m, each of amplitude 0.15 times its wavelength (H = 1:
+      // a self-similar coast, of fractal dimension near 1.2 once the
+      // data's own shape is added; Mandelbrot 1967).
+      if (settings.coast_distance_m) {
+        if (!(settings.coast_resolution_m > 0.0)) throw Error("relief: a data coast needs its resolution");
+        const double longest = 2.0 * settings.coast_resolution_m;
+        coast_wiggle_ = make_octaves(seed, 11, longest, 0.15 * longest, 0.5, octaves_down_to(longest, 100.0));
+      }
       sea_level_m_ = 0.0;
       break;
     }
@@ -332,6 +348,21 @@ double Relief::sum_octaves(const std::vector<Octave>& octaves, const glm::dvec3&
   return sum;
 }
 
+double Relief::detail_m(const glm::dvec3& direction, double max_wavelength_m) const {
+  const glm::dvec3 p = direction * settings_.radius_m;
+  double sum = 0;
+  for (const Octave& o : detail_)
+    if (1.0 < o.inv_wavelength_per_m * max_wavelength_m) sum += o.amplitude_m * octave_noise(p, o);
+  return sum;
+}
+
+double Relief::detail_bound_m(double max_wavelength_m) const {
+  double sum = 0;
+  for (const Octave& o : detail_)
+    if (1.0 < o.inv_wavelength_per_m * max_wavelength_m) sum += kNoiseBound * o.amplitude_m;
+  return sum;
+}
+
 double Relief::large_scale_field(const glm::dvec3& p_m) const { return sum_octaves(large_scale_, p_m); }
 
 // The Mars dichotomy coordinate: the component along the (southward) axis
@@ -414,7 +445,12 @@ double Relief::height_m(const glm::dvec3& direction) const {
     case ReliefStyle::flat:
       return 0.0;
     case ReliefStyle::earth: {
-      const double t = large_scale_field(p) - threshold_;
+      // With a data coast, the continent coordinate is the distance to the
+      // coast (with its wiggle) over kCoastProfile_m: the shelf, the slope
+      // and the rise of the land follow the real coastline.
+      const bool data_coast = bool(settings_.coast_distance_m);
+      const double coast_m = data_coast ? settings_.coast_distance_m(direction) + sum_octaves(coast_wiggle_, p) : 0.0;
+      const double t = data_coast ? coast_m / kCoastProfile_m : large_scale_field(p) - threshold_;
       double h = earth_hypsometry(t);
       // Belts: a C2 mask from the belt field, restricted to land and shelves.
       const double belt = fade_mask((sum_octaves(belt_, p) - 0.1) / 0.3) * fade_mask((t + 0.05) / 0.1);
@@ -426,7 +462,12 @@ double Relief::height_m(const glm::dvec3& direction) const {
         }
         h += belt * ridges;
       }
-      return h + sum_octaves(detail_, p);
+      h += sum_octaves(detail_, p);
+      // The data decide which side of the coast a point is on: no hill of
+      // the detail noise rises out of the sea, no hollow of the land sinks
+      // below it.
+      if (data_coast) h = coast_m >= 0.0 ? std::max(h, kCoastLand_m) : std::min(h, -kCoastLand_m);
+      return h;
     }
     case ReliefStyle::mars: {
       const double highland = fade_mask((dichotomy_coordinate(direction, p) - kDichotomyEdge) / kDichotomyWidth);
@@ -555,8 +596,8 @@ void Relief::calibrate_threshold(double fraction_below) {
 void Relief::add_octave_bounds(const std::vector<Octave>& octaves) {
   for (const Octave& o : octaves) {
     TermBound b;
-    b.low_m = -o.amplitude_m;
-    b.high_m = o.amplitude_m;
+    b.low_m = -kNoiseBound * o.amplitude_m;
+    b.high_m = kNoiseBound * o.amplitude_m;
     b.slope = o.amplitude_m * kNoiseSlope * o.inv_wavelength_per_m;
     b.curvature_per_m = o.amplitude_m * kNoiseCurvature * o.inv_wavelength_per_m * o.inv_wavelength_per_m;
     terms_.push_back(b);

@@ -14,6 +14,7 @@
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,6 +35,13 @@ struct ReliefSettings {
   // The sea's height above the datum, m; none: the style's (Earth 0, the
   // others below their lowest ground: no sea).
   std::optional<double> sea_level_m;
+  // Earth style: the signed distance from a direction to the real coast, m
+  // (positive on land), and the size of the data it comes from, m. When
+  // given, the land and the sea are where the data put them (the relief's
+  // own continents are not used) and the coast gets a fractal wiggle below
+  // the data's resolution.
+  std::function<double(const glm::dvec3&)> coast_distance_m;
+  double coast_resolution_m = 0.0;
 };
 
 class Relief {
@@ -51,6 +59,15 @@ class Relief {
   // Earth style below sea level it is the sea floor's (the water is drawn by
   // the caller).
   glm::vec3 albedo(const glm::dvec3& direction) const;
+
+  // The style's fine detail alone: the octaves of the detail noise whose
+  // wavelength is below max_wavelength_m, m. Each octave is lattice gradient
+  // noise, zero at its lattice points and of zero mean over any area many
+  // wavelengths wide (Perlin 2002): added to elevation data below its
+  // resolution it does not shift the data's mean height.
+  double detail_m(const glm::dvec3& direction, double max_wavelength_m) const;
+  // A bound of |detail_m| for that cut-off, m.
+  double detail_bound_m(double max_wavelength_m) const;
 
   // Bounds of height_m over the whole planet, m (rigorous: from the ranges of
   // the terms the height is summed from).
@@ -135,6 +152,7 @@ class Relief {
   std::vector<Octave> ridges_;       // ridged octaves
   std::vector<Octave> detail_;       // fBm down to below a metre
   std::vector<Octave> dunes_;        // Titan: ridges stretched east-west
+  std::vector<Octave> coast_wiggle_; // Earth with a data coast: the coast's detail, m of distance
   std::vector<CraterClass> craters_;
   double threshold_ = 0;             // the large-scale field's value at the coast / highland edge
   glm::dvec3 dichotomy_axis_{0.0, 0.0, -1.0};
