@@ -356,6 +356,20 @@ double Relief::detail_m(const glm::dvec3& direction, double max_wavelength_m) co
   return sum;
 }
 
+double Relief::albedo_variation(const glm::dvec3& direction, double max_wavelength_m, double min_wavelength_m) const {
+  const glm::dvec3 p = direction * settings_.radius_m;
+  double sum = 0, amplitude = 0.12;
+  Octave o;
+  std::uint32_t k = 0;
+  for (double wavelength = max_wavelength_m; wavelength >= std::max(min_wavelength_m, 1.0) && k < 24;
+       wavelength *= 0.5, amplitude *= 0.5, ++k) {
+    o.inv_wavelength_per_m = 1.0 / wavelength;
+    o.key = layer_key(settings_.seed, 12, k);
+    sum += amplitude * octave_noise(p, o);
+  }
+  return sum;
+}
+
 double Relief::detail_bound_m(double max_wavelength_m) const {
   double sum = 0;
   for (const Octave& o : detail_)

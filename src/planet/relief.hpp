@@ -66,6 +66,14 @@ class Relief {
   // wavelengths wide (Perlin 2002): added to elevation data below its
   // resolution it does not shift the data's mean height.
   double detail_m(const glm::dvec3& direction, double max_wavelength_m) const;
+  // A relative variation of the ground's brightness at wavelengths from
+  // max_wavelength_m down to min_wavelength_m (and not below a metre):
+  // octaves of gradient noise of amplitude 0.12 halving per octave, so the
+  // factor 1 + albedo_variation lies in [0.76, 1.24] with mean 1. It puts
+  // detail under imagery coarser than the mesh without changing the
+  // imagery's mean colour.
+  double albedo_variation(const glm::dvec3& direction, double max_wavelength_m, double min_wavelength_m) const;
+
   // A bound of |detail_m| for that cut-off, m.
   double detail_bound_m(double max_wavelength_m) const;
 

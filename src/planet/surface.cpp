@@ -262,7 +262,13 @@ void Surface::albedos(const glm::dvec3* directions, std::size_t n, double spacin
   }
   for (std::size_t i = 0; i < n; ++i) {
     if (valid[i]) {
-      out[i] = glm::clamp(glm::vec3(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]), 0.0f, 1.0f);
+      // Below the imagery's pixel, down to twice the mesh's spacing (finer
+      // would alias between vertices), the style's brightness variation.
+      const double pixel = imagery_pixel_m();
+      const double variation = pixel > 4.0 * spacing_m
+                                   ? relief_.albedo_variation(directions[i], 0.5 * pixel, 2.0 * spacing_m)
+                                   : 0.0;
+      out[i] = glm::clamp(glm::vec3(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]) * float(1.0 + variation), 0.0f, 1.0f);
     } else if (ground_height_m(directions[i]) < data_->sea_level_m) {
       out[i] = kSeaAlbedo;
     } else {
