@@ -353,7 +353,7 @@ TEST_F(GlobeGpu, StreamedTilesLeaveNoHoleAndStayUnderTheMemoryCap) {
   atmos::GlobeSettings settings;
   settings.max_tiles_per_frame = 12;
   settings.memory_cap_bytes = std::size_t(4) << 20;
-  atmos::Globe globe(*earth_, surface_of(atmos::SurfaceStyle::mars, 5), *pass_, settings);
+  atmos::Globe globe(*earth_, surface_of(atmos::SurfaceStyle::earth, 5), *pass_, settings);
   const int width = 128, height = 72;
   Target target(width, height);
   const double radius = earth_->bottom_radius_m;
@@ -395,7 +395,7 @@ TEST_F(GlobeGpu, StreamedTilesLeaveNoHoleAndStayUnderTheMemoryCap) {
 TEST_F(GlobeGpu, DaySideIsLitAndNightSideIsDark) {
   atmos::GlobeSettings settings;
   settings.complete_every_frame = true;
-  atmos::Globe globe(*earth_, surface_of(atmos::SurfaceStyle::mars, 3), *pass_, settings);
+  atmos::Globe globe(*earth_, surface_of(atmos::SurfaceStyle::earth, 3), *pass_, settings);
   const int width = 96, height = 96;
   Target target(width, height);
   const double radius = earth_->bottom_radius_m;
@@ -422,8 +422,58 @@ TEST_F(GlobeGpu, DaySideIsLitAndNightSideIsDark) {
     }
   ASSERT_GT(day_pixels, 100);
   ASSERT_GT(night_pixels, 100);
-  EXPECT_GT(day / day_pixels, 1.0);  // cd/m² / 1000: a sunlit ground of albedo ~0.2 is ~10^3..10^4 cd/m²
+  // cd/m² / 1000: a sunlit ground of mean albedo ~0.12 (the earth style's
+  // sea, 0.06 over 71 %, and land ~0.25) is ~10^3 cd/m² and more.
+  EXPECT_GT(day / day_pixels, 0.4);
   EXPECT_LT(night / night_pixels, 1e-3 * (day / day_pixels));
+}
+
+// Mars's lowlands lie kilometres below its datum: lit and composited by the
+// pass of extend_below_datum's atmosphere, the ground there is finite and
+// sunlit, and so is the final image.
+TEST_F(GlobeGpu, GroundBelowTheDatumIsLitByTheExtendedAtmosphere) {
+  const atmos::Atmosphere mars = atmos::load_atmosphere("mars");
+  const atmos::PlanetSurface surface = surface_of(atmos::SurfaceStyle::mars, 2);
+  const atmos::Atmosphere air = atmos::extend_below_datum(mars, surface);
+  ASSERT_LT(air.bottom_radius_m, mars.bottom_radius_m - 4e3);
+  atmos::PrecomputeOptions options;
+  options.sizes = atmos_test::small_gpu_sizes();
+  const atmos::Tables tables = atmos::precompute_tables(air, options);
+  const atmos::AtmospherePass pass(air, tables, atmos::PlanetFrame{});
+  atmos::GlobeSettings settings;
+  settings.complete_every_frame = true;
+  atmos::Globe globe(mars, surface, pass, settings);
+  // The lowest of a few hundred points: a lowland below the datum.
+  glm::dvec3 lowest(0, 0, 1);
+  double lowest_height = INFINITY;
+  for (int i = 0; i < 400; ++i) {
+    const double z = -1.0 + (i + 0.5) / 200.0, phi = 2.399963 * i, r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    const glm::dvec3 d(r * std::cos(phi), r * std::sin(phi), z);
+    const double h = globe.height_m(d * mars.bottom_radius_m);
+    if (h < lowest_height) {
+      lowest_height = h;
+      lowest = d;
+    }
+  }
+  ASSERT_LT(lowest_height, -2000.0);
+  const double radius = mars.bottom_radius_m;
+  const glm::dvec3 camera = lowest * (radius + lowest_height + 3000.0);
+  const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), lowest));
+  const int width = 64, height = 48;
+  atmos::GlobeView view = view_from(camera, glm::normalize(east - lowest), lowest, width, height);
+  view.sun_direction = glm::normalize(lowest + 0.5 * east);
+  Target target(width, height);
+  target.clear();
+  globe.draw(view);
+  const std::vector<float> lit = target.read_colour();
+  int drawn = 0;
+  for (size_t k = 0; k < lit.size(); k += 4) {
+    if (lit[k] == -1.0f) continue;  // not drawn
+    ++drawn;
+    ASSERT_TRUE(std::isfinite(lit[k]) && std::isfinite(lit[k + 1]) && std::isfinite(lit[k + 2])) << k;
+    EXPECT_GT(lit[k] + lit[k + 1] + lit[k + 2], 0.0f) << k;
+  }
+  EXPECT_GT(drawn, width * height / 4);
 }
 
 TEST_F(GlobeGpu, RejectsBadInput) {
@@ -439,6 +489,15 @@ TEST_F(GlobeGpu, RejectsBadInput) {
     EXPECT_THROW(atmos::Globe(*earth_, surface_of(atmos::SurfaceStyle::earth, 1, sea), *pass_, {}),
                  atmos::Error)
         << sea;
+
+  // Ground below the bottom of the pass's atmosphere (the Mars style's
+  // lowlands on Earth's datum): the pass must come from extend_below_datum.
+  try {
+    atmos::Globe below(*earth_, surface_of(atmos::SurfaceStyle::mars, 1), *pass_, {});
+    ADD_FAILURE() << "no error for ground below the pass's atmosphere";
+  } catch (const atmos::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("extend_below_datum"), std::string::npos) << e.what();
+  }
 
   atmos::Globe globe(*earth_, surface_of(atmos::SurfaceStyle::flat, 1), *pass_, {});
   const double radius = earth_->bottom_radius_m;

@@ -5,6 +5,7 @@
 #include "planet/surface.hpp"
 
 #include "atmos/atmosphere.hpp"
+#include "atmos/globe.hpp"
 #include "atmos/planet_file.hpp"
 #include "planet/shoreline_bins.hpp"
 
@@ -191,6 +192,57 @@ TEST_F(SurfaceTest, ImageryIsTheAlbedoAndBadSourcesAreNamed) {
   missing = style(atmos::SurfaceStyle::earth);
   missing.coastline = (dir_ / "no_such_bins.nc").string();
   expect_error(missing, "no_such_bins.nc");
+}
+
+// extend_below_datum: the air above the datum is unchanged, the profiles
+// continue below it (exponential analytically, piecewise linear at their
+// lowest density), and the vertical optical depth from a point 7 km below
+// the datum is the analytic column of the continued profile.
+TEST(ExtendBelowDatum, AirAboveTheDatumIsUnchangedAndContinuesBelow) {
+  const atmos::Atmosphere mars = atmos::load_atmosphere("mars");
+  const atmos::PlanetSurface surface = style(atmos::SurfaceStyle::mars, 2);
+  const double lowest = atmos::lowest_surface_height_m(surface, mars.bottom_radius_m);
+  ASSERT_LT(lowest, -4000.0);
+  const atmos::Atmosphere air = atmos::extend_below_datum(mars, surface);
+  const double depth = mars.bottom_radius_m - air.bottom_radius_m;
+  EXPECT_NEAR(depth, -lowest, 1e-6);
+  EXPECT_DOUBLE_EQ(air.top_radius_m, mars.top_radius_m);
+  ASSERT_EQ(air.constituents.size(), mars.constituents.size());
+  const double wavelength = 550.0;
+  for (size_t c = 0; c < mars.constituents.size(); ++c) {
+    const atmos::Constituent &a = mars.constituents[c], &b = air.constituents[c];
+    const auto extinction = [&](const atmos::Constituent& k, double altitude) {
+      return (k.scattering.at(wavelength) + k.absorption.at(wavelength)) * k.density.at(altitude);
+    };
+    for (double h = 0.0; h <= mars.top_radius_m - mars.bottom_radius_m; h += 997.0)
+      EXPECT_NEAR(extinction(b, h + depth), extinction(a, h), 1e-12 * extinction(a, 0.0) + 1e-9 * extinction(a, h))
+          << a.name << " at " << h << " m";
+    // Below the datum.
+    const double below = -7000.0;
+    if (a.density.kind == atmos::DensityProfile::Kind::exponential) {
+      EXPECT_NEAR(extinction(b, below + depth), extinction(a, 0.0) * std::exp(7000.0 / a.density.scale_height_m),
+                  1e-9 * extinction(b, below + depth));
+      // The vertical column from 7 km below the datum to the top, by the
+      // trapezoid rule on the extended profile, against H (e^{7/H} - e^{-top/H}).
+      const double top = mars.top_radius_m - mars.bottom_radius_m, H = a.density.scale_height_m;
+      double column = 0.0;
+      const int n = 20000;
+      for (int i = 0; i < n; ++i) {
+        const double h0 = below + (top - below) * i / n, h1 = below + (top - below) * (i + 1) / n;
+        column += 0.5 * (b.density.at(h0 + depth) + b.density.at(h1 + depth)) * (h1 - h0);
+      }
+      const double scale = (b.scattering.at(wavelength) + b.absorption.at(wavelength)) /
+                           (a.scattering.at(wavelength) + a.absorption.at(wavelength));
+      EXPECT_NEAR(column * scale, H * (std::exp(7000.0 / H) - std::exp(-top / H)), 1e-5 * H);
+    } else if (a.density.knots.front().first <= 0.0) {
+      EXPECT_DOUBLE_EQ(b.density.at(below + depth), a.density.knots.front().second);
+    }
+  }
+  // A surface that stays above the datum leaves the atmosphere as it is.
+  const atmos::Atmosphere earth = atmos::load_atmosphere("earth");
+  const atmos::Atmosphere same = atmos::extend_below_datum(earth, style(atmos::SurfaceStyle::earth));
+  EXPECT_EQ(same.bottom_radius_m, earth.bottom_radius_m);
+  EXPECT_EQ(atmos::lowest_surface_height_m(style(atmos::SurfaceStyle::earth), earth.bottom_radius_m), 0.0);
 }
 
 }  // namespace

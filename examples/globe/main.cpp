@@ -68,20 +68,23 @@ atmos::Image read_image(GLuint texture, int width, int height, double nits_per_u
 int run(const Options& o) {
   auto context = atmos::GlContext::create_headless();
   const atmos::Atmosphere planet = atmos::load_atmosphere(o.planet);
-  const atmos::CacheResult cached =
-      atmos::load_or_precompute_tables(planet, atmos::PrecomputeOptions{}, atmos::default_cache_directory());
-  // The engine's world: kilometres, planet centred at the origin.
-  atmos::PlanetFrame frame;
-  frame.units_per_metre = 1e-3;
-  atmos::AtmospherePass pass(planet, cached.tables, frame);
-  atmos::GlobeSettings settings;
-  settings.complete_every_frame = true;
-  settings.max_screen_error_px = o.max_screen_error_px;
   // The planet file's surface (its "surface" object), the style and seed
   // of the command line replacing its own.
   atmos::PlanetSurface surface = atmos::load_surface(o.planet);
   if (!o.style.empty()) surface.style = atmos::surface_style_from_name(o.style);
   if (o.seed_given) surface.seed = o.seed;
+  // The pass's air reaches down to the lowest ground (Mars's lowlands lie
+  // kilometres below its datum); the globe keeps the planet's datum.
+  const atmos::Atmosphere air = atmos::extend_below_datum(planet, surface);
+  const atmos::CacheResult cached =
+      atmos::load_or_precompute_tables(air, atmos::PrecomputeOptions{}, atmos::default_cache_directory());
+  // The engine's world: kilometres, planet centred at the origin.
+  atmos::PlanetFrame frame;
+  frame.units_per_metre = 1e-3;
+  atmos::AtmospherePass pass(air, cached.tables, frame);
+  atmos::GlobeSettings settings;
+  settings.complete_every_frame = true;
+  settings.max_screen_error_px = o.max_screen_error_px;
   atmos::Globe globe(planet, surface, pass, settings);
 
   // The engine's render targets: lit colour (RGBA32F) and reversed-Z depth.

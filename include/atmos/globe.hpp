@@ -91,8 +91,10 @@ class Globe {
   // bottom radius) with the relief of `surface` (load_surface: a planet
   // file's "surface"), lit through `pass`, which must outlive the globe.
   // Throws atmos::Error on invalid settings, a sea level outside the
-  // atmosphere (below the planet's centre or above its top), or without a
-  // current OpenGL 4.5 context.
+  // atmosphere (below the planet's centre or above its top), a surface
+  // whose lowest point lies below the pass's atmosphere (give the pass
+  // extend_below_datum(atmosphere, surface)), or without a current OpenGL
+  // 4.5 context.
   Globe(const Atmosphere& atmosphere, const PlanetSurface& surface, const AtmospherePass& pass,
         const GlobeSettings& settings = {});
   ~Globe();
@@ -119,6 +121,27 @@ class Globe {
  private:
   std::unique_ptr<Impl> impl_;
 };
+
+// The lowest point of `surface` on a planet whose datum sphere has radius
+// datum_radius_m, m above the datum (a bound: the drawn surface never goes
+// lower). Opens the surface's elevation raster, if any (atmos::Error as
+// Globe's constructor).
+double lowest_surface_height_m(const PlanetSurface& surface, double datum_radius_m);
+
+// The same atmosphere continued below its bottom (the datum) down to the
+// lowest point of `surface`, for the AtmospherePass that lights and
+// composites a globe whose ground goes below the datum (Mars's northern
+// lowlands, Hellas, the Dead Sea shore): bottom_radius is lowered by that
+// depth d and every density profile is continued downwards, so that the
+// air above the datum is unchanged:
+//  - exponential: rho(h) = exp(-h / H) becomes exp(-(h' - d) / H), the
+//    same profile with its coefficients times exp(d / H) (h' = h + d, the
+//    altitude above the new bottom);
+//  - piecewise linear: the knots move up by d, and a profile that starts at
+//    the datum keeps its lowest density below it.
+// Returns `atmosphere` unchanged when the surface stays above the datum.
+// The Globe keeps `atmosphere` (the datum); the pass takes this one.
+Atmosphere extend_below_datum(const Atmosphere& atmosphere, const PlanetSurface& surface);
 
 // An infinite perspective projection with reversed-Z depth (OpenGL with
 // glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE)): the near plane at depth 1,

@@ -212,6 +212,9 @@ class AtmospherePass {
   void bind_textures(int first_unit) const;
 
   const PlanetFrame& frame() const;
+  // The radius of the atmosphere's ground (its bottom_radius), m: the
+  // lowest point its tables reach.
+  double bottom_radius_m() const;
   // The illuminance of the atmosphere's own sun at the top of the
   // atmosphere (lux): what FrameInput::sun_illuminance_lux = 0 means, and
   // the sun of glsl_library()'s functions (scale their light by

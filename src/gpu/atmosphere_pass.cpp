@@ -106,6 +106,7 @@ bool is_float_colour_format(GLint format) {
 
 struct AtmospherePass::Impl {
   PlanetFrame frame;
+  double bottom_radius_m = 0.0;
   std::unique_ptr<gpu::GpuTables> tables;
   std::unique_ptr<gpu::GpuTimer> timer;
   // The program variants (gpu::PassVariant::index), compiled on first use.
@@ -163,6 +164,7 @@ AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const Tables& table
   gpu::require_gl_context("the engine plugin (atmos::AtmospherePass)");
   Impl& p = *impl_;
   p.frame = frame;
+  p.bottom_radius_m = atmosphere.bottom_radius_m;
   gpu::clear_gl_errors();
   try {
     p.tables = std::make_unique<gpu::GpuTables>(atmosphere, tables, TexturePrecision::full);
@@ -233,6 +235,8 @@ AtmospherePass::~AtmospherePass() {
 const PassTimings& AtmospherePass::last_timings() const { return impl_->timings; }
 
 const PlanetFrame& AtmospherePass::frame() const { return impl_->frame; }
+
+double AtmospherePass::bottom_radius_m() const { return impl_->bottom_radius_m; }
 
 double AtmospherePass::sun_illuminance_lux() const { return impl_->own_sun_lux; }
 

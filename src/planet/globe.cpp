@@ -176,6 +176,14 @@ Globe::Globe(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
   if (settings.first_unit < 0) throw Error("globe settings: first_unit must be a texture unit (>= 0)");
   impl_ = std::make_unique<Impl>(atmosphere, surface, pass, settings);
   Impl& p = *impl_;
+  // The pass's tables must reach the lowest ground: below their bottom the
+  // light and the aerial perspective would be clamped to it.
+  const double lowest_radius = atmosphere.bottom_radius_m + p.surface.min_height_m();
+  if (pass.bottom_radius_m() > lowest_radius + 1.0)
+    throw Error("globe: the ground goes down to " + std::to_string(p.surface.min_height_m()) +
+                " m, below the bottom of the pass's atmosphere (" +
+                std::to_string(pass.bottom_radius_m() - atmosphere.bottom_radius_m) +
+                " m): build the pass from extend_below_datum(atmosphere, surface)");
   if (settings.memory_cap_bytes < 6 * p.builder.vertex_count() * sizeof(planet::TileVertex))
     throw Error("globe settings: memory_cap_bytes " + std::to_string(settings.memory_cap_bytes) +
                 " holds less than the six root tiles");
@@ -388,6 +396,37 @@ double Globe::height_m(const glm::dvec3& position) const {
 double Globe::min_height_m() const { return impl_->builder.min_surface_height_m(); }
 double Globe::max_height_m() const { return impl_->builder.max_surface_height_m(); }
 const GlobeStats& Globe::last_stats() const { return impl_->stats; }
+
+double lowest_surface_height_m(const PlanetSurface& surface, double datum_radius_m) {
+  return planet::lowest_height_m(surface, datum_radius_m);
+}
+
+Atmosphere extend_below_datum(const Atmosphere& atmosphere, const PlanetSurface& surface) {
+  const double depth = -lowest_surface_height_m(surface, atmosphere.bottom_radius_m);
+  if (!(depth > 0.0)) return atmosphere;
+  if (!(depth < 0.5 * atmosphere.bottom_radius_m))
+    throw Error("extend_below_datum: the surface goes " + std::to_string(depth) +
+                " m below the datum, more than half the planet's radius");
+  Atmosphere deeper = atmosphere;
+  deeper.bottom_radius_m -= depth;
+  for (Constituent& c : deeper.constituents) {
+    DensityProfile& d = c.density;
+    if (d.kind == DensityProfile::Kind::exponential) {
+      const double factor = std::exp(depth / d.scale_height_m);
+      c.scattering = c.scattering.scaled(factor);
+      c.absorption = c.absorption.scaled(factor);
+    } else {
+      std::vector<std::pair<double, double>> knots;
+      // A profile that reaches the datum keeps its lowest density below it.
+      if (!d.knots.empty() && d.knots.front().first <= 0.0 && d.knots.front().first + depth > 0.0)
+        knots.emplace_back(0.0, d.knots.front().second);
+      for (const auto& [altitude, density] : d.knots) knots.emplace_back(altitude + depth, density);
+      d.knots = knots;
+    }
+  }
+  deeper.validate();
+  return deeper;
+}
 
 glm::dmat4 reversed_z_projection(double fov_y_rad, double aspect, double near) {
   if (!(fov_y_rad > 0.0 && fov_y_rad < 3.14159) || !(aspect > 0.0) || !(near > 0.0) || !std::isfinite(aspect) ||

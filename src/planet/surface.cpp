@@ -149,6 +149,11 @@ namespace {
 // the resolution of Debian's Blue Marble).
 constexpr int kCoastGridWidth = 2048;
 
+double sea_level_of(const PlanetSurface& s) {
+  if (s.sea_level_m) return *s.sea_level_m;
+  return s.style == SurfaceStyle::earth ? 0.0 : -std::numeric_limits<double>::infinity();
+}
+
 std::unique_ptr<Surface::Data> open_data(const PlanetSurface& s, double radius_m) {
   if (!(std::isfinite(radius_m) && radius_m > 0.0)) throw Error("surface: the radius must be finite and positive");
   auto data = std::make_unique<Surface::Data>();
@@ -156,8 +161,7 @@ std::unique_ptr<Surface::Data> open_data(const PlanetSurface& s, double radius_m
     data->elevation = std::make_unique<RasterSource>(raster_settings(s.elevation, RasterKind::elevation, "elevation"));
   if (!s.imagery.source.empty())
     data->imagery = std::make_unique<RasterSource>(raster_settings(s.imagery, RasterKind::imagery, "imagery"));
-  if (s.sea_level_m) data->sea_level_m = *s.sea_level_m;
-  else if (s.style == SurfaceStyle::earth) data->sea_level_m = 0.0;
+  data->sea_level_m = sea_level_of(s);
   // The Earth style's land and sea from the real coast, where no elevation
   // data cover the globe: the coastline file, or the imagery's colours.
   const bool global_data = data->elevation && data->elevation->is_global();
@@ -196,15 +200,18 @@ ReliefSettings relief_settings(const PlanetSurface& s, double radius_m, const Su
 
 }  // namespace
 
-Surface::Surface(const PlanetSurface& surface, double radius_m)
-    : data_(open_data(surface, radius_m)), relief_(relief_settings(surface, radius_m, *data_)) {
-  double lo = relief_.min_height_m(), hi = relief_.max_height_m();
-  if (data_->elevation) {
-    detail_wavelength_m_ = 2.0 * data_->elevation->pixel_size_m(radius_m);
-    const double detail = relief_.detail_bound_m(detail_wavelength_m_);
-    const double data_lo = data_->elevation->min_value() - detail, data_hi = data_->elevation->max_value() + detail;
+namespace {
+
+// The drawn surface's height range from the relief's and the data's (the
+// coast only moves land and sea within the relief's range).
+void height_range(const Relief& relief, const RasterSource* elevation, double detail_wavelength_m, double sea_level_m,
+                  double& min_m, double& max_m) {
+  double lo = relief.min_height_m(), hi = relief.max_height_m();
+  if (elevation != nullptr) {
+    const double detail = relief.detail_bound_m(detail_wavelength_m);
+    const double data_lo = elevation->min_value() - detail, data_hi = elevation->max_value() + detail;
     // Where the data cover everything, the relief never shows.
-    if (data_->elevation->is_global()) {
+    if (elevation->is_global()) {
       lo = data_lo;
       hi = data_hi;
     } else {
@@ -212,8 +219,28 @@ Surface::Surface(const PlanetSurface& surface, double radius_m)
       hi = std::max(hi, data_hi);
     }
   }
-  min_height_m_ = std::max(lo, data_->sea_level_m);
-  max_height_m_ = std::max(hi, data_->sea_level_m);
+  min_m = std::max(lo, sea_level_m);
+  max_m = std::max(hi, sea_level_m);
+}
+
+}  // namespace
+
+double lowest_height_m(const PlanetSurface& surface, double radius_m) {
+  const Relief relief(ReliefSettings{surface.style, surface.seed, radius_m, surface.sea_level_m, {}, 0.0});
+  std::unique_ptr<RasterSource> elevation;
+  if (!surface.elevation.source.empty())
+    elevation = std::make_unique<RasterSource>(raster_settings(surface.elevation, RasterKind::elevation, "elevation"));
+  const double detail_wavelength = elevation ? 2.0 * elevation->pixel_size_m(radius_m) : 0.0;
+  double lo = 0, hi = 0;
+  height_range(relief, elevation.get(), detail_wavelength, sea_level_of(surface), lo, hi);
+  return lo;
+}
+
+Surface::Surface(const PlanetSurface& surface, double radius_m)
+    : data_(open_data(surface, radius_m)), relief_(relief_settings(surface, radius_m, *data_)) {
+  if (data_->elevation) detail_wavelength_m_ = 2.0 * data_->elevation->pixel_size_m(radius_m);
+  height_range(relief_, data_->elevation.get(), detail_wavelength_m_, data_->sea_level_m, min_height_m_,
+               max_height_m_);
 }
 
 Surface::~Surface() = default;

@@ -33,6 +33,10 @@
 
 namespace atmos::planet {
 
+// The lowest drawn height of a surface, m above the datum (Surface's
+// min_height_m without building the coast's grid).
+double lowest_height_m(const PlanetSurface& surface, double radius_m);
+
 class Surface {
  public:
   // Opens the rasters and the coastline file. atmos::Error as RasterSource
