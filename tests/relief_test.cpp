@@ -331,6 +331,28 @@ TEST(Relief, AlbedoFollowsThePresetsGroundColours) {
   }
 }
 
+// The Mars style's canyon (after Valles Marineris): near the equator, its
+// floor ~7 km below the plateau on either side, and only in the Mars style.
+TEST(Relief, MarsHasAValleyDeeperThanItsSurroundings) {
+  const Relief mars = make(ReliefStyle::mars, 1, kMarsRadius);
+  const glm::dvec3 c = mars.canyon_centre();
+  ASSERT_NEAR(glm::length(c), 1.0, 1e-12);
+  EXPECT_LT(std::abs(c.z), std::sin(15.0 * M_PI / 180.0));
+  // Across the canyon: the normal to c in the plane of c and the pole.
+  const glm::dvec3 across = glm::normalize(glm::dvec3(0, 0, 1) - c * c.z);
+  const auto h = [&](double offset_m) {
+    return mars.height_m(glm::normalize(c + across * (offset_m / kMarsRadius)));
+  };
+  // Means over a few points (the detail and craters vary by hundreds of m).
+  double floor = 0, plateau = 0;
+  for (int k = -2; k <= 2; ++k) {
+    floor += h(k * 5e3) / 5.0;
+    plateau += (h(300e3 + k * 5e3) + h(-300e3 + k * 5e3)) / 10.0;
+  }
+  EXPECT_LT(floor - plateau, -5000.0) << "floor " << floor << " m, plateau " << plateau << " m";
+  EXPECT_EQ(make(ReliefStyle::earth).canyon_centre(), glm::dvec3(0.0));
+}
+
 TEST(Relief, InvalidSettingsAreReported) {
   for (double radius : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()})
     EXPECT_THROW(make(ReliefStyle::earth, 1, radius), atmos::Error);

@@ -43,6 +43,8 @@ struct Options {
   double from_radii = 2.5;   // first altitude, planet radii
   double to_m = 2.0;         // last altitude, m
   double sun_elevation = 20.0;  // degrees, at the descent's ground point
+  double sun_azimuth = 0.0;     // degrees from north towards east
+  double heading = 90.0;        // degrees from north towards east: where the camera looks near the ground
   double latitude = 20.0, longitude = 30.0;  // degrees, the ground point
   double exposure = 13.0;  // EV100 of the PNGs
   double max_screen_error_px = 1.0;
@@ -106,8 +108,11 @@ int run(const Options& o) {
   const glm::dvec3 north = glm::cross(up, east);
   const double radius = planet.bottom_radius_m;
   const double ground = radius + globe.height_m(frame.centre + up * radius * frame.units_per_metre);
-  const double sun_el = glm::radians(o.sun_elevation);
-  const glm::dvec3 sun = glm::normalize(north * std::cos(sun_el) + up * std::sin(sun_el));
+  const double sun_el = glm::radians(o.sun_elevation), sun_az = glm::radians(o.sun_azimuth);
+  const glm::dvec3 sun = glm::normalize((north * std::cos(sun_az) + east * std::sin(sun_az)) * std::cos(sun_el) +
+                                        up * std::sin(sun_el));
+  const double heading = glm::radians(o.heading);
+  const glm::dvec3 ahead = north * std::cos(heading) + east * std::sin(heading);
   const double nits_per_unit = 1000.0;
 
   std::filesystem::create_directories(o.out_dir);
@@ -116,16 +121,16 @@ int run(const Options& o) {
     const double t = o.descent > 1 ? double(f) / double(o.descent - 1) : 0.0;
     const double altitude = std::exp(std::log(first) + (std::log(last) - std::log(first)) * t);
     // From far away the camera looks at the planet's centre; near the ground
-    // it looks east, 8 degrees down, with the sun on its left (north): the
-    // relief lit from the side.
+    // it looks along the heading (east by default), 8 degrees down; with the
+    // default sun (north) the relief is lit from the side.
     const double w = std::clamp(std::log10(altitude / 1e3) / std::log10(first / 1e3), 0.0, 1.0);
     const double pitch = glm::radians(-8.0 + (-90.0 + 8.0) * w);
-    const glm::dvec3 forward = glm::normalize(east * std::cos(pitch) + up * std::sin(pitch));
+    const glm::dvec3 forward = glm::normalize(ahead * std::cos(pitch) + up * std::sin(pitch));
     const glm::dvec3 camera_m = up * (ground + altitude);
     const glm::dvec3 camera = frame.centre + camera_m * frame.units_per_metre;
 
     atmos::GlobeView view;
-    view.view = glm::lookAt(camera, camera + forward, std::abs(pitch) > 1.5 ? east : up);
+    view.view = glm::lookAt(camera, camera + forward, std::abs(pitch) > 1.5 ? ahead : up);
     view.projection = atmos::reversed_z_projection(glm::radians(60.0), double(o.width) / o.height, 1e-6);
     view.width = o.width;
     view.height = o.height;
@@ -194,6 +199,12 @@ int main(int argc, char** argv) {
   app.add_option("--sun-elevation", o.sun_elevation, "Sun elevation at the ground point, degrees")
       ->capture_default_str()
       ->check(CLI::Range(-90.0, 90.0));
+  app.add_option("--sun-azimuth", o.sun_azimuth, "Sun azimuth at the ground point, degrees from north towards east")
+      ->capture_default_str()
+      ->check(CLI::Range(-360.0, 360.0));
+  app.add_option("--heading", o.heading, "Where the camera looks near the ground, degrees from north towards east")
+      ->capture_default_str()
+      ->check(CLI::Range(-360.0, 360.0));
   app.add_option("--latitude", o.latitude, "Latitude of the ground point, degrees")
       ->capture_default_str()
       ->check(CLI::Range(-89.0, 89.0));

@@ -60,6 +60,12 @@ constexpr double kFadeSlope = 1.875;       // max s'
 constexpr double kFadeCurvature = 5.7736;  // max |s''| = 10 / sqrt(3), rounded up
 constexpr double kRidgeSlope = 4.0;        // d/dn (1 - |n|)^4 <= 4 for |n| <= 1
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
+// The canyon, after Valles Marineris (Smith et al. 1999, MOLA): about
+// 4000 km long, 150 km wide on its floor (half width 75 km, +-30 % along
+// its length), walls 20 km wide, 7 km deep, its ends rising over 300 km.
+constexpr double kCanyonLength_m = 4000e3, kCanyonHalfWidth_m = 75e3, kCanyonWall_m = 20e3;
+constexpr double kCanyonDepth_m = 7000.0, kCanyonTaper_m = 300e3, kCanyonWobble = 0.3;
+constexpr double kCanyonWobbleWavelength_m = 400e3;
 
 // Per-octave amplitude ratios 2^-H for Hurst exponents H (fBm with spectral
 // slope beta = 2H + 1; Musgrave et al. 1989), as literals so that no platform
@@ -259,6 +265,18 @@ Relief::Relief(const ReliefSettings& settings) : settings_(settings) {
       }
       crater_presence_high_ = 1.0;
       crater_presence_low_ = 0.12;
+      // The canyon: near the equator (its great circle's pole within 13 deg
+      // of the north pole, towards a seeded direction), its middle at a
+      // seeded longitude; one octave of noise for its width (|n| <= 1).
+      {
+        const uvec3 k = pcg3d(layer_key(seed, 13, 0));
+        const auto unit = [](std::uint32_t v) { return double(v >> 8) / 8388608.0 - 1.0; };  // [-1, 1)
+        canyon_pole_ = glm::normalize(glm::dvec3(0.17 * unit(k.x), 0.17 * unit(k.y), 1.0));
+        glm::dvec3 middle(unit(k.z), unit(pcg3d(k).x), 0.0);
+        if (glm::dot(middle, middle) < 1e-6) middle = glm::dvec3(1.0, 0.0, 0.0);
+        canyon_centre_ = glm::normalize(middle - canyon_pole_ * glm::dot(middle, canyon_pole_));
+        canyon_wobble_ = make_octaves(seed, 14, kCanyonWobbleWavelength_m, 1.0, 0.5, 1);
+      }
       break;
     }
     case ReliefStyle::venus: {
@@ -377,6 +395,28 @@ double Relief::detail_bound_m(double max_wavelength_m) const {
   return sum;
 }
 
+// The canyon's depth (<= 0): -D a(s) w(x). With c the direction of the
+// canyon's middle, n the pole of its great circle and t = n x c: x =
+// R |d . n| is the distance from the great circle, s = R d . t the
+// position along it (both within 0.1 % of the arcs at these angles, and
+// without the platform's trigonometry, which would break the bit-for-bit
+// heights); a rises from 0 to 1 over the taper at each end (|s| up to half
+// the length, on the hemisphere d . c > 0), w is 1 on the floor (x below
+// the wobbling half width minus the wall) and falls to 0 across the wall
+// (C2 masks).
+double Relief::canyon_m(const glm::dvec3& direction, const glm::dvec3& p_m) const {
+  if (canyon_wobble_.empty() || glm::dot(direction, canyon_centre_) <= 0.0) return 0.0;
+  const double R = settings_.radius_m;
+  const double along = glm::dot(direction, glm::cross(canyon_pole_, canyon_centre_)) * R;
+  const double ends = fade_mask((0.5 * kCanyonLength_m - std::abs(along)) / kCanyonTaper_m);
+  if (!(ends > 0.0)) return 0.0;
+  const double across = std::abs(glm::dot(direction, canyon_pole_)) * R;
+  const double half_width = kCanyonHalfWidth_m * (1.0 + kCanyonWobble * sum_octaves(canyon_wobble_, p_m));
+  return -kCanyonDepth_m * ends * fade_mask((half_width - across) / kCanyonWall_m);
+}
+
+glm::dvec3 Relief::canyon_centre() const { return canyon_wobble_.empty() ? glm::dvec3(0.0) : canyon_centre_; }
+
 double Relief::large_scale_field(const glm::dvec3& p_m) const { return sum_octaves(large_scale_, p_m); }
 
 // The Mars dichotomy coordinate: the component along the (southward) axis
@@ -486,7 +526,7 @@ double Relief::height_m(const glm::dvec3& direction) const {
     case ReliefStyle::mars: {
       const double highland = fade_mask((dichotomy_coordinate(direction, p) - kDichotomyEdge) / kDichotomyWidth);
       const double h = kLowlands_m + kDichotomyStep_m * highland;
-      return h + (0.25 + 0.75 * highland) * sum_octaves(detail_, p) + craters_m(p);
+      return h + (0.25 + 0.75 * highland) * sum_octaves(detail_, p) + craters_m(p) + canyon_m(direction, p);
     }
     case ReliefStyle::venus: {
       const double t = large_scale_field(p) - threshold_;
@@ -673,6 +713,16 @@ void Relief::finish_bounds() {
       const double m_curvature = mask_curvature(kDichotomyWidth, s_slope, field_curvature);
       terms_.push_back(TermBound{kLowlands_m, kLowlands_m + kDichotomyStep_m, kDichotomyStep_m * m_slope,
                                  kDichotomyStep_m * m_curvature});
+      // The canyon: range [-D, 0]; slope from its two masks, D s' (1/wall
+      // (1 + dW/ds) + 2/taper), dW/ds = W0 wobble n' / lambda_w; kinked (the
+      // distance |x| at the great circle, where the floor mask is flat,
+      // and the mask of the ends where they meet).
+      {
+        const double dw = kCanyonHalfWidth_m * kCanyonWobble * kNoiseSlope / kCanyonWobbleWavelength_m;
+        terms_.push_back(TermBound{-kCanyonDepth_m, 0.0,
+                                   kCanyonDepth_m * kFadeSlope * ((1.0 + dw) / kCanyonWall_m + 2.0 / kCanyonTaper_m),
+                                   -1.0});
+      }
       // Detail under the factor f = 0.25 + 0.75 m (|f| <= 1): product rule,
       // (f n)' <= 0.75 Lm + n', (f n)'' <= 0.75 Km + 2 (0.75 Lm) n' + n''.
       for (const Octave& o : detail_) {

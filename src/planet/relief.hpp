@@ -120,6 +120,10 @@ class Relief {
   double crater_class_min_diameter_m(int size_class) const;
   bool crater_at(const glm::dvec3& direction, int size_class, Crater& crater) const;
 
+  // The Mars style's canyon (a Valles Marineris): the direction of the middle
+  // of its floor; (0, 0, 0) for the other styles. For placing cameras.
+  glm::dvec3 canyon_centre() const;
+
   // One octave of a noise layer: its lattice (inverse wavelength, offset, key)
   // and its amplitude.
   struct Octave {
@@ -144,6 +148,7 @@ class Relief {
   double large_scale_field(const glm::dvec3& p_m) const;
   double dichotomy_coordinate(const glm::dvec3& direction, const glm::dvec3& p_m) const;
   double craters_m(const glm::dvec3& p_m) const;
+  double canyon_m(const glm::dvec3& direction, const glm::dvec3& p_m) const;
   double crater_presence(const glm::dvec3& centre_direction) const;
   bool crater_in_cell(const glm::dvec3& p_m, const CraterClass& size_class, Crater& crater, double& r) const;
   double sum_octaves(const std::vector<Octave>& octaves, const glm::dvec3& p_m) const;
@@ -164,6 +169,10 @@ class Relief {
   std::vector<CraterClass> craters_;
   double threshold_ = 0;             // the large-scale field's value at the coast / highland edge
   glm::dvec3 dichotomy_axis_{0.0, 0.0, -1.0};
+  // The canyon runs along the great circle with pole canyon_pole_, centred
+  // on canyon_centre_; canyon_wobble_ varies its width.
+  glm::dvec3 canyon_pole_{0.0}, canyon_centre_{0.0};
+  std::vector<Octave> canyon_wobble_;
   double crater_presence_low_ = 0, crater_presence_high_ = 0;
 };
 
