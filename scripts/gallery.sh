@@ -53,12 +53,23 @@ for scene in noon-valley sunset-shafts orbit-400km; do
   (cd "$out/plugin" && "$example" --scene "$scene" -o "$scene.png" -o "$scene.exr" &&
     "$example" --scene "$scene" --no-atmosphere -o "$scene-raw.png")
 done
-# The terrain globe (atmos::Globe, examples/globe) under the plugin: a
-# descent of five frames from 2.5 planet radii to 2 m, Earth and Mars (its
-# southern highlands) in their procedural styles, 960x540.
+# The terrain globe (atmos::Globe, examples/globe) under the plugin, 960x540:
+# Earth (Blue Marble imagery, GSHHG coasts) from 2.5 planet radii at noon and
+# at the terminator, north up; a descent of five frames from 2.5 radii to 2 m
+# onto the Red Sea's Egyptian coast; Mars's southern highlands from orbit
+# and from 2 m; and the canyon of the Mars style (the mars-thesis air, the
+# clearer one) late in the afternoon, looking north at its wall.
 globe="${ATMOS_BUILD_DIR:-$root/build}/examples/atmos_example_globe"
-mkdir -p "$out/globe/earth" "$out/globe/mars"
-"$globe" --planet earth --descent 5 --out-dir "$out/globe/earth"
+mkdir -p "$out/globe/earth" "$out/globe/earth-noon" "$out/globe/earth-terminator" "$out/globe/mars" \
+  "$out/globe/mars-canyon"
+"$globe" --planet earth --descent 1 --latitude 10 --longitude 20 --heading 0 --sun-elevation 90 \
+  --out-dir "$out/globe/earth-noon"
+"$globe" --planet earth --descent 1 --latitude 10 --longitude 20 --heading 0 --sun-elevation 0 --sun-azimuth 90 \
+  --out-dir "$out/globe/earth-terminator"
+"$globe" --planet earth --descent 5 --latitude 26.5 --longitude 33.6 --sun-elevation 35 --sun-azimuth 200 \
+  --out-dir "$out/globe/earth"
 "$globe" --planet mars --latitude -35 --longitude 60 --descent 5 --sun-elevation 12 --exposure 12 \
   --out-dir "$out/globe/mars"
+"$globe" --planet mars-thesis --descent 2 --to 300 --latitude -1.9 --longitude 138.27 --heading 20 \
+  --sun-elevation 12 --sun-azimuth 250 --exposure 12 --out-dir "$out/globe/mars-canyon"
 echo "gallery: $out"
