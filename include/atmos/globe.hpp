@@ -123,9 +123,12 @@ class Globe {
 };
 
 // The lowest point of `surface` on a planet whose datum sphere has radius
-// datum_radius_m, m above the datum (a bound: the drawn surface never goes
-// lower). Opens the surface's elevation raster, if any (atmos::Error as
-// Globe's constructor).
+// datum_radius_m, m above the datum: elevation data's minimum less the
+// detail added below them, and the procedural relief's minimum over 40000
+// directions less a tenth of its sampled range (the relief's exact minimum
+// is not known; a bound that adds every term's worst case lies kilometres
+// lower than any point). Opens the surface's elevation raster, if any
+// (atmos::Error as Globe's constructor).
 double lowest_surface_height_m(const PlanetSurface& surface, double datum_radius_m);
 
 // The same atmosphere continued below its bottom (the datum) down to the

@@ -176,11 +176,13 @@ Globe::Globe(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
   if (settings.first_unit < 0) throw Error("globe settings: first_unit must be a texture unit (>= 0)");
   impl_ = std::make_unique<Impl>(atmosphere, surface, pass, settings);
   Impl& p = *impl_;
-  // The pass's tables must reach the lowest ground: below their bottom the
-  // light and the aerial perspective would be clamped to it.
-  const double lowest_radius = atmosphere.bottom_radius_m + p.surface.min_height_m();
+  // The pass's tables must reach the lowest ground (as lowest_surface_height_m
+  // estimates it): below their bottom the light and the aerial perspective
+  // would be clamped to it.
+  const double lowest = p.surface.estimated_lowest_m();
+  const double lowest_radius = atmosphere.bottom_radius_m + lowest;
   if (pass.bottom_radius_m() > lowest_radius + 1.0)
-    throw Error("globe: the ground goes down to " + std::to_string(p.surface.min_height_m()) +
+    throw Error("globe: the ground goes down to " + std::to_string(lowest) +
                 " m, below the bottom of the pass's atmosphere (" +
                 std::to_string(pass.bottom_radius_m() - atmosphere.bottom_radius_m) +
                 " m): build the pass from extend_below_datum(atmosphere, surface)");

@@ -2,7 +2,9 @@
 
 #include <glm/geometric.hpp>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
@@ -225,15 +227,59 @@ void height_range(const Relief& relief, const RasterSource* elevation, double de
 
 }  // namespace
 
+// The relief's lowest point, estimated: the minimum over a Fibonacci
+// lattice of 40000 directions (about 110 km apart on Earth, 60 km on
+// Mars; Gonzalez 2010) minus a tenth of the sampled range, and never
+// below the rigorous bound. That bound adds every term's worst case at
+// once, which no point reaches (Mars: -19 km, against -11 km sampled): an
+// atmosphere extended that far would put the tables' ground, and its
+// reflected light, far below any real ground.
+double estimated_lowest_m(const Relief& relief) {
+  constexpr int kSamples = 40000;
+  constexpr double kGolden = 2.39996322972865332;  // pi (3 - sqrt 5)
+  struct Range {
+    double low = std::numeric_limits<double>::infinity(), high = -std::numeric_limits<double>::infinity();
+  };
+  const Range r = tbb::parallel_reduce(
+      tbb::blocked_range<int>(0, kSamples), Range{},
+      [&](const tbb::blocked_range<int>& block, Range range) {
+        for (int i = block.begin(); i < block.end(); ++i) {
+          const double z = 1.0 - (2.0 * i + 1.0) / kSamples, ring = std::sqrt(std::max(0.0, 1.0 - z * z));
+          const double phi = kGolden * i;
+          const double h = relief.height_m(glm::dvec3(ring * std::cos(phi), ring * std::sin(phi), z));
+          range.low = std::min(range.low, h);
+          range.high = std::max(range.high, h);
+        }
+        return range;
+      },
+      [](Range a, const Range& b) {
+        a.low = std::min(a.low, b.low);
+        a.high = std::max(a.high, b.high);
+        return a;
+      });
+  return std::max(relief.min_height_m(), r.low - 0.1 * (r.high - r.low));
+}
+
+double estimated_lowest_m(const Relief& relief, const RasterSource* elevation, double sea_level_m) {
+  double lo = estimated_lowest_m(relief);
+  if (elevation != nullptr) {
+    const double detail_wavelength = 2.0 * elevation->pixel_size_m(relief.settings().radius_m);
+    const double data_lo = elevation->min_value() - relief.detail_bound_m(detail_wavelength);
+    lo = elevation->is_global() ? data_lo : std::min(lo, data_lo);
+  }
+  return std::max(lo, sea_level_m);
+}
+
 double lowest_height_m(const PlanetSurface& surface, double radius_m) {
   const Relief relief(ReliefSettings{surface.style, surface.seed, radius_m, surface.sea_level_m, {}, 0.0});
   std::unique_ptr<RasterSource> elevation;
   if (!surface.elevation.source.empty())
     elevation = std::make_unique<RasterSource>(raster_settings(surface.elevation, RasterKind::elevation, "elevation"));
-  const double detail_wavelength = elevation ? 2.0 * elevation->pixel_size_m(radius_m) : 0.0;
-  double lo = 0, hi = 0;
-  height_range(relief, elevation.get(), detail_wavelength, sea_level_of(surface), lo, hi);
-  return lo;
+  return estimated_lowest_m(relief, elevation.get(), sea_level_of(surface));
+}
+
+double Surface::estimated_lowest_m() const {
+  return planet::estimated_lowest_m(relief_, data_->elevation.get(), data_->sea_level_m);
 }
 
 Surface::Surface(const PlanetSurface& surface, double radius_m)

@@ -33,8 +33,10 @@
 
 namespace atmos::planet {
 
-// The lowest drawn height of a surface, m above the datum (Surface's
-// min_height_m without building the coast's grid).
+// The lowest drawn height of a surface, m above the datum, estimated
+// (surface.cpp): the relief's sampled minimum less a margin, elevation
+// data's own minimum less the detail's bound; at least the sea level.
+// Surface::min_height_m is the rigorous bound (for culling), far lower.
 double lowest_height_m(const PlanetSurface& surface, double radius_m);
 
 class Surface {
@@ -56,6 +58,8 @@ class Surface {
   // imagery's overview), linear RGB in [0, 1].
   void albedos(const glm::dvec3* directions, std::size_t n, double spacing_m, glm::vec3* out) const;
 
+  // The lowest drawn height as lowest_height_m estimates it, m.
+  double estimated_lowest_m() const;
   // Bounds of the drawn surface's height, m.
   double min_height_m() const { return min_height_m_; }
   double max_height_m() const { return max_height_m_; }
