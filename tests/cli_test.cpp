@@ -98,6 +98,13 @@ TEST(Cli, UsageErrorsAreOneLineWithExitCode2) {
   expect_usage_error("sample --paths 100" + kSmall, "--reference");
   expect_usage_error("sample --reference --sun-disc" + kSmall, "--reference");
   expect_usage_error("nosuchcommand", "nosuchcommand");
+  // The globe is drawn with OpenGL only, and is the default: --cpu needs
+  // --surface sphere, never a silent change of ground.
+  const std::string needs_gl = "the globe needs OpenGL: use --surface sphere with --cpu";
+  expect_usage_error("render --cpu --surface globe" + kSmall, needs_gl);
+  expect_usage_error("render --cpu" + kSmall, needs_gl);
+  expect_usage_error("render --surface x" + kSmall, "--surface");
+  expect_usage_error("render --precision half" + kSmall, "--precision half applies to --surface sphere");
 }
 
 // The help text of option `name` in `help` (CLI11's layout: the option's
@@ -206,9 +213,9 @@ TEST(Cli, EveryCommandRunsWithItsSharedOptions) {
   const std::string view = " --altitude 100 --sun-elevation 20 --sun-azimuth 90 --moon 270,30,0.3 --moon 0,60,0.5";
   CliRun r = atmos_cli("precompute" + planet);
   EXPECT_EQ(r.code, 0) << r.err;
-  r = atmos_cli("render --cpu --size 8x8 -o " + (scratch() / "shared.exr").string() + planet + view);
+  r = atmos_cli("render --cpu --surface sphere --size 8x8 -o " + (scratch() / "shared.exr").string() + planet + view);
   EXPECT_EQ(r.code, 0) << r.err;
-  r = atmos_cli("render --cpu --size 8x8 -o " + (scratch() / "shared.exr").string() + planet +
+  r = atmos_cli("render --cpu --surface sphere --size 8x8 -o " + (scratch() / "shared.exr").string() + planet +
                 " --position 7e6,1e6,2e6 --sun-elevation 20 --moon 270,30,0.3");
   EXPECT_EQ(r.code, 0) << r.err;
   r = atmos_cli("sample" + planet + view, "azimuth_deg,elevation_deg\n0,90\n");
@@ -245,7 +252,7 @@ TEST(Cli, BadPlanetFilesAreOneLineErrors) {
 }
 
 TEST(Cli, UnwritableOutputIsAnError) {
-  const CliRun r = atmos_cli("render --cpu --size 8x8 -o /no/such/dir/out.png" + kSmall);
+  const CliRun r = atmos_cli("render --cpu --surface sphere --size 8x8 -o /no/such/dir/out.png" + kSmall);
   EXPECT_EQ(r.code, 1) << r.err;
   EXPECT_EQ(lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("/no/such/dir/out.png"), std::string::npos) << r.err;
@@ -449,9 +456,10 @@ TEST(Cli, SpaceIsBlackAndTheLitLimbBright) {
   EXPECT_LT(dark_limb, 0.01 * lit_limb);
 }
 
-// --moon in front of the sun: the sky goes dark, on the GPU and the CPU alike.
+// --moon in front of the sun: the sky goes dark, on the GPU and the CPU alike
+// (the renderer's sphere: the CPU draws no globe).
 TEST(Cli, MoonInFrontOfTheSunDarkensTheSky) {
-  const std::string view = " --sun-elevation 40 --sun-azimuth 180 --look 180,60 --size 16x16";
+  const std::string view = " --surface sphere --sun-elevation 40 --sun-azimuth 180 --look 180,60 --size 16x16";
   const atmos::Image day = render(view, "day");
   const atmos::Image eclipse = render(view + " --moon 180,40,0.3", "eclipse");
   const atmos::Image eclipse_cpu = render(view + " --moon 180,40,0.3 --cpu", "eclipse_cpu");
@@ -473,7 +481,7 @@ std::vector<double> sample_luminances(const CliRun& r) {
 // ray through the image centre.
 double render_luminance(const std::string& args, double azimuth, double elevation, const std::string& name) {
   const fs::path out = scratch() / (name + ".exr");
-  const CliRun r = atmos_cli("render --cpu --size 1x1 --look " + std::to_string(azimuth) + "," +
+  const CliRun r = atmos_cli("render --cpu --surface sphere --size 1x1 --look " + std::to_string(azimuth) + "," +
                              std::to_string(elevation) + args + " -o " + out.string());
   EXPECT_EQ(r.code, 0) << args << "\n" << r.err;
   const atmos::Image image = atmos::read_exr(out.string());
@@ -544,8 +552,142 @@ TEST(Cli, RenderProjectionsAndCpuPath) {
     const atmos::Image image = render(std::string("--projection ") + projection + " --size 32x16", projection);
     EXPECT_EQ(image.width, 32);
   }
-  const CliRun r = atmos_cli("render --cpu --size 16x8 -o " + (scratch() / "cpu.exr").string() + kSmall);
+  const CliRun r =
+      atmos_cli("render --cpu --surface sphere --size 16x8 -o " + (scratch() / "cpu.exr").string() + kSmall);
   EXPECT_EQ(r.code, 0) << r.err;
+}
+
+// --- The terrain globe (--surface globe, the default) ---
+
+// Mean colour of the pixels x0 <= x < x1, y0 <= y < y1.
+Pixel mean_colour(const atmos::Image& image, int x0, int y0, int x1, int y1) {
+  Pixel sum{0.0, 0.0, 0.0};
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) {
+      const Pixel p = pixel(image, x, y);
+      sum.r += p.r;
+      sum.g += p.g;
+      sum.b += p.b;
+    }
+  const double n = double(x1 - x0) * double(y1 - y0);
+  return {sum.r / n, sum.g / n, sum.b / n};
+}
+
+// The detail of a region: the mean absolute luminance difference between
+// horizontal neighbours over the mean luminance (0 for a uniform region,
+// small for a smooth gradient).
+double detail(const atmos::Image& image, int x0, int y0, int x1, int y1) {
+  double differences = 0.0, sum = 0.0;
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x + 1 < x1; ++x) {
+      differences += std::abs(pixel(image, x + 1, y).luminance() - pixel(image, x, y).luminance());
+      sum += pixel(image, x, y).luminance();
+    }
+  return sum > 0.0 ? differences / sum : 0.0;
+}
+
+// 2 m above the ground at noon, in the Sahara (20° N, 30° E: --position 2 m
+// above the datum sphere, which the globe puts 2 m above its terrain),
+// looking north at the horizon: the lower half of the image is ground, with
+// the globe as with the sphere, and they differ: the globe's ground has the
+// imagery's colour (sand, far less blue than the sphere's grey ground in the
+// same light) and the relief's shading.
+TEST(Cli, GlobeGroundFromTwoMetres) {
+  const double r = 6371e3 + 2.0, lat = 20.0 * M_PI / 180.0, lon = 30.0 * M_PI / 180.0;
+  const std::string position = "--position " + std::to_string(r * std::cos(lat) * std::cos(lon)) + "," +
+                               std::to_string(r * std::cos(lat) * std::sin(lon)) + "," +
+                               std::to_string(r * std::sin(lat));
+  const std::string view = position + " --sun-elevation 70 --sun-azimuth 180 --look 0,0 --fov 40 --size 320x180";
+  const atmos::Image globe = render(view + " --surface globe", "globe-ground");
+  const atmos::Image sphere = render(view + " --surface sphere", "sphere-ground");
+  for (const atmos::Image* image : {&globe, &sphere}) {
+    const bool is_globe = image == &globe;
+    const Pixel sky = mean_colour(*image, 0, 0, 320, 40);
+    const Pixel ground = mean_colour(*image, 0, 100, 320, 180);
+    std::printf("%s: sky rgb %.0f %.0f %.0f, ground rgb %.0f %.0f %.0f, ground detail %.4f\n",
+                is_globe ? "globe" : "sphere", sky.r, sky.g, sky.b, ground.r, ground.g, ground.b,
+                detail(*image, 0, 100, 320, 180));
+    EXPECT_GT(sky.b, 1.3 * sky.r) << (is_globe ? "globe" : "sphere") << ": the sky is blue";
+    EXPECT_LT(ground.b / ground.r, 0.8 * sky.b / sky.r) << (is_globe ? "globe" : "sphere") << ": not the sky";
+    EXPECT_GT(ground.luminance(), 100.0) << (is_globe ? "globe" : "sphere") << ": lit ground";
+  }
+  const Pixel g = mean_colour(globe, 0, 100, 320, 180), s = mean_colour(sphere, 0, 100, 320, 180);
+  EXPECT_LT(g.b / g.r, 0.7 * s.b / s.r) << "the globe's sand, the sphere's grey";
+  EXPECT_GT(detail(globe, 0, 100, 320, 180), 3.0 * detail(sphere, 0, 100, 320, 180)) << "the globe's relief";
+}
+
+// From 2.5 planet radii above 0° N 0° E, the sun 60° up there: the
+// planet's disc, the same size with the globe as with the sphere, in black
+// space. The pass would draw its own sphere where the globe drew nothing;
+// the globe's disc shows the continents' edges (Africa and the Atlantic),
+// the sphere's is smooth.
+TEST(Cli, GlobeFromOrbitShowsThePlanet) {
+  const std::string view = "--position " + std::to_string(2.5 * 6371e3) +
+                           ",0,0 --look 0,-90 --fov 60 --size 96x96 --sun-azimuth 90 --sun-elevation 60";
+  const atmos::Image globe = render(view, "globe-orbit");
+  const atmos::Image sphere = render(view + " --surface sphere", "sphere-orbit");
+  const double radius_px = 48.0 / std::tan(30.0 * M_PI / 180.0) * std::tan(std::asin(1.0 / 2.5));
+  auto disc_pixels = [&](const atmos::Image& image) {
+    int n = 0;
+    for (int y = 0; y < 96; ++y)
+      for (int x = 0; x < 96; ++x) n += pixel(image, x, y).luminance() > 10.0;
+    return n;
+  };
+  const int g = disc_pixels(globe), s = disc_pixels(sphere);
+  const double inner = 0.6 * radius_px / std::sqrt(2.0);
+  const int x0 = int(48 - inner), x1 = int(48 + inner);
+  std::printf("orbit: disc %d px with the globe, %d with the sphere (pi r^2 = %.0f); detail %.4f and %.4f\n", g, s,
+              M_PI * radius_px * radius_px, detail(globe, x0, x0, x1, x1), detail(sphere, x0, x0, x1, x1));
+  EXPECT_EQ(pixel(globe, 0, 0).luminance(), 0.0);
+  EXPECT_EQ(pixel(globe, 95, 95).luminance(), 0.0);
+  EXPECT_GT(pixel(globe, 48, 48).luminance(), 100.0);
+  EXPECT_NEAR(double(g) / double(s), 1.0, 0.03);
+  EXPECT_GT(g, int(0.7 * M_PI * radius_px * radius_px));
+  EXPECT_GT(detail(globe, x0, x0, x1, x1), 3.0 * detail(sphere, x0, x0, x1, x1));
+}
+
+// The gallery's all-sky camera (a 180° fisheye looking up, the sun at
+// azimuth 135°, 20° up) through the globe's cube map: the sky is the
+// sphere renderer's at the zenith and at 45° elevation towards the four
+// cardinal points (which fixes the image's orientation: the sky is
+// brighter towards the sun), and outside the image circle is black.
+TEST(Cli, GlobeFisheyeAllSkyMatchesTheSphereSky) {
+  const std::string view = "--projection fisheye --look 0,90 --sun-azimuth 135 --sun-elevation 20 --size 96x96";
+  const atmos::Image globe = render(view, "globe-allsky");
+  const atmos::Image sphere = render(view + " --surface sphere", "sphere-allsky");
+  // Looking up with north at the top, east is on the left: 45° from the
+  // zenith is 24 px from the centre.
+  const std::vector<std::pair<int, int>> points = {{48, 48}, {48, 24}, {24, 48}, {48, 72}, {72, 48}};
+  for (const auto& [x, y] : points) {
+    const Pixel g = pixel(globe, x, y), s = pixel(sphere, x, y);
+    std::printf("allsky (%d, %d): globe %.1f cd/m2, sphere %.1f cd/m2\n", x, y, g.luminance(), s.luminance());
+    EXPECT_NEAR(g.luminance() / s.luminance(), 1.0, 0.01) << x << ", " << y;
+    EXPECT_NEAR(g.b / g.r, s.b / s.r, 0.01 * s.b / s.r) << x << ", " << y;
+  }
+  EXPECT_GT(pixel(globe, 24, 72).luminance(), 1.5 * pixel(globe, 72, 24).luminance()) << "brighter towards the sun";
+  EXPECT_EQ(pixel(globe, 0, 0).luminance(), 0.0);
+  EXPECT_EQ(pixel(globe, 95, 0).luminance(), 0.0);
+}
+
+// A partial eclipse dims the globe's ground as it dims the sphere's: the
+// globe lights its ground with the uneclipsed sun, and the CLI dims it with
+// the moons' factors for the sun's and the sky's light (atmos_eclipse). The
+// ground 4 m away (the north pole's flat sea ice and the flat sphere) has
+// the same mix of sun and sky light in both.
+TEST(Cli, GlobeGroundDimsInAnEclipse) {
+  const std::string view = " --sun-elevation 40 --sun-azimuth 180 --look 180,-30 --fov 20 --size 32x32";
+  const std::string moon = " --moon 180,40.3,0.3";
+  double ratio[2] = {0.0, 0.0};
+  for (int globe = 0; globe < 2; ++globe) {
+    const std::string surface = globe ? " --surface globe" : " --surface sphere";
+    const atmos::Image day = render(view + surface, std::string("day-ground") + (globe ? "-globe" : ""));
+    const atmos::Image eclipse = render(view + surface + moon, std::string("eclipse-ground") + (globe ? "-globe" : ""));
+    ratio[globe] = mean_colour(eclipse, 0, 0, 32, 32).luminance() / mean_colour(day, 0, 0, 32, 32).luminance();
+  }
+  std::printf("eclipsed ground over day ground: sphere %.3g, globe %.3g\n", ratio[0], ratio[1]);
+  EXPECT_LT(ratio[0], 0.8);
+  EXPECT_GT(ratio[0], 0.05);
+  EXPECT_NEAR(ratio[1] / ratio[0], 1.0, 0.02);
 }
 
 }  // namespace

@@ -317,6 +317,20 @@ std::vector<atmos::Moon> MoonOptions::place(const Viewpoint& viewpoint, const at
 }
 
 // ---------------------------------------------------------------------------
+// The ground
+
+void SurfaceOption::add(CLI::App& app) {
+  app.add_option("--surface", surface,
+                 "The ground: globe (the planet file's terrain: relief, imagery and coastlines drawn by atmos::Globe "
+                 "and composited by the engine plugin; the viewpoint's altitude is then above the terrain below it; "
+                 "needs OpenGL) or sphere (the analytic sphere of the bottom radius with the planet's ground albedo, "
+                 "the altitude above it; the only ground of --cpu)")
+      ->type_name("globe|sphere")
+      ->check(CLI::IsMember({"globe", "sphere"}).description(""))
+      ->capture_default_str();
+}
+
+// ---------------------------------------------------------------------------
 // The image size
 
 void SizeOption::add(CLI::App& app, const std::string& what) {

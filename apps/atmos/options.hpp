@@ -138,6 +138,14 @@ struct MoonOptions {
   std::vector<atmos::Moon> place(const Viewpoint& viewpoint, const atmos::Atmosphere& atmosphere) const;
 };
 
+// --surface globe|sphere (render): what the ground under the atmosphere is.
+struct SurfaceOption {
+  std::string surface = "globe";
+
+  void add(CLI::App& app);
+  bool globe() const { return surface == "globe"; }
+};
+
 // --size WxH (render, bench: the same format and range, each command its
 // own default and description of what is that size).
 struct SizeOption {

@@ -1,5 +1,7 @@
 // atmos render: images from the tables, on the GPU (or the CPU with --cpu);
-// with only the planet and table options, the default gallery.
+// with only the planet and table options, the default gallery. The ground
+// is the terrain globe under the engine plugin (globe_render.hpp), or with
+// --surface sphere the renderer's analytic sphere.
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -10,10 +12,12 @@
 #include <vector>
 
 #include "atmos/image.hpp"
+#include "atmos/planet_file.hpp"
 #include "atmos/post.hpp"
 #include "atmos/renderer.hpp"
 #include "atmos/sky.hpp"
 #include "commands.hpp"
+#include "globe_render.hpp"
 
 namespace atmos_cli {
 
@@ -26,6 +30,7 @@ struct RenderOptions {
   ViewpointOptions viewpoint;
   SunOptions sun;
   MoonOptions moons;
+  SurfaceOption surface;
   SizeOption size{"640x360"};
   std::string look;
   double fov = 0.0;
@@ -41,7 +46,7 @@ struct RenderOptions {
   double bloom = 0.0;
   bool auto_exposure = false;
   bool post = false;     // one of them given
-  bool gallery = false;  // no option but the planet, table, cache, --precision and --cpu ones
+  bool gallery = false;  // no option but the planet, table, cache, --surface, --precision and --cpu ones
 };
 
 struct Shot {
@@ -185,12 +190,20 @@ void check_options(const RenderOptions& o) {
   for (const std::string& path : o.outputs)
     if (!has_extension(path, ".png") && !has_extension(path, ".exr"))
       throw UsageError("-o/--output must name a .png or .exr file, got \"" + path + "\"");
+  if (o.surface.globe() && o.cpu) throw UsageError("the globe needs OpenGL: use --surface sphere with --cpu");
+  if (o.surface.globe() && o.precision == "half")
+    throw UsageError("--precision half applies to --surface sphere: the globe's atmosphere pass samples "
+                     "full-precision textures");
 }
 
 int run_render(const RenderOptions& o) {
   check_options(o);
   const atmos::Atmosphere atmosphere = o.planet.atmosphere();
   const std::vector<Shot> shots = o.gallery ? gallery(atmosphere) : std::vector<Shot>{single_shot(o, atmosphere)};
+  // The planet file's surface is read before the slow work, so that its
+  // errors come first.
+  const atmos::PlanetSurface surface =
+      o.surface.globe() ? atmos::load_surface(o.planet.planet) : atmos::PlanetSurface{};
   const LoadedTables loaded = load_tables(o.planet, o.tables, o.cache, true);
   const atmos::Atmosphere& a = loaded.atmosphere;
 
@@ -198,7 +211,10 @@ int run_render(const RenderOptions& o) {
   std::unique_ptr<atmos::GlContext> context;
   if (!o.cpu || o.post) context = atmos::GlContext::create_headless();
   std::unique_ptr<atmos::Renderer> renderer;
-  if (!o.cpu)
+  std::unique_ptr<GlobeRenderer> globe;
+  if (o.surface.globe())
+    globe = std::make_unique<GlobeRenderer>(a, loaded.tables, surface);
+  else if (!o.cpu)
     renderer = std::make_unique<atmos::Renderer>(
         a, loaded.tables, o.precision == "half" ? atmos::TexturePrecision::half : atmos::TexturePrecision::full);
   // The post-processing runs on the GPU, also after a --cpu render.
@@ -214,8 +230,17 @@ int run_render(const RenderOptions& o) {
       renderer->set_stars(stars);
       renderer->set_moons(shot.moons);
     }
-    const atmos::Image image = o.cpu ? atmos::render_cpu(a, loaded.tables, shot.camera, shot.sun, stars, shot.moons)
-                                     : renderer->render(shot.camera, shot.sun);
+    atmos::Image image;
+    if (o.cpu) {
+      image = atmos::render_cpu(a, loaded.tables, shot.camera, shot.sun, stars, shot.moons);
+    } else if (globe) {
+      // The viewpoint's altitude is above the terrain under it.
+      atmos::Camera camera = shot.camera;
+      camera.position = globe->above_terrain(camera.position);
+      image = globe->render(camera, shot.sun, stars, shot.moons);
+    } else {
+      image = renderer->render(shot.camera, shot.sun);
+    }
     if (o.gallery) {
       write_outputs(image, {shot.name + ".png", shot.name + ".exr"}, shot.exposure);
     } else if (post) {
@@ -234,14 +259,15 @@ Command add_render_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "render",
       "Render an image of the sky (and of the ground and the planet) into the output files. With no option but "
-      "the planet, table and cache options, --precision and --cpu: the default gallery (noon, sunset, allsky and "
-      "orbit, each .png and .exr) into the current directory");
+      "the planet, table and cache options, --surface, --precision and --cpu: the default gallery (noon, sunset, "
+      "allsky and orbit, each .png and .exr) into the current directory");
   o->planet.add(*cmd);
   o->tables.add(*cmd);
   o->cache.add(*cmd);
   o->viewpoint.add(*cmd);
   o->sun.add(*cmd);
   o->moons.add(*cmd);
+  o->surface.add(*cmd);
   cmd->add_option("--look", o->look,
                   "View direction: azimuth AZ (degrees clockwise from north) and elevation EL in [-90, 90] "
                   "(default: the sun's azimuth, 15 degrees up; from outside the atmosphere, straight down)")
@@ -272,7 +298,9 @@ Command add_render_command(CLI::App& app) {
       ->type_name("half|full")
       ->check(CLI::IsMember({"half", "full"}).description(""))
       ->capture_default_str();
-  cmd->add_flag("--cpu", o->cpu, "Render on the CPU with the same functions (no OpenGL needed unless post-processing)");
+  cmd->add_flag("--cpu", o->cpu,
+                "Render on the CPU with the same functions, with --surface sphere (no OpenGL needed unless "
+                "post-processing)");
   cmd->add_flag("--stars", o->stars,
                 "Draw the star field also with the sun above the horizon (it is drawn whenever the sun is below it)");
   auto* tonemap = cmd->add_option("--tonemap", o->tonemap,
@@ -292,11 +320,12 @@ Command add_render_command(CLI::App& app) {
   return {cmd, [o, cmd, fov, tonemap, bloom, auto_exposure] {
             o->fov_given = fov->count() > 0;
             o->post = tonemap->count() > 0 || bloom->count() > 0 || auto_exposure->count() > 0;
-            // Only the planet, table and cache options, --precision and --cpu
-            // keep the gallery (e.g. --planet mars --wavelengths 15).
+            // Only the planet, table and cache options, --surface,
+            // --precision and --cpu keep the gallery (e.g. --planet mars
+            // --wavelengths 15).
             const std::set<std::string> gallery_options = {
-                "--planet", "--orders",    "--wavelengths", "--density-scale", "--solar",
-                "--tables", "--cache-dir", "--no-cache",    "--precision",     "--cpu"};
+                "--planet",    "--orders",   "--wavelengths", "--density-scale", "--solar",  "--tables",
+                "--cache-dir", "--no-cache", "--surface",     "--precision",     "--cpu"};
             o->gallery = true;
             for (const auto* opt : cmd->get_options())
               if (opt->count() > 0 && gallery_options.count(opt->get_name()) == 0) o->gallery = false;
