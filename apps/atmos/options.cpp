@@ -324,10 +324,10 @@ void SurfaceOption::add(CLI::App& app) {
                  "The ground: globe (the planet file's terrain: relief, imagery and coastlines drawn by atmos::Globe "
                  "and composited by the engine plugin; the viewpoint's altitude is then above the terrain below it; "
                  "needs OpenGL) or sphere (the analytic sphere of the bottom radius with the planet's ground albedo, "
-                 "the altitude above it; the only ground of --cpu)")
+                 "the altitude above it; the only ground of --cpu and --precision half). Default: globe, or sphere "
+                 "with --cpu or --precision half")
       ->type_name("globe|sphere")
-      ->check(CLI::IsMember({"globe", "sphere"}).description(""))
-      ->capture_default_str();
+      ->check(CLI::IsMember({"globe", "sphere"}).description(""));
 }
 
 // ---------------------------------------------------------------------------

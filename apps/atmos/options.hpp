@@ -139,11 +139,15 @@ struct MoonOptions {
 };
 
 // --surface globe|sphere (render): what the ground under the atmosphere is.
+// Not given: the globe, except with --cpu or --precision half, which only
+// the sphere supports.
 struct SurfaceOption {
-  std::string surface = "globe";
+  std::string surface;  // "" = not given
 
   void add(CLI::App& app);
-  bool globe() const { return surface == "globe"; }
+  bool globe(bool cpu, bool half_precision) const {
+    return surface.empty() ? !(cpu || half_precision) : surface == "globe";
+  }
 };
 
 // --size WxH (render, bench: the same format and range, each command its

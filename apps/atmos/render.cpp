@@ -190,8 +190,9 @@ void check_options(const RenderOptions& o) {
   for (const std::string& path : o.outputs)
     if (!has_extension(path, ".png") && !has_extension(path, ".exr"))
       throw UsageError("-o/--output must name a .png or .exr file, got \"" + path + "\"");
-  if (o.surface.globe() && o.cpu) throw UsageError("the globe needs OpenGL: use --surface sphere with --cpu");
-  if (o.surface.globe() && o.precision == "half")
+  if (o.surface.globe(o.cpu, o.precision == "half") && o.cpu)
+    throw UsageError("the globe needs OpenGL: use --surface sphere with --cpu");
+  if (o.surface.globe(o.cpu, o.precision == "half") && o.precision == "half")
     throw UsageError("--precision half applies to --surface sphere: the globe's atmosphere pass samples "
                      "full-precision textures");
 }
@@ -203,7 +204,7 @@ int run_render(const RenderOptions& o) {
   // The planet file's surface is read before the slow work, so that its
   // errors come first.
   const atmos::PlanetSurface surface =
-      o.surface.globe() ? atmos::load_surface(o.planet.planet) : atmos::PlanetSurface{};
+      o.surface.globe(o.cpu, o.precision == "half") ? atmos::load_surface(o.planet.planet) : atmos::PlanetSurface{};
   const LoadedTables loaded = load_tables(o.planet, o.tables, o.cache, true);
   const atmos::Atmosphere& a = loaded.atmosphere;
 
@@ -212,7 +213,7 @@ int run_render(const RenderOptions& o) {
   if (!o.cpu || o.post) context = atmos::GlContext::create_headless();
   std::unique_ptr<atmos::Renderer> renderer;
   std::unique_ptr<GlobeRenderer> globe;
-  if (o.surface.globe())
+  if (o.surface.globe(o.cpu, o.precision == "half"))
     globe = std::make_unique<GlobeRenderer>(a, loaded.tables, surface);
   else if (!o.cpu)
     renderer = std::make_unique<atmos::Renderer>(
