@@ -1,4 +1,5 @@
-// The engine plugin (AtmospherePass) against its CPU twin, and the
+// The engine plugin (AtmospherePass) against its CPU twin (also from orbit,
+// where it draws each class of pixels with its own program), and the
 // properties an engine needs of it: depth encodings agree, no seam at the
 // horizon, no hitch from the ground to 100 planet radii, light shafts, the
 // planet's shadow seen from space, the GLSL library, and bad input; and
@@ -32,6 +33,7 @@
 #include "atmos/renderer.hpp"
 #include "atmos/tables.hpp"
 #include "gpu/atmosphere_pass.hpp"
+#include "physics/parameters.hpp"
 #include "figures.hpp"
 #include "gpu_fixture.hpp"
 
@@ -389,6 +391,87 @@ TEST_F(Plugin, MatchesCpuTwin) {
     EXPECT_LE(rms, shot.moons.empty() ? kRmsRelative : kEclipseRmsRelative) << name;
     EXPECT_GT(surfaces, 0) << name << ": the shot shows no surface";
   }
+}
+
+// From orbit the pass sorts the pixels into classes and draws each with its
+// own program (atmosphere_pass.frag.glsl): the space beside the planet, the
+// sky and the surfaces with the low-sun integration where their light needs
+// it (pixel_needs_low_sun_path) and without it elsewhere. The CPU twin
+// evaluates every pixel with the frame's variant (composite_pixel, all
+// pixels with the integration), so the two agree within the twin's
+// tolerances only if no pixel is drawn by the wrong program. The view: 400
+// km up, looking north past the horizon, the sun 6° up in the north-west:
+// the sun is below 10° on the nearer ground and limb (the low-sun band) and
+// above it towards the sun, and space fills the top, so that every class
+// has pixels.
+TEST_F(Plugin, ClassifiedPixelsMatchTheCpuTwinFromOrbit) {
+  const glm::dvec3 site = glm::normalize(glm::dvec3(0.3, 0.2, 0.93));
+  const LocalFrame l = local_frame(site);
+  Shot shot;
+  shot.camera = site * (kEarthRadius + 400e3);
+  shot.forward = direction(l, 0.0, -17.0);
+  shot.up_hint = l.up;
+  shot.fov_deg = 40.0;
+  shot.width = 160;
+  shot.height = 120;
+  shot.encoding = DepthEncoding::reversed_z;
+  shot.sun = direction(l, -60.0, 6.0);
+  EngineFrame e = make_engine_frame(shot);
+  const std::vector<glm::vec3> gpu = run(e);
+  ASSERT_TRUE(all_finite(gpu));
+
+  // The classes, from the pass's own tests on the CPU.
+  const atmos::physics::AtmosphereParams params = atmos::physics::make_render_params(*earth_, tables_->sizes);
+  const glm::mat3 matrix = atmos::physics::channels_to_srgb_matrix(tables_->wavelengths_nm);
+  const atmos::physics::PassFrame frame = atmos::gpu::make_pass_frame(
+      e.input, engine_frame(), params, matrix, atmos::gpu::own_sun_illuminance(params, matrix));
+  ASSERT_TRUE(frame.low_sun);
+  int space = 0, sky = 0, sky_low_sun = 0, surface = 0, surface_low_sun = 0;
+  std::vector<glm::ivec2> pixels;
+  for (int y = 0; y < shot.height; ++y)
+    for (int x = 0; x < shot.width; ++x) {
+      pixels.push_back({x, y});
+      const glm::vec2 ndc = (glm::vec2(float(x), float(y)) + 0.5f) /
+                                glm::vec2(float(shot.width), float(shot.height)) * 2.0f -
+                            1.0f;
+      const atmos::physics::PixelRay ray =
+          atmos::physics::pixel_ray(frame.inverse_projection, frame.view_to_world, ndc);
+      const float depth = e.buffers.depth[size_t(y) * size_t(shot.width) + size_t(x)];
+      const bool low_sun = atmos::physics::pixel_needs_low_sun_path(params, frame, ray, depth);
+      if (!atmos::physics::depth_is_sky(depth, frame.depth_encoding)) {
+        (low_sun ? surface_low_sun : surface) += 1;
+      } else if (atmos::physics::sky_ray_misses_atmosphere(params, frame, ray)) {
+        space += 1;
+      } else {
+        (low_sun ? sky_low_sun : sky) += 1;
+      }
+    }
+  std::printf("classes: space %d, sky %d + %d with the low sun, surfaces %d + %d with the low sun\n", space, sky,
+              sky_low_sun, surface, surface_low_sun);
+  EXPECT_GT(space, 0);
+  EXPECT_GT(sky, 0);
+  EXPECT_GT(sky_low_sun, 0);
+  EXPECT_GT(surface, 0);
+  EXPECT_GT(surface_low_sun, 0);
+
+  const std::vector<glm::vec3> cpu =
+      atmos::gpu::composite_cpu(*earth_, *tables_, engine_frame(), e.input, e.buffers, pixels);
+  double max_relative = 0.0, sum_squares = 0.0;
+  size_t worst = 0;
+  for (size_t k = 0; k < pixels.size(); ++k) {
+    const double reference = std::max(luminance(cpu[k]), 1e-3);
+    const double difference = glm::length(glm::dvec3(gpu[k]) - glm::dvec3(cpu[k])) / reference;
+    if (difference > max_relative) worst = k;
+    max_relative = std::max(max_relative, difference);
+    sum_squares += difference * difference;
+  }
+  const double rms = std::sqrt(sum_squares / double(pixels.size()));
+  std::printf("classified pass against the twin: max %.3e at (%d, %d) [cpu %.5g, gpu %.5g], rms %.3e\n",
+              max_relative, pixels[worst].x, pixels[worst].y, luminance(cpu[worst]), luminance(gpu[worst]), rms);
+  atmos_test::record_figure("orbit classes: max relative difference", max_relative, "", "<= 1e-2");
+  atmos_test::record_figure("orbit classes: RMS relative difference", rms, "", "<= 3e-3");
+  EXPECT_LE(max_relative, kMaxRelative);
+  EXPECT_LE(rms, kRmsRelative);
 }
 
 // The same view with standard depth (finite and infinite far plane, as a

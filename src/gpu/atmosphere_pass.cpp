@@ -1,7 +1,7 @@
 // The engine plugin (include/atmos/plugin.hpp): validation of the engine's
 // input, the reduction of its double-precision frame to camera-relative
-// floats, and the two GPU passes (the sky-view table, then composite.glsl
-// over every pixel).
+// floats, and the GPU passes (the sky-view table, the aerial-perspective
+// volume, then composite.glsl over every pixel, class by class).
 #include <epoxy/gl.h>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "atmos/plugin.hpp"
 #include "gpu/atmosphere_pass.hpp"
@@ -371,8 +372,8 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     for (GLuint i = 0; i < 4; ++i) glBindImageTexture(i, 0, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
   }
 
-  // Passes 3-5: every pixel, the sky's and the surfaces' by separate
-  // programs over a stencil mask (see atmosphere_pass.frag.glsl).
+  // The composite: every pixel, sorted into classes in a stencil mask, each
+  // class drawn by its own program (see atmosphere_pass.frag.glsl).
   if (p.stencil == 0 || p.stencil_width != input.width || p.stencil_height != input.height) {
     if (p.stencil != 0) glDeleteRenderbuffers(1, &p.stencil);
     glCreateRenderbuffers(1, &p.stencil);
@@ -394,10 +395,26 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   variant.blend = frame.volume && frame.volume_weight < 1.0f;
   variant.stars = frame.stars.enabled;
   variant.eclipse = eclipse;
-  const auto program_of = [&](gpu::PassVariant::Pixels pixels) {
-    // The mask does not depend on the rest of the variant: one program.
-    gpu::PassVariant v = pixels == gpu::PassVariant::Pixels::classify ? gpu::PassVariant{} : variant;
+  // The classes of the stencil mask's bits (atmosphere_pass.frag.glsl).
+  constexpr GLint kSkyBit = 1;
+  constexpr GLint kLowSunBit = 2;
+  constexpr GLint kSpaceBit = 4;
+  // Which pixels need the low-sun integration, when some may and the
+  // composite evaluates it: not with moons (every pixel integrates), nor for
+  // cameras whose surfaces read the volume alone and whose sky reads the
+  // sky-view table (the variant's low_sun changes nothing there).
+  const bool classify_low_sun = low_sun && !eclipse && !(frame.volume && !variant.blend && sky_view_camera);
+  // The sky beside the atmosphere, for cameras above it.
+  const bool classify_space = !sky_view_camera;
+  const auto program_of = [&](gpu::PassVariant::Pixels pixels, bool pixel_low_sun) {
+    // The classifying programs read the frame's geometry alone: one program
+    // each.
+    const bool classifying = pixels == gpu::PassVariant::Pixels::classify ||
+                             pixels == gpu::PassVariant::Pixels::classify_low_sun ||
+                             pixels == gpu::PassVariant::Pixels::classify_space;
+    gpu::PassVariant v = classifying ? gpu::PassVariant{} : variant;
     v.pixels = pixels;
+    if (!classifying) v.low_sun = pixel_low_sun;
     GLuint& program = p.programs[v.index()];
     if (program == 0)
       program = gpu::link_program(gpu::atmosphere_pass_vertex_shader_source(),
@@ -405,11 +422,35 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
                                                                               p.tables->spectral(), v));
     return program;
   };
-  const GLuint classify_program = program_of(gpu::PassVariant::Pixels::classify);
-  const GLuint sky_program = program_of(gpu::PassVariant::Pixels::sky);
-  const GLuint surface_program = program_of(gpu::PassVariant::Pixels::surface);
+  // The draws: the classifying ones set their bit where they keep the
+  // pixel; the shading ones draw where the mask equals `bits`.
+  struct Draw {
+    GLuint program;
+    bool classify;
+    GLint bits;
+  };
+  std::vector<Draw> draws;
+  draws.push_back({program_of(gpu::PassVariant::Pixels::classify, false), true, kSkyBit});
+  if (classify_low_sun)
+    draws.push_back({program_of(gpu::PassVariant::Pixels::classify_low_sun, false), true, kLowSunBit});
+  if (classify_space)
+    draws.push_back({program_of(gpu::PassVariant::Pixels::classify_space, false), true, kSpaceBit});
+  if (classify_low_sun) {
+    // Without the integration where no pixel needs it, with it where some do.
+    draws.push_back({program_of(gpu::PassVariant::Pixels::sky, false), false, kSkyBit});
+    draws.push_back({program_of(gpu::PassVariant::Pixels::sky, true), false, kSkyBit | kLowSunBit});
+    draws.push_back({program_of(gpu::PassVariant::Pixels::surface, false), false, 0});
+    draws.push_back({program_of(gpu::PassVariant::Pixels::surface, true), false, kLowSunBit});
+  } else {
+    draws.push_back({program_of(gpu::PassVariant::Pixels::sky, low_sun), false, kSkyBit});
+    draws.push_back({program_of(gpu::PassVariant::Pixels::surface, low_sun), false, 0});
+  }
+  if (classify_space)
+    draws.push_back({program_of(gpu::PassVariant::Pixels::space, false), false, kSkyBit | kSpaceBit});
+
   const physics::SkyViewFrame sky_view = frame.sky_view;
-  for (GLuint program : {classify_program, sky_program, surface_program}) {
+  for (const Draw& draw : draws) {
+    const GLuint program = draw.program;
     glProgramUniform3f(program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
     glProgramUniform3f(program, 1, frame.sun_direction.x, frame.sun_direction.y, frame.sun_direction.z);
     glProgramUniformMatrix4fv(program, 2, 1, GL_FALSE, glm::value_ptr(frame.inverse_projection));
@@ -430,9 +471,8 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     glProgramUniform1f(program, 31, frame.depth_column_view_z);
     glProgramUniform1f(program, 32, frame.stars.sigma);
     gpu::set_sky_view_frame_uniforms(program, sky_view);
+    if (eclipse && !draw.classify) gpu::set_moons_uniforms(program, frame.moons);
   }
-  if (eclipse)
-    for (GLuint program : {sky_program, surface_program}) gpu::set_moons_uniforms(program, frame.moons);
   p.tables->bind();
   for (GLuint unit = 0; unit < gpu::kTableUnitCount; ++unit) glBindSampler(unit, 0);
   glBindTextureUnit(kDepthUnit, input.depth);
@@ -458,20 +498,23 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   glStencilMask(0xFF);
   const GLint clear_stencil = 0;
   glClearNamedFramebufferiv(p.framebuffer, GL_STENCIL, 0, &clear_stencil);
-  // Mark the sky: 1 where the classifying program keeps the pixel.
-  glStencilFunc(GL_ALWAYS, 1, 0xFF);
-  glStencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
-  glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-  glUseProgram(classify_program);
-  glDrawArrays(GL_TRIANGLES, 0, 3);
-  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-  glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
-  glStencilFunc(GL_EQUAL, 1, 0xFF);
-  glUseProgram(sky_program);
-  glDrawArrays(GL_TRIANGLES, 0, 3);
-  glStencilFunc(GL_EQUAL, 0, 0xFF);
-  glUseProgram(surface_program);
-  glDrawArrays(GL_TRIANGLES, 0, 3);
+  for (const Draw& draw : draws) {
+    if (draw.classify) {
+      // Set this draw's bit where the classifying program keeps the pixel.
+      glStencilMask(GLuint(draw.bits));
+      glStencilFunc(GL_ALWAYS, draw.bits, 0xFF);
+      glStencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
+      glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    } else {
+      glStencilMask(0);
+      glStencilFunc(GL_EQUAL, draw.bits, 0xFF);
+      glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
+      glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    }
+    glUseProgram(draw.program);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+  }
+  glStencilMask(0xFF);
   glDisable(GL_STENCIL_TEST);
   if (input.timed) timings.composite_ms = p.timer->end_ms();
   glBindFramebuffer(GL_FRAMEBUFFER, 0);

@@ -8,17 +8,32 @@
 // frame's moons from the uniforms of table_bindings.glsl, uniform_moons;
 // 0: no_moons(), whose code folds away).
 //
-// Why three programs. Software rasterisers run both sides of every branch,
-// so one program for every pixel would charge each pixel for the sky AND
-// for a surface. But they do skip blocks of pixels that fail the stencil
-// test before shading. So the pass first marks the sky pixels in a stencil
-// buffer (PIXELS_CLASSIFY: a depth read and a discard), then draws the sky
-// program where the mark is and the surface program where it is not: each
-// pixel pays for its own kind only (half the cost of a frame that is half
-// sky, on llvmpipe; GPUs, which branch per warp, lose nothing).
+// Why several programs. Software rasterisers run both sides of every
+// branch, so one program for every pixel would charge each pixel for the sky
+// AND for a surface, and for the work of the rarest pixels. But they do skip
+// blocks of pixels (llvmpipe: 4x4) that fail the stencil test before
+// shading. So the pass first sorts the pixels into classes in a stencil
+// buffer, one bit per question, each by a cheap program that discards the
+// pixels whose answer is no (PIXELS_CLASSIFY*: a depth read, a little
+// geometry):
+//  - bit 0, PIXELS_CLASSIFY: the engine drew nothing here (sky);
+//  - bit 1, PIXELS_CLASSIFY_LOW_SUN (frames that may have a low sun, see
+//    make_pass_frame): the pixel's light needs the low-sun integration
+//    (composite.glsl: pixel_needs_low_sun_path), a few pixels around the
+//    terminator where the whole frame would otherwise pay for it;
+//  - bit 2, PIXELS_CLASSIFY_SPACE (cameras above the atmosphere): a sky
+//    pixel whose ray misses the atmosphere (sky_ray_misses_atmosphere).
+// Then each class is drawn by its own program where the stencil holds its
+// bits: the sky (PIXELS_SKY) and the surfaces (PIXELS_SURFACE), each with
+// and without the low-sun integration (VARIANT_LOW_SUN), and the space
+// beside the planet (PIXELS_SPACE: stars, sun and moons alone). Every pixel
+// pays for its own kind only (GPUs, which branch per warp, lose nothing).
 #define PIXELS_CLASSIFY 0
 #define PIXELS_SKY 1
 #define PIXELS_SURFACE 2
+#define PIXELS_SPACE 3
+#define PIXELS_CLASSIFY_LOW_SUN 4
+#define PIXELS_CLASSIFY_SPACE 5
 
 // The engine's textures (texelFetch: one texel per pixel). Colour and albedo
 // share a unit: a surface mode reads one of them.
@@ -66,18 +81,8 @@ layout(location = 1) noperspective in float ray_view_z;
 
 layout(location = 0) out vec4 frag_color;
 
-#if VARIANT_PIXELS == PIXELS_CLASSIFY
-
-// Keeps the sky pixels (the draw's stencil operation marks them).
-void main() {
-  if (!depth_is_sky(texelFetch(engine_depth, ivec2(gl_FragCoord.xy), 0).r, depth_encoding)) discard;
-  frag_color = vec4(0.0);
-}
-
-#else
-
-void main() {
-  ivec2 pixel = ivec2(gl_FragCoord.xy);
+// This frame's PassFrame, from the uniforms and the variant's constants.
+PassFrame pass_frame_from_uniforms() {
   PassFrame frame;
   frame.camera = camera;
   frame.sun_direction = sun_direction;
@@ -109,11 +114,48 @@ void main() {
 #else
   frame.moons = no_moons();
 #endif
+  return frame;
+}
+
+#if VARIANT_PIXELS == PIXELS_CLASSIFY
+
+// Keeps the sky pixels (the draw's stencil operation marks them).
+void main() {
+  if (!depth_is_sky(texelFetch(engine_depth, ivec2(gl_FragCoord.xy), 0).r, depth_encoding)) discard;
+  frag_color = vec4(0.0);
+}
+
+#elif VARIANT_PIXELS == PIXELS_CLASSIFY_LOW_SUN || VARIANT_PIXELS == PIXELS_CLASSIFY_SPACE
+
+// Keeps the pixels that need the low-sun integration, or the sky pixels
+// whose rays miss the atmosphere (the draw's stencil operation marks them).
+// Only the frame's geometry is read: one program for every variant.
+void main() {
+  PassFrame frame = pass_frame_from_uniforms();
+  PixelRay ray;
+  ray.world = ray_world;
+  ray.view_z = ray_view_z;
+  float depth = texelFetch(engine_depth, ivec2(gl_FragCoord.xy), 0).r;
+#if VARIANT_PIXELS == PIXELS_CLASSIFY_LOW_SUN
+  if (!pixel_needs_low_sun_path(ATMOSPHERE, frame, ray, depth)) discard;
+#else
+  if (!depth_is_sky(depth, depth_encoding) || !sky_ray_misses_atmosphere(ATMOSPHERE, frame, ray)) discard;
+#endif
+  frag_color = vec4(0.0);
+}
+
+#else
+
+void main() {
+  ivec2 pixel = ivec2(gl_FragCoord.xy);
+  PassFrame frame = pass_frame_from_uniforms();
   PixelRay ray;
   ray.world = ray_world;
   ray.view_z = ray_view_z;
   float dither = pixel_dither(gl_FragCoord.xy);
-#if VARIANT_PIXELS == PIXELS_SKY
+#if VARIANT_PIXELS == PIXELS_SPACE
+  vec3 rgb = composite_space_pixel(ATMOSPHERE, frame, ray);
+#elif VARIANT_PIXELS == PIXELS_SKY
   vec3 rgb = composite_sky_pixel(ATMOSPHERE, SPECTRAL, spectral_transmittance_texture, scattering_texture,
                                  single_aerosol_texture, multiple_scattering_texture, irradiance_texture,
                                  sky_view_rayleigh_texture, sky_view_aerosol_texture, sky_view_surface_texture,

@@ -48,6 +48,7 @@ struct PassFrame {
   float ap_t_min;           // m, no surface is nearer (the camera's altitude above the highest surfaces)
   float ap_t_far;           // m, distance of the volume's last slice
   bool low_sun;             // the sun may be low (< 10°) somewhere in view: integrate single scattering there
+                            // (surfaces, and from above the atmosphere the sky's rays through it)
   bool shadows;             // a shadow map is given
   int shadow_steps;
   mat4 shadow_matrix;       // camera-relative metres (world axes) -> the light's clip space
@@ -697,12 +698,13 @@ INLINE vec3 composite_sky_pixel(IN(AtmosphereParams) atmosphere, IN(SpectralSets
                                 IN(sampler3D) ap_aerosol, IN(sampler3D) ap_transmittance, IN(PassFrame) frame,
                                 IN(sampler2DShadow) shadow_map, IN(PixelRay) ray, float dither) {
   vec3 view_ray = world_view_ray(frame, ray);
-  vec3 radiance = radiance_along_view_ray(atmosphere, spectral, spectral_transmittance_texture, scattering_texture,
-                                          single_aerosol_texture, multiple_scattering_texture, irradiance_texture,
-                                          sky_view_rayleigh_texture, sky_view_aerosol_texture,
-                                          sky_view_surface_texture, use_sky_view, frame.sky_view, frame.camera,
-                                          view_ray, frame.sun_direction, frame.sun_disc, frame.stars, frame.moons,
-                                          true);  // frame.moons: only moons that may eclipse (make_pass_frame)
+  vec3 radiance = radiance_along_view_ray_low_sun(
+      atmosphere, spectral, spectral_transmittance_texture, scattering_texture, single_aerosol_texture,
+      multiple_scattering_texture, irradiance_texture, sky_view_rayleigh_texture, sky_view_aerosol_texture,
+      sky_view_surface_texture, use_sky_view, frame.sky_view, frame.camera, view_ray, frame.sun_direction,
+      frame.sun_disc, frame.stars, frame.moons,
+      true,  // frame.moons: only moons that may eclipse (make_pass_frame)
+      frame.low_sun);
   if (frame.shadows) {
     // Up to where the ray leaves the atmosphere or meets the ground.
     vec3 start = camera_above_ground(atmosphere, frame.camera);
@@ -782,8 +784,60 @@ INLINE vec3 composite_surface_pixel(IN(AtmosphereParams) atmosphere, IN(Spectral
          max(frame.radiance_to_srgb * in_scatter, vec3(0.0f)) * frame.light_scale;
 }
 
-// The pixel, whichever it is (the CPU twin; the pass runs the two kinds as
-// separate programs over a stencil mask, see atmosphere_pass.frag.glsl).
+// A sky pixel whose ray misses the atmosphere (a camera above it looking
+// past the planet): only the light from beyond reaches the camera, the
+// stars, the sun disc or a moon (radiance_beyond_atmosphere), unattenuated
+// and without shafts (they lie in the atmosphere). The same as
+// composite_sky_pixel for such a pixel, without the atmosphere's work.
+INLINE bool sky_ray_misses_atmosphere(IN(AtmosphereParams) atmosphere, IN(PassFrame) frame, IN(PixelRay) ray) {
+  vec3 start = camera_above_ground(atmosphere, frame.camera);
+  return !enter_atmosphere(atmosphere, start, world_view_ray(frame, ray));
+}
+
+INLINE vec3 composite_space_pixel(IN(AtmosphereParams) atmosphere, IN(PassFrame) frame, IN(PixelRay) ray) {
+  vec3 beyond = radiance_beyond_atmosphere(atmosphere, camera_above_ground(atmosphere, frame.camera),
+                                           world_view_ray(frame, ray), frame.sun_direction, frame.sun_disc,
+                                           frame.stars, frame.moons);
+  return max(frame.radiance_to_srgb * beyond, vec3(0.0f)) * frame.light_scale;
+}
+
+// Whether the pixel's light needs the low-sun path (a frame with
+// frame.low_sun, no moons): the weight of the integration on its segment in
+// the atmosphere (segment_low_sun_weight) is above zero. For a surface the
+// segment is the one light_to_distance evaluates, to the surface's point;
+// for the sky, the whole ray through the atmosphere (view_ray_terms from
+// space; the shafts' segments are parts of it, and the sun is lowest at an
+// end of a ray, so a part of a ray whose weight is zero has a zero weight
+// too). Pixels where it is false give the same light with frame.low_sun
+// false, without the integration: the pass draws the two kinds with
+// different programs (atmosphere_pass.frag.glsl).
+INLINE bool pixel_needs_low_sun_path(IN(AtmosphereParams) atmosphere, IN(PassFrame) frame, IN(PixelRay) ray,
+                                     float depth) {
+  vec3 view_ray;
+  float t;
+  if (depth_is_sky(depth, frame.depth_encoding)) {
+    view_ray = world_view_ray(frame, ray);
+    t = 1e30f;  // to the ray's end (atmosphere_segment stops at the ground or the top)
+  } else {
+    // The segment of light_to_distance and eclipsed_scattering_to_point,
+    // from the same floats.
+    vec3 offset = world_offset_from_depth(frame, ray, depth);
+    t = length(offset);
+    view_ray = t > 0.0f ? offset / t : world_view_ray(frame, ray);
+    offset = view_ray * t;
+    t = length(offset);
+    view_ray = t > 0.0f ? offset / t : vec3(0.0f, 0.0f, 1.0f);
+  }
+  AtmosphereSegment segment;
+  if (!atmosphere_segment(atmosphere, camera_above_ground(atmosphere, frame.camera), view_ray, t,
+                          frame.sun_direction, segment))
+    return false;
+  return segment_low_sun_weight(segment, clamp_cosine(dot(view_ray, frame.sun_direction))) > 0.0f;
+}
+
+// The pixel, whichever it is, with the frame's variant (the CPU twin; the
+// pass sorts the pixels into classes in a stencil mask and draws each class
+// with its own program, see atmosphere_pass.frag.glsl).
 INLINE vec3 composite_pixel(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
                             IN(sampler2D) spectral_transmittance_texture, IN(sampler3D) scattering_texture,
                             IN(sampler3D) single_aerosol_texture, IN(sampler3D) multiple_scattering_texture,

@@ -61,16 +61,23 @@ void check_perspective(const glm::dmat4& projection) {
 
 // Whether some surface the camera can see may have the sun below 10°
 // (LOW_SUN_MU_S_TABLE), where aerial perspective integrates single
-// scattering (scattering_to_distance). A surface point is at most
-// acos(R / r) + acos(R / (R + kMaxSurfaceAltitude)) away from the camera's
-// nadir, in angle from the planet centre (the camera's horizon plus the
-// surface's own), and the sun's zenith angle there differs from the one
-// above the nadir by at most that much. The variant without the integration
-// is several times faster on software rasterisers, which run every branch.
+// scattering (scattering_to_distance) — and, for a camera above the
+// atmosphere, some point of the atmosphere it sees, where the sky's rays
+// integrate it (composite_sky_pixel, without the sky-view table). A point
+// at altitude h that the camera sees is at most acos(R / r) + acos(R / (R +
+// h)) away from the camera's nadir, in angle from the planet centre (the
+// camera's horizon plus the point's own), with h up to kMaxSurfaceAltitude
+// for surfaces and up to the top of the atmosphere for the air; the sun's
+// zenith angle there differs from the one above the nadir by at most that
+// much. The variant without the integration is several times faster on
+// software rasterisers, which run every branch.
 bool sun_may_be_low(const physics::AtmosphereParams& atmosphere, const glm::dvec3& camera, const glm::vec3& sun) {
   const double bottom = atmosphere.bottom_radius;
   const double r = std::max(glm::length(camera), bottom);
-  const double reach = std::acos(bottom / r) + std::acos(bottom / (bottom + gpu::kMaxSurfaceAltitude));
+  const double highest = physics::camera_uses_sky_view(atmosphere, glm::vec3(camera))
+                             ? gpu::kMaxSurfaceAltitude
+                             : std::max(gpu::kMaxSurfaceAltitude, double(atmosphere.top_radius) - bottom);
+  const double reach = std::acos(bottom / r) + std::acos(bottom / (bottom + highest));
   // The zenith of the camera the shaders see (camera_above_ground: below the
   // ground, and at the planet's centre, it stands on the ground).
   const glm::dvec3 zenith = glm::normalize(glm::dvec3(physics::camera_above_ground(atmosphere, glm::vec3(camera))));

@@ -59,9 +59,10 @@ AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams&
 // treats as constants (see PassFrame).
 struct PassVariant {
   // Which pixels the program draws (atmosphere_pass.frag.glsl: PIXELS_*):
-  // it marks the sky pixels in the stencil buffer, or shades the sky's, or
-  // the surfaces'.
-  enum class Pixels { classify = 0, sky = 1, surface = 2 };
+  // it marks a class of pixels in the stencil buffer (the sky, those that
+  // need the low-sun integration, the sky beside the atmosphere), or shades
+  // the sky's, the surfaces' or those of the space beside the atmosphere.
+  enum class Pixels { classify = 0, sky = 1, surface = 2, space = 3, classify_low_sun = 4, classify_space = 5 };
   Pixels pixels = Pixels::sky;
   bool sky_view_camera = true;  // camera in the atmosphere: reads the sky-view table
   bool low_sun = false;         // integrates single scattering where the sun is low
@@ -71,7 +72,7 @@ struct PassVariant {
   bool blend = false;           // ... mixed with the exact evaluation (cameras in the blend band)
   bool stars = false;           // the star field behind the sky
   bool eclipse = false;         // the frame has moons (needs low_sun): the uniforms of uniform_moons()
-  static constexpr int kCount = 3 * 256;
+  static constexpr int kCount = 6 * 256;
   int index() const {
     return int(pixels) * 256 + ((sky_view_camera ? 1 : 0) | (low_sun ? 2 : 0) | (shadows ? 4 : 0) |
                                 (gbuffer ? 8 : 0) | (volume ? 16 : 0) | (blend ? 32 : 0) | (stars ? 64 : 0) |

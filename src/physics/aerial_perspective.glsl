@@ -135,12 +135,17 @@ INLINE PathScattering scattering_to_distance(IN(AtmosphereParams) atmosphere, IN
                                              IN(sampler3D) multiple_scattering_texture, float r, float mu, float mu_s,
                                              float nu, float t, bool low_sun_path, bool split, IN(Moons) moons,
                                              vec3 origin, vec3 view_ray, vec3 sun_direction) {
+  float low_sun = moons.count > 0 ? 1.0f : low_sun_weight(mu_s, mu_s_at_ray_end(r, mu, mu_s, nu, t));
+  bool integrate = low_sun_path && low_sun > 0.0f;
   // The integration replaces single scattering only: it needs the split.
+  // Where it does not run the result is that of low_sun_path false (the
+  // split's two differences are each clamped at zero, their sum is not),
+  // so that a pixel's light does not depend on whether its frame may have
+  // a low sun elsewhere.
   PathScattering s = horizon_safe_scattering_to_distance(
       atmosphere, spectral, spectral_transmittance_texture, scattering_texture, single_aerosol_texture,
-      multiple_scattering_texture, r, mu, mu_s, nu, t, split || low_sun_path);
-  float low_sun = moons.count > 0 ? 1.0f : low_sun_weight(mu_s, mu_s_at_ray_end(r, mu, mu_s, nu, t));
-  if (low_sun_path && low_sun > 0.0f) {
+      multiple_scattering_texture, r, mu, mu_s, nu, t, split || integrate);
+  if (integrate) {
     vec3 single_rayleigh;
     vec3 single_aerosol;
     float diffuse_visibility;  // 1 without moons
@@ -160,6 +165,51 @@ INLINE vec3 path_radiance(IN(AtmosphereParams) atmosphere, IN(PathScattering) s,
   return phase_weighted_scattering(atmosphere, s.single_rayleigh + s.multiple, s.aerosol, nu);
 }
 
+// The part inside the atmosphere of the segment from a camera (at or above
+// the ground, relative to the planet centre) along the unit `view_ray` over
+// a length t: where it starts (the camera, or where the segment enters the
+// atmosphere from space), the start's (r, mu, mu_s), whether the ray meets
+// the ground, and the length t of the part (at most to the ray's end on the
+// ground sphere or the top). False when the segment misses the atmosphere
+// or has no length in it.
+struct AtmosphereSegment {
+  vec3 start;
+  float r;
+  float mu;
+  float mu_s;
+  bool ground;
+  float t;
+};
+
+INLINE bool atmosphere_segment(IN(AtmosphereParams) atmosphere, vec3 camera, vec3 view_ray, float t,
+                               vec3 sun_direction, OUT(AtmosphereSegment) segment) {
+  segment.start = camera;
+  segment.r = 0.0f;
+  segment.mu = 0.0f;
+  segment.mu_s = 0.0f;
+  segment.ground = false;
+  segment.t = 0.0f;
+  if (!enter_atmosphere(atmosphere, segment.start, view_ray)) return false;
+  // The distance the segment runs inside the atmosphere.
+  t = t - length(segment.start - camera);
+  if (!(t > 0.0f)) return false;
+  segment.r = clamp_radius(atmosphere, length(segment.start));
+  segment.mu = clamp_cosine(dot(segment.start, view_ray) / segment.r);
+  segment.mu_s = clamp_cosine(dot(segment.start, sun_direction) / segment.r);
+  segment.ground = ray_intersects_ground(atmosphere, segment.r, segment.mu);
+  // A point beyond the ray's end lies below the ground sphere (the engine's
+  // terrain may dip below it): the tables end at the sphere.
+  segment.t = min(t, distance_to_nearest_atmosphere_boundary(atmosphere, segment.r, segment.mu, segment.ground));
+  return true;
+}
+
+// The weight of the low-sun path on a segment (scattering_to_distance,
+// scattering_along_ray: low_sun_weight at its two ends); nu: the cosine
+// between the view ray and the sun.
+INLINE float segment_low_sun_weight(IN(AtmosphereSegment) segment, float nu) {
+  return low_sun_weight(segment.mu_s, mu_s_at_ray_end(segment.r, segment.mu, segment.mu_s, nu, segment.t));
+}
+
 // The light between a camera and a point: in-scattered radiance and
 // transmittance (returned in `transmittance`). `camera` is relative to the
 // planet centre (m); `offset` goes from the camera to the point (m), which
@@ -172,7 +222,8 @@ INLINE vec3 path_radiance(IN(AtmosphereParams) atmosphere, IN(PathScattering) s,
 // for the frame: software rasterisers run both sides of every branch, and
 // the integration would cost every pixel at noon too. `split`: whether
 // single_rayleigh must exclude the multiple scattering (else it holds both,
-// and `multiple` is 0 — two lookups fewer); always split with low_sun_path.
+// and `multiple` is 0 — two lookups fewer); always split where the
+// low-sun integration runs.
 // With moons (eclipse.glsl; low_sun_path must then be true) the segment's
 // light is eclipsed as scattering_to_distance says; with no_moons() (a
 // constant in shaders) the cost is that of scattering_to_point.
@@ -193,23 +244,14 @@ INLINE PathScattering eclipsed_scattering_to_point(IN(AtmosphereParams) atmosphe
   float t = length(offset);
   vec3 view_ray = t > 0.0f ? offset / t : vec3(0.0f, 0.0f, 1.0f);
   nu = clamp_cosine(dot(view_ray, sun_direction));
-  vec3 start = camera;
-  if (!enter_atmosphere(atmosphere, start, view_ray)) return s;
-  // The distance the segment runs inside the atmosphere.
-  t = t - length(start - camera);
-  if (!(t > 0.0f)) return s;
-  float r = clamp_radius(atmosphere, length(start));
-  float mu = clamp_cosine(dot(start, view_ray) / r);
-  float mu_s = clamp_cosine(dot(start, sun_direction) / r);
-  bool ground = ray_intersects_ground(atmosphere, r, mu);
-  float d = distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ground);
-  // A point beyond the ray's end lies below the ground sphere (the engine's
-  // terrain may dip below it): the tables end at the sphere. (Unused when
-  // the point is in the atmosphere; the segment's transmittance comes with
-  // the table values, see table_scattering_to_distance.)
+  AtmosphereSegment segment;
+  if (!atmosphere_segment(atmosphere, camera, view_ray, t, sun_direction, segment)) return s;
+  // (The segment's transmittance comes with the table values, see
+  // table_scattering_to_distance.)
   s = scattering_to_distance(atmosphere, spectral, spectral_transmittance_texture, scattering_texture,
-                             single_aerosol_texture, multiple_scattering_texture, r, mu, mu_s, nu, min(t, d),
-                             low_sun_path, split, moons, start, view_ray, sun_direction);
+                             single_aerosol_texture, multiple_scattering_texture, segment.r, segment.mu,
+                             segment.mu_s, nu, segment.t, low_sun_path, split, moons, segment.start, view_ray,
+                             sun_direction);
   transmittance = s.transmittance;
   return s;
 }

@@ -56,6 +56,26 @@ INLINE vec3 sun_corona_radiance(IN(AtmosphereParams) atmosphere, vec3 view_ray, 
   return atmosphere.solar_irradiance * (mean_disc * relative);
 }
 
+// The light from beyond the atmosphere along a view ray from `camera` (at or
+// above the ground), before the atmosphere attenuates it: the stars
+// (stars.glsl), the sun disc with its corona (`include_sun_disc`), or a
+// moon in front of them (moon_radiance).
+INLINE vec3 radiance_beyond_atmosphere(IN(AtmosphereParams) atmosphere, vec3 camera, vec3 view_ray,
+                                       vec3 sun_direction, bool include_sun_disc, IN(StarField) stars,
+                                       IN(Moons) moons) {
+  vec3 beyond = star_field_radiance(atmosphere, stars, view_ray);
+  if (include_sun_disc) {
+    beyond += sun_disc_radiance(atmosphere, view_ray, sun_direction) +
+              sun_corona_radiance(atmosphere, view_ray, sun_direction);
+  }
+  int moon;
+  float moon_distance = view_ray_moon_distance(moons, camera, view_ray, moon);
+  if (moon >= 0) {
+    beyond = moon_radiance(moons, moon, camera, view_ray, moon_distance, sun_direction, atmosphere.solar_irradiance);
+  }
+  return beyond;
+}
+
 // Everything that reaches a camera along a view ray, for a spherical planet:
 // the sky, or the Lambertian ground lit by sun and sky seen through the
 // aerial perspective in front of it, plus (optionally) the sun disc with
@@ -72,30 +92,26 @@ INLINE vec3 sun_corona_radiance(IN(AtmosphereParams) atmosphere, vec3 view_ray, 
 // in front hides the sun disc and the stars behind it and shows its own lit
 // side (moon_radiance); with `moons_eclipse` (moons_may_eclipse) they also
 // eclipse the view ray's terms (view_ray_terms; a sky-view table must be
-// computed with the same moons).
-INLINE vec3 radiance_along_view_ray(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
-                                    IN(sampler2D) spectral_transmittance_texture, IN(sampler3D) scattering_texture,
-                                    IN(sampler3D) single_aerosol_texture, IN(sampler3D) multiple_scattering_texture,
-                                    IN(sampler2D) irradiance_texture, IN(sampler2D) sky_view_rayleigh_texture,
-                                    IN(sampler2D) sky_view_aerosol_texture, IN(sampler2D) sky_view_surface_texture,
-                                    bool use_sky_view, IN(SkyViewFrame) sky_view, vec3 camera, vec3 view_ray,
-                                    vec3 sun_direction, bool include_sun_disc, IN(StarField) stars,
-                                    IN(Moons) moons, bool moons_eclipse) {
+// computed with the same moons). `low_sun_path` (without the sky-view
+// table): as scattering_along_ray's, false only where the sun is known to
+// be high (above LOW_SUN_MU_S_TABLE) all along the ray, which drops the
+// integration (shaders pass a constant); radiance_along_view_ray passes
+// true.
+INLINE vec3 radiance_along_view_ray_low_sun(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                            IN(sampler2D) spectral_transmittance_texture,
+                                            IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
+                                            IN(sampler3D) multiple_scattering_texture,
+                                            IN(sampler2D) irradiance_texture, IN(sampler2D) sky_view_rayleigh_texture,
+                                            IN(sampler2D) sky_view_aerosol_texture,
+                                            IN(sampler2D) sky_view_surface_texture, bool use_sky_view,
+                                            IN(SkyViewFrame) sky_view, vec3 camera, vec3 view_ray,
+                                            vec3 sun_direction, bool include_sun_disc, IN(StarField) stars,
+                                            IN(Moons) moons, bool moons_eclipse, bool low_sun_path) {
   camera = camera_above_ground(atmosphere, camera);
   float nu = clamp_cosine(dot(view_ray, sun_direction));
-  // The light from beyond the atmosphere along the ray: the sun disc and the
-  // stars (stars.glsl), or a moon in front of them; attenuated below like
-  // the sun.
-  vec3 beyond = star_field_radiance(atmosphere, stars, view_ray);
-  if (include_sun_disc) {
-    beyond += sun_disc_radiance(atmosphere, view_ray, sun_direction) +
-              sun_corona_radiance(atmosphere, view_ray, sun_direction);
-  }
-  int moon;
-  float moon_distance = view_ray_moon_distance(moons, camera, view_ray, moon);
-  if (moon >= 0) {
-    beyond = moon_radiance(moons, moon, camera, view_ray, moon_distance, sun_direction, atmosphere.solar_irradiance);
-  }
+  // Attenuated below like the sun.
+  vec3 beyond =
+      radiance_beyond_atmosphere(atmosphere, camera, view_ray, sun_direction, include_sun_disc, stars, moons);
   vec3 start = camera;
   // Outside the atmosphere and missing it: only what is beyond.
   if (!enter_atmosphere(atmosphere, start, view_ray)) return beyond;
@@ -116,10 +132,25 @@ INLINE vec3 radiance_along_view_ray(IN(AtmosphereParams) atmosphere, IN(Spectral
     Moons shadowing = no_moons();
     if (moons_eclipse) shadowing = moons;
     view_ray_terms(atmosphere, spectral, spectral_transmittance_texture, scattering_texture, single_aerosol_texture,
-                   multiple_scattering_texture, irradiance_texture, start, view_ray, sun_direction, ground, true,
-                   shadowing, rayleigh, aerosol, surface);
+                   multiple_scattering_texture, irradiance_texture, start, view_ray, sun_direction, ground,
+                   low_sun_path, shadowing, rayleigh, aerosol, surface);
   }
   vec3 radiance = phase_weighted_scattering(atmosphere, rayleigh, aerosol, nu);
   if (ground) return radiance + surface;
   return radiance + surface * beyond;
+}
+
+INLINE vec3 radiance_along_view_ray(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                    IN(sampler2D) spectral_transmittance_texture, IN(sampler3D) scattering_texture,
+                                    IN(sampler3D) single_aerosol_texture, IN(sampler3D) multiple_scattering_texture,
+                                    IN(sampler2D) irradiance_texture, IN(sampler2D) sky_view_rayleigh_texture,
+                                    IN(sampler2D) sky_view_aerosol_texture, IN(sampler2D) sky_view_surface_texture,
+                                    bool use_sky_view, IN(SkyViewFrame) sky_view, vec3 camera, vec3 view_ray,
+                                    vec3 sun_direction, bool include_sun_disc, IN(StarField) stars,
+                                    IN(Moons) moons, bool moons_eclipse) {
+  return radiance_along_view_ray_low_sun(atmosphere, spectral, spectral_transmittance_texture, scattering_texture,
+                                         single_aerosol_texture, multiple_scattering_texture, irradiance_texture,
+                                         sky_view_rayleigh_texture, sky_view_aerosol_texture,
+                                         sky_view_surface_texture, use_sky_view, sky_view, camera, view_ray,
+                                         sun_direction, include_sun_disc, stars, moons, moons_eclipse, true);
 }
