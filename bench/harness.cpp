@@ -254,6 +254,10 @@ void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables
     input.sun_direction = view.sun_direction;
     input.nits_per_unit = view.nits_per_unit;
     input.output = output;
+    // With the globe's shadows, its farthest cascade for the light shafts.
+    const atmos::GlobeShadowMap shadow = globe.shadow_map_for_pass();
+    input.shadow_map = shadow.texture;
+    input.shadow_matrix = shadow.matrix;
     pass.render(input);
     glFinish();
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
@@ -282,6 +286,32 @@ void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables
       sink({prefix + ".selection", median(selection), "ms"});
       sink({prefix + ".triangles", double(globe.last_stats().triangles), "count"});
       sink({prefix + ".tiles", double(globe.last_stats().tiles_drawn), "count"});
+    }
+  }
+  {
+    // Sun shadows (4 cascades of 2048^2 over 20 km) and the pass's light
+    // shafts from the farthest cascade, near the ground.
+    atmos::GlobeSettings settings;
+    settings.complete_every_frame = true;
+    settings.shadow_cascades = 4;
+    atmos::Globe globe(atmosphere, atmos::load_surface("earth"), pass, settings);
+    const std::pair<const char*, double> altitudes[] = {{"2m", 2.0}, {"10km", 10e3}};
+    for (const auto& [name, altitude] : altitudes) {
+      const atmos::GlobeView view = globe_view(globe, atmosphere, altitude, width, height);
+      double terrain_ms = 0.0;
+      frame(globe, view, terrain_ms);  // generates the tiles, compiles the pass's shadow variant
+      std::vector<double> frames, terrain, shadow_selection;
+      for (int i = 0; i < 3; ++i) {
+        frames.push_back(frame(globe, view, terrain_ms));
+        terrain.push_back(terrain_ms);
+        shadow_selection.push_back(globe.last_stats().shadow_selection_ms);
+      }
+      const std::string prefix = std::string("globe.") + name + ".shadows";
+      sink({prefix + ".frame", median(frames), "ms"});
+      sink({prefix + ".terrain", median(terrain), "ms"});
+      sink({prefix + ".selection", median(shadow_selection), "ms"});
+      sink({prefix + ".triangles", double(globe.last_stats().shadow_triangles), "count"});
+      sink({prefix + ".casters", double(globe.last_stats().shadow_casters), "count"});
     }
   }
   {

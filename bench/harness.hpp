@@ -115,7 +115,12 @@ void time_post(atmos::Renderer& renderer, const atmos::Camera& camera, const Fig
 // `globe.2.5R.*`): the whole frame (the globe's draw and the pass,
 // wall-clock up to glFinish), the terrain's draw alone, the CPU selection
 // (the quadtree traversal and culling), drawn triangles and tiles; medians
-// of 3 frames after one that generates the tiles. Then a descent of 40
+// of 3 frames after one that generates the tiles. With the terrain's sun
+// shadows (4 cascades of 2048^2 over 20 km) and the pass's light shafts
+// from the farthest cascade, from 2 m and 10 km (`globe.2m.shadows.*`,
+// `globe.10km.shadows.*`): the frame, the terrain (shadow maps included),
+// the CPU time of the cascades' selections, and the triangles and tile
+// draws into the shadow maps. Then a descent of 40
 // frames from 2.5 radii to 2 m with tiles streamed (at most
 // GlobeSettings::max_tiles_per_frame new tiles a frame):
 // `globe.descent.max_over_median`, the longest frame over the median one.

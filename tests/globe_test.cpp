@@ -1,10 +1,13 @@
 // The terrain globe (include/atmos/globe.hpp): its tile meshes on the CPU
-// (morph targets, shared edges, skirts, precision), and on the GPU a
-// scripted descent from 100 planet radii to a metre with no hole in the
-// surface, its lighting under the atmosphere, and bad input.
+// (morph targets, shared edges, skirts, precision) and its sun's shadow
+// cascades (fit, snapping, culling), and on the GPU a scripted descent from
+// 100 planet radii to a metre with no hole in the surface, its lighting
+// under the atmosphere, the terrain's shadows, and bad input.
 #include <gtest/gtest.h>
 
 #include <epoxy/gl.h>
+#include <gdal.h>
+#include <ogr_srs_api.h>
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/mat4x4.hpp>
@@ -22,6 +25,7 @@
 #include "atmos/plugin.hpp"
 #include "gpu_fixture.hpp"
 #include "planet/globe_mesh.hpp"
+#include "planet/globe_shadows.hpp"
 
 namespace {
 
@@ -216,6 +220,272 @@ TEST_F(GlobeMesh, VerticesDoNotJitterAtAMetreAboveTheGround) {
 }
 
 // ---------------------------------------------------------------------------
+// The sun's cascades (src/planet/globe_shadows.hpp), on the CPU.
+
+using atmos::planet::ShadowCascade;
+using atmos::planet::ShadowLight;
+using atmos::planet::ShadowView;
+
+// A view from `camera` along `forward` (up_hint fixes the roll), with a
+// symmetric 60 degree vertical field of view of the given aspect.
+ShadowView shadow_view(const glm::dvec3& camera, const glm::dvec3& forward, const glm::dvec3& up_hint, double aspect,
+                       const glm::dvec3& sun, double nearest_m, double distance_m) {
+  ShadowView v;
+  v.camera = camera;
+  v.forward = glm::normalize(forward);
+  v.right = glm::normalize(glm::cross(v.forward, up_hint));
+  v.up = glm::cross(v.right, v.forward);
+  const double t = std::tan(glm::radians(30.0));
+  v.x_min = -t * aspect;
+  v.x_max = t * aspect;
+  v.y_min = -t;
+  v.y_max = t;
+  v.sun = glm::normalize(sun);
+  v.nearest_depth_m = nearest_m;
+  v.shadow_distance_m = distance_m;
+  return v;
+}
+
+// The corner of the view's frustum at view depth d and slopes (sx, sy).
+glm::dvec3 frustum_point(const ShadowView& v, double d, double sx, double sy) {
+  return v.camera + v.forward * d + v.right * (sx * d) + v.up * (sy * d);
+}
+
+// The cascades' clip-space cubes hold their slices (the view depths each
+// serves, its hand-over band from the previous cascade included): every
+// corner of every slice, for symmetric and skewed frusta, cameras on the
+// ground and high up, low and high suns and one along the planet's axis
+// (where the light's frame changes its reference axis); also after the
+// depth range is extended towards the sun. The slices tile the view depths
+// from the nearest ground to the shadow distance.
+TEST(GlobeShadowCascades, SliceCornersProjectInsideTheirClipCubes) {
+  const double radius = kEarthRadius;
+  const glm::dvec3 up = glm::normalize(glm::dvec3(0.3, 0.5, 0.8));
+  const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), up));
+  const glm::dvec3 north = glm::cross(up, east);
+  std::vector<ShadowView> views;
+  for (const glm::dvec3& sun : {glm::normalize(north + 0.05 * up), glm::normalize(up + 0.2 * east),
+                                glm::dvec3(0.01, 0.0, 0.99995), glm::normalize(-east + 0.3 * up)}) {
+    views.push_back(shadow_view(up * (radius + 2.0), north - 0.1 * up, up, 16.0 / 9.0, sun, 1.3, 20e3));
+    views.push_back(shadow_view(up * (radius + 10e3), north - 0.6 * up, up, 1.0, sun, 8e3, 30e3));
+    ShadowView skewed = shadow_view(up * (radius + 300.0), east - 0.3 * up, up, 1.5, sun, 150.0, 5e3);
+    skewed.x_min = -0.3;
+    skewed.x_max = 1.2;
+    skewed.y_min = -0.9;
+    skewed.y_max = 0.2;
+    views.push_back(skewed);
+  }
+  int checked = 0;
+  for (const ShadowView& v : views)
+    for (const int count : {1, 2, 4})
+      for (const int size : {512, 2048}) {
+        const ShadowLight light = atmos::planet::shadow_light(v.sun);
+        std::vector<ShadowCascade> cascades = atmos::planet::fit_shadow_cascades(v, light, count, size);
+        ASSERT_EQ(cascades.size(), size_t(count));
+        EXPECT_LE(cascades.front().near_depth_m, v.nearest_depth_m);
+        EXPECT_GT(cascades.front().near_depth_m, v.nearest_depth_m / std::exp2(0.25) - 1e-9);
+        EXPECT_EQ(cascades.back().far_depth_m, v.shadow_distance_m);
+        for (size_t i = 0; i < cascades.size(); ++i) {
+          ShadowCascade& c = cascades[i];
+          EXPECT_LT(c.near_depth_m, c.blend_start_m);
+          EXPECT_LT(c.blend_start_m, c.far_depth_m);
+          if (i > 0) {
+            EXPECT_EQ(c.near_depth_m, cascades[i - 1].blend_start_m);
+          }
+          EXPECT_NEAR(c.texel_m, 2.0 * c.half_size_m / size, 1e-12 * c.half_size_m);
+          for (const double extend : {0.0, 3000.0}) {
+            if (extend > 0.0) atmos::planet::extend_towards_sun(c, c.z_near_m + extend, 1e6);
+            const glm::dmat4 m = atmos::planet::cascade_clip_from_planet(light, c);
+            for (const double d : {c.near_depth_m, c.far_depth_m})
+              for (const double sx : {v.x_min, v.x_max})
+                for (const double sy : {v.y_min, v.y_max}) {
+                  const glm::dvec4 clip = m * glm::dvec4(frustum_point(v, d, sx, sy), 1.0);
+                  EXPECT_EQ(clip.w, 1.0);
+                  for (int k = 0; k < 3; ++k)
+                    EXPECT_LE(std::abs(clip[k]), 1.0 + 1e-9)
+                        << "cascade " << i << " of " << count << ", depth " << d << ", axis " << k;
+                  ++checked;
+                }
+          }
+        }
+      }
+  EXPECT_EQ(checked, 12 * (1 + 2 + 4) * 2 * 2 * 8);
+}
+
+// Stable cascades (Valient 2008): when the camera moves by less than a
+// texel or turns, each cascade keeps its texel size, and its box moves by
+// whole texels of a grid fixed to the planet, so that a point of the
+// ground falls at the same place within its texel (no shimmering edges).
+TEST(GlobeShadowCascades, TexelGridStaysPutWhenTheCameraMovesOrTurns) {
+  const double radius = kEarthRadius;
+  const glm::dvec3 up = glm::normalize(glm::dvec3(-0.4, 0.7, 0.2));
+  const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), up));
+  const glm::dvec3 north = glm::cross(up, east);
+  const glm::dvec3 sun = glm::normalize(north + 0.3 * east + 0.2 * up);
+  const glm::dvec3 camera = up * (radius + 2.0);
+  const int size = 1024;
+  const ShadowView base = shadow_view(camera, north - 0.15 * up, up, 16.0 / 9.0, sun, 1.5, 20e3);
+  const ShadowLight light = atmos::planet::shadow_light(sun);
+  const std::vector<ShadowCascade> before = atmos::planet::fit_shadow_cascades(base, light, 4, size);
+  ASSERT_EQ(before.size(), 4u);
+  // Ground points near the camera and far away.
+  const std::vector<glm::dvec3> points = {camera + north * 30.0 - up * 2.0, camera + north * 400.0 + east * 50.0,
+                                          camera + north * 3000.0 - east * 700.0, camera + north * 15e3};
+  const auto texel_coordinate = [&](const ShadowCascade& c, const glm::dvec3& p) {
+    const glm::dvec4 clip = atmos::planet::cascade_clip_from_planet(light, c) * glm::dvec4(p, 1.0);
+    return glm::dvec2(clip.x * 0.5 + 0.5, clip.y * 0.5 + 0.5) * double(size);
+  };
+  std::uint64_t state = 12345;
+  const auto uniform = [&] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return double(state >> 11) * 0x1.0p-53;
+  };
+  int moved_boxes = 0, unsnapped_fractions = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    ShadowView moved = base;
+    if (trial < 20) {
+      // A step shorter than the finest texel, in any direction.
+      const glm::dvec3 direction =
+          glm::normalize(glm::dvec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5) + glm::dvec3(1e-9));
+      moved.camera = camera + direction * (0.95 * before[0].texel_m * uniform());
+    } else {
+      // A turn of the camera (yaw and pitch), in place.
+      const double yaw = glm::radians(360.0 * uniform()), pitch = glm::radians(-30.0 + 40.0 * uniform());
+      const glm::dvec3 forward =
+          (north * std::cos(yaw) + east * std::sin(yaw)) * std::cos(pitch) + up * std::sin(pitch);
+      moved = shadow_view(camera, forward, up, 16.0 / 9.0, sun, 1.5, 20e3);
+    }
+    const std::vector<ShadowCascade> after = atmos::planet::fit_shadow_cascades(moved, light, 4, size);
+    ASSERT_EQ(after.size(), before.size());
+    for (size_t i = 0; i < after.size(); ++i) {
+      EXPECT_EQ(after[i].texel_m, before[i].texel_m) << "trial " << trial << " cascade " << i;
+      EXPECT_EQ(after[i].half_size_m, before[i].half_size_m);
+      for (const glm::dvec3& p : points) {
+        const glm::dvec2 shift = texel_coordinate(after[i], p) - texel_coordinate(before[i], p);
+        for (int k = 0; k < 2; ++k)
+          EXPECT_NEAR(shift[k], std::round(shift[k]), 1e-6) << "trial " << trial << " cascade " << i;
+        if (shift != glm::dvec2(0.0)) ++moved_boxes;
+      }
+      // Without the snapping the box would have followed the sphere's
+      // centre, by a fraction of a texel.
+      const glm::dvec3 centre_shift = after[i].centre - before[i].centre;
+      const double unsnapped = glm::dot(centre_shift, light.x) / before[i].texel_m;
+      if (std::abs(unsnapped - std::round(unsnapped)) > 0.01) ++unsnapped_fractions;
+    }
+  }
+  EXPECT_GT(moved_boxes, 0);          // the boxes did move, by whole texels
+  EXPECT_GT(unsnapped_fractions, 20);  // and the snapping was needed for that
+}
+
+// How far towards the sun a caster may lie: the sun's ray from any point
+// of the sphere (above the lowest ground) is above the highest ground
+// beyond that distance.
+TEST(GlobeShadowCascades, ShellDistanceBoundsWhereTheSunsRayMeetsTheGround) {
+  const double inner = kEarthRadius - 400.0, outer = kEarthRadius + 8800.0;
+  std::uint64_t state = 99;
+  const auto uniform = [&] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return double(state >> 11) * 0x1.0p-53;
+  };
+  const auto random_unit = [&] {
+    const double z = 2.0 * uniform() - 1.0, phi = 6.283185307179586 * uniform(), r = std::sqrt(1.0 - z * z);
+    return glm::dvec3(r * std::cos(phi), r * std::sin(phi), z);
+  };
+  for (int trial = 0; trial < 200; ++trial) {
+    const glm::dvec3 up = random_unit();
+    const double sphere_radius = std::exp2(2.0 + 14.0 * uniform());
+    const glm::dvec3 centre = up * (kEarthRadius + 5000.0 * uniform() - 200.0);
+    // Suns from below the horizon to the zenith.
+    const glm::dvec3 sun = glm::normalize(random_unit() + up * (2.0 * uniform() - 0.5));
+    const double bound = atmos::planet::sun_shell_distance_m(centre, sphere_radius, sun, inner, outer);
+    for (int k = 0; k < 50; ++k) {
+      const glm::dvec3 p = centre + random_unit() * (sphere_radius * std::cbrt(uniform()));
+      if (glm::length(p) < inner) continue;
+      // Where the ray p + t sun leaves the highest ground's sphere for good.
+      const double b = glm::dot(p, sun), c = glm::dot(p, p) - outer * outer;
+      const double exit = b * b - c >= 0.0 ? -b + std::sqrt(b * b - c) : 0.0;
+      EXPECT_LE(exit, bound * (1.0 + 1e-9) + 1e-6) << "trial " << trial;
+    }
+  }
+}
+
+// The casters' culling is conservative: a sphere that holds a point of
+// the sun's ray from a point of the frustum's part (or of a receiving
+// sphere), before the shell distance, is kept; spheres off to the side of
+// the sun's rays, or behind the part, are culled.
+TEST(GlobeShadowCascades, CasterCullingKeepsEverySphereOnASunRay) {
+  const double radius = kEarthRadius;
+  const glm::dvec3 up = glm::normalize(glm::dvec3(0.6, -0.2, 0.77));
+  const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), up));
+  const glm::dvec3 north = glm::cross(up, east);
+  std::uint64_t state = 7;
+  const auto uniform = [&] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return double(state >> 11) * 0x1.0p-53;
+  };
+  const auto random_unit = [&] {
+    const double z = 2.0 * uniform() - 1.0, phi = 6.283185307179586 * uniform(), r = std::sqrt(1.0 - z * z);
+    return glm::dvec3(r * std::cos(phi), r * std::sin(phi), z);
+  };
+  int kept_on_rays = 0, culled_aside = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const glm::dvec3 sun = glm::normalize(random_unit() + up * (0.3 + uniform()));
+    const double heading = 6.0 * uniform();
+    const glm::dvec3 forward =
+        glm::normalize(north * std::cos(heading) + east * std::sin(heading) - up * (0.3 * uniform()));
+    const ShadowView v = shadow_view(up * (radius + 2.0 + 500.0 * uniform()), forward, up, 1.7, sun, 1.0, 20e3);
+    const ShadowLight light = atmos::planet::shadow_light(sun);
+    const double a = 10.0 * std::exp2(8.0 * uniform()), b = a * (1.5 + 4.0 * uniform());
+    const double shell = 5000.0 * uniform();
+    const atmos::planet::ShadowFootprint frustum = atmos::planet::shadow_footprint(v, light, a, b);
+    // Receivers: a few spheres inside the part.
+    std::vector<glm::dvec4> receivers;
+    for (int k = 0; k < 6; ++k)
+      receivers.emplace_back(frustum_point(v, a + (b - a) * uniform(), v.x_min + (v.x_max - v.x_min) * uniform(),
+                                           v.y_min + (v.y_max - v.y_min) * uniform()),
+                             5.0 + 50.0 * uniform());
+    const atmos::planet::ShadowFootprint spheres = atmos::planet::sphere_footprint(light, receivers);
+    for (int k = 0; k < 100; ++k) {
+      const double t = shell * uniform();
+      // A point of the part, and one of a receiving sphere.
+      const glm::dvec3 p = frustum_point(v, a + (b - a) * uniform(), v.x_min + (v.x_max - v.x_min) * uniform(),
+                                         v.y_min + (v.y_max - v.y_min) * uniform());
+      const glm::dvec4& r = receivers[size_t(k) % receivers.size()];
+      const glm::dvec3 q = glm::dvec3(r) + random_unit() * (r.w * uniform());
+      const double caster_radius = 1.0 + 100.0 * uniform();
+      const glm::dvec3 offset = random_unit() * (caster_radius * uniform());
+      EXPECT_TRUE(atmos::planet::may_cast_onto(frustum, light, p + sun * t + offset, caster_radius, 0.0, shell))
+          << "trial " << trial << " point " << k;
+      EXPECT_TRUE(atmos::planet::may_cast_onto(spheres, light, q + sun * t + offset, caster_radius, 0.0, shell))
+          << "trial " << trial << " point " << k;
+      kept_on_rays += 2;
+      // Across the sun, well beyond the part and the receivers.
+      const glm::dvec3 across = glm::normalize(glm::cross(sun, random_unit()));
+      const glm::dvec3 aside = p + across * (3.0 * b + 4.0 * b * uniform() + 300.0) + sun * t;
+      if (!atmos::planet::may_cast_onto(frustum, light, aside, caster_radius, 0.0, shell)) ++culled_aside;
+      // Behind the part, away from the sun.
+      EXPECT_FALSE(atmos::planet::may_cast_onto(frustum, light, p - sun * (3.0 * b + 4.0 * caster_radius + 1.0),
+                                                caster_radius, 0.0, shell));
+    }
+  }
+  EXPECT_EQ(kept_on_rays, 40 * 100 * 2);
+  EXPECT_GT(culled_aside, 40 * 100 * 9 / 10);
+}
+
+// Zhang et al. 2006's practical split at its two ends: logarithmic and uniform.
+TEST(GlobeShadowCascades, PracticalSplitsBlendLogarithmicAndUniform) {
+  const std::vector<double> log_split = atmos::planet::practical_splits(2.0, 2e4, 4, 1.0);
+  const std::vector<double> uniform_split = atmos::planet::practical_splits(2.0, 2e4, 4, 0.0);
+  const std::vector<double> half = atmos::planet::practical_splits(2.0, 2e4, 4, 0.5);
+  ASSERT_EQ(log_split.size(), 5u);
+  for (int i = 0; i <= 4; ++i) {
+    EXPECT_NEAR(log_split[size_t(i)], 2.0 * std::pow(1e4, i / 4.0), 1e-9 * log_split[size_t(i)]);
+    EXPECT_NEAR(uniform_split[size_t(i)], 2.0 + (2e4 - 2.0) * i / 4.0, 1e-9);
+    EXPECT_NEAR(half[size_t(i)], 0.5 * (log_split[size_t(i)] + uniform_split[size_t(i)]), 1e-9);
+  }
+}
+
+// ---------------------------------------------------------------------------
 // The GPU: the globe drawn into a small reversed-Z framebuffer.
 
 class GlobeGpu : public atmos_test::EarthGpuTest {
@@ -277,6 +547,32 @@ class GlobeGpu : public atmos_test::EarthGpuTest {
     v.sun_direction = glm::normalize(glm::dvec3(0.2, 0.4, 1.0));
     v.nits_per_unit = 1000.0;
     return v;
+  }
+
+  // The same view drawn by a globe without and one with shadows.
+  struct Images {
+    std::vector<float> off, on, depth_off, depth_on;
+  };
+  static Images draw_both(atmos::Globe& off, atmos::Globe& on, const atmos::GlobeView& view, Target& target) {
+    Images images;
+    target.clear();
+    off.draw(view);
+    images.off = target.read_colour();
+    images.depth_off = target.read_depth();
+    target.clear();
+    on.draw(view);
+    images.on = target.read_colour();
+    images.depth_on = target.read_depth();
+    return images;
+  }
+  static atmos::GlobeSettings shadow_settings(int cascades) {
+    atmos::GlobeSettings settings;
+    settings.complete_every_frame = true;
+    settings.max_screen_error_px = 0.5;
+    settings.shadow_cascades = cascades;
+    settings.shadow_map_size = 1024;
+    settings.shadow_distance_m = 12e3;
+    return settings;
   }
 
   static inline std::unique_ptr<atmos::AtmospherePass> pass_;
@@ -479,6 +775,309 @@ TEST_F(GlobeGpu, GroundBelowTheDatumIsLitByTheExtendedAtmosphere) {
   EXPECT_GT(drawn, width * height / 4);
 }
 
+
+// ---------------------------------------------------------------------------
+// Sun shadows on the GPU: a plain with one mountain.
+
+// A smooth mountain (a Gaussian kMountainHeight_m high, kMountainWidth_m in
+// e-folding radius) centred at kMountainLat/Lon on an otherwise flat plain at
+// the datum: a GeoTIFF in GDAL's memory file system, drawn with the flat
+// style, which adds no relief of its own.
+constexpr double kMountainLat = 10.0, kMountainLon = 20.0;
+constexpr double kMountainHeight_m = 800.0, kMountainWidth_m = 1500.0;
+
+glm::dvec3 geographic_direction(double lat_deg, double lon_deg) {
+  const double lat = glm::radians(lat_deg), lon = glm::radians(lon_deg);
+  return {std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat)};
+}
+
+atmos::PlanetSurface mountain_surface(double radius_m) {
+  static const std::string path = [radius_m] {
+    GDALAllRegister();
+    const std::string p = "/vsimem/atmos_globe_test_mountain.tif";
+    const int n = 256;
+    const double half = 0.12;  // degrees: 27 km across
+    const double west = kMountainLon - half, north = kMountainLat + half, step = 2.0 * half / n;
+    GDALDatasetH ds = GDALCreate(GDALGetDriverByName("GTiff"), p.c_str(), n, n, 1, GDT_Float32, nullptr);
+    double gt[6] = {west, step, 0.0, north, 0.0, -step};
+    GDALSetGeoTransform(ds, gt);
+    OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
+    OSRSetFromUserInput(srs, "EPSG:4326");
+    GDALSetSpatialRef(ds, srs);
+    OSRDestroySpatialReference(srs);
+    const glm::dvec3 top = geographic_direction(kMountainLat, kMountainLon);
+    std::vector<float> heights(size_t(n) * size_t(n));
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const glm::dvec3 d = geographic_direction(north + (j + 0.5) * gt[5], west + (i + 0.5) * gt[1]);
+        const double r = radius_m * std::acos(std::clamp(glm::dot(d, top), -1.0, 1.0));
+        heights[size_t(j * n + i)] =
+            float(kMountainHeight_m * std::exp(-(r * r) / (kMountainWidth_m * kMountainWidth_m)));
+      }
+    GDALRasterBandH band = GDALGetRasterBand(ds, 1);
+    GDALSetRasterUnitType(band, "m");
+    EXPECT_EQ(GDALRasterIO(band, GF_Write, 0, 0, n, n, heights.data(), n, n, GDT_Float32, 0, 0), CE_None);
+    GDALClose(ds);
+    return p;
+  }();
+  atmos::PlanetSurface s = surface_of(atmos::SurfaceStyle::flat, 1);
+  s.elevation.source = path;
+  return s;
+}
+
+// The mountain's local frame: up through its top, east, north.
+struct LocalFrame {
+  double radius_m;  // the datum
+  glm::dvec3 up, east, north;
+  explicit LocalFrame(double datum_radius_m) : radius_m(datum_radius_m) {
+    up = geographic_direction(kMountainLat, kMountainLon);
+    east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), up));
+    north = glm::cross(up, east);
+  }
+  // A point `height` m above the datum at (x east, y north) m from the top's foot.
+  glm::dvec3 at(double x, double y, double height) const {
+    return glm::normalize(up * radius_m + east * x + north * y) * (radius_m + height);
+  }
+  glm::dvec3 direction(double azimuth_deg, double elevation_deg) const {
+    const double a = glm::radians(azimuth_deg), e = glm::radians(elevation_deg);
+    return glm::normalize((north * std::cos(a) + east * std::sin(a)) * std::cos(e) + up * std::sin(e));
+  }
+};
+
+// The sun's ray from `point` (planet-centred m; `frame`: the globe's
+// pass's) over the drawn relief (Globe::height_m), in
+// steps of 20 m until it is above the highest ground: the lowest clearance
+// of the ray above the ground below it (m), and whether it stays above
+// min(margin, 0.05 t) at every distance t (a point clearly in sunlight).
+struct SunRay {
+  double lowest_clearance_m = INFINITY;
+  bool clear = true;
+};
+SunRay march_to_sun(const atmos::Globe& globe, const atmos::PlanetFrame& frame, double radius_m,
+                    const glm::dvec3& point, const glm::dvec3& sun, double margin_m) {
+  SunRay ray;
+  for (double t = 10.0; t < 40e3; t += 20.0) {
+    const glm::dvec3 x = point + sun * t;
+    const double altitude = glm::length(x) - radius_m;
+    if (altitude > globe.max_height_m() + 1.0) break;
+    const double clearance = altitude - globe.height_m(frame.centre + x * frame.units_per_metre);
+    ray.lowest_clearance_m = std::min(ray.lowest_clearance_m, clearance);
+    if (clearance < std::min(margin_m, 0.05 * t)) ray.clear = false;
+  }
+  return ray;
+}
+
+double luminance(const float* c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
+
+// The world point drawn at pixel (x, y) from the reversed-Z depth buffer of
+// a view of reversed_z_projection (depth = near / view depth).
+glm::dvec3 pixel_point(const atmos::GlobeView& view, int x, int y, float depth) {
+  const glm::dmat4& p = view.projection;
+  const double d = p[3][2] / double(depth);
+  const glm::dvec4 in_view(((x + 0.5) / view.width * 2.0 - 1.0) * d / p[0][0],
+                           ((y + 0.5) / view.height * 2.0 - 1.0) * d / p[1][1], -d, 1.0);
+  return glm::dvec3(glm::inverse(view.view) * in_view);
+}
+
+// A mountain casts its shadow at a low sun: the ground behind it (the sun's
+// ray from there passes through the mountain, by the CPU's march over
+// Globe::height_m) is darker with shadows than without, by the sun's part
+// of its light; the ground in full sun keeps its colour within 1 %. The
+// farthest cascade, handed to the engine plugin, removes the light the
+// shadowed air no longer scatters (light shafts): the air in front of the
+// shadow is darker with it than without. In an engine's world of
+// kilometres, the planet's centre away from its origin.
+TEST_F(GlobeGpu, ShadowsOfAMountainDarkenTheGroundBehindItAtALowSun) {
+  // An engine whose world is in kilometres, the planet's centre away from
+  // its origin.
+  atmos::PlanetFrame frame;
+  frame.centre = glm::dvec3(1200.0, -300.0, 450.0);
+  frame.units_per_metre = 1e-3;
+  const auto world = [&](const glm::dvec3& planet_m) { return frame.centre + planet_m * frame.units_per_metre; };
+  const auto planet = [&](const glm::dvec3& world_point) {
+    return (world_point - frame.centre) / frame.units_per_metre;
+  };
+  atmos::AtmospherePass pass(*earth_, *tables_, frame);
+  const atmos::PlanetSurface surface = mountain_surface(earth_->bottom_radius_m);
+  atmos::Globe off(*earth_, surface, pass, shadow_settings(0));
+  atmos::Globe on(*earth_, surface, pass, shadow_settings(4));
+  ASSERT_GT(on.max_height_m(), 790.0);
+  const LocalFrame local(earth_->bottom_radius_m);
+  // The sun 8 degrees above the eastern horizon: the shadow runs 5.7 km
+  // west. The camera, 2 km up, south-west of the mountain, looks north
+  // and down.
+  const glm::dvec3 sun = local.direction(90.0, 8.0);
+  const glm::dvec3 camera = local.at(-2500.0, -5000.0, 2000.0);
+  const int width = 128, height = 96;
+  atmos::GlobeView view = view_from(world(camera), glm::normalize(local.north + 0.15 * local.east - 0.45 * local.up),
+                                    local.up, width, height);
+  view.projection =
+      atmos::reversed_z_projection(glm::radians(60.0), double(width) / height, 0.05 * frame.units_per_metre);
+  view.sun_direction = sun;
+  Target target(width, height);
+  const Images images = draw_both(off, on, view, target);
+  EXPECT_EQ(images.depth_on, images.depth_off);  // the same surface
+  EXPECT_EQ(on.last_stats().shadow_cascades, 4);
+  EXPECT_GT(on.last_stats().shadow_casters, 4);
+  EXPECT_EQ(off.last_stats().shadow_cascades, 0);
+
+  // Margins: the mesh's error and a few texels of the coarsest cascade.
+  const atmos::GlobeShadowMap for_pass = on.shadow_map_for_pass();
+  ASSERT_NE(for_pass.texture, 0u);
+  const double margin = 30.0 + 3.0 * for_pass.texel_m;
+  std::vector<double> shadowed_ratios, lit_ratios;
+  std::vector<size_t> shadowed_pixels;
+  for (int y = 0; y < height; y += 2)
+    for (int x = 0; x < width; x += 2) {
+      const size_t i = size_t(y * width + x);
+      if (!(images.depth_on[i] > 0.0f)) continue;
+      const glm::dvec3 point = planet(pixel_point(view, x, y, images.depth_on[i]));
+      const SunRay ray = march_to_sun(on, frame, earth_->bottom_radius_m, point, sun, margin);
+      const double ratio = luminance(&images.on[4 * i]) / luminance(&images.off[4 * i]);
+      if (ray.lowest_clearance_m < -margin && on.height_m(world(point)) < 10.0) {  // the plain behind the mountain
+        shadowed_ratios.push_back(ratio);
+        shadowed_pixels.push_back(i);
+      } else if (ray.clear) {
+        lit_ratios.push_back(ratio);
+      }
+    }
+  ASSERT_GE(shadowed_ratios.size(), 20u);
+  ASSERT_GE(lit_ratios.size(), 200u);
+  // In the shadow only the sky's light is left: at this low sun the sky
+  // gives the plain about two thirds of its light, the sun a third.
+  int dark = 0;
+  for (const double r : shadowed_ratios) dark += r < 0.85 ? 1 : 0;
+  EXPECT_GE(dark, int(0.95 * double(shadowed_ratios.size())));
+  int unchanged = 0;
+  for (const double r : lit_ratios) unchanged += std::abs(r - 1.0) <= 0.01 ? 1 : 0;
+  EXPECT_EQ(unchanged, int(lit_ratios.size()));
+  RecordProperty("shadowed_pixels", int(shadowed_ratios.size()));
+  RecordProperty("lit_pixels", int(lit_ratios.size()));
+
+  // The plugin's light shafts from the farthest cascade.
+  atmos::FrameInput input;
+  input.colour = target.colour;
+  input.depth = target.depth;
+  input.width = width;
+  input.height = height;
+  input.depth_encoding = atmos::DepthEncoding::reversed_z;
+  input.view = view.view;
+  input.projection = view.projection;
+  input.sun_direction = sun;
+  input.nits_per_unit = view.nits_per_unit;
+  const auto composite = [&](bool shafts) {
+    input.shadow_map = shafts ? for_pass.texture : 0u;
+    input.shadow_matrix = for_pass.matrix;
+    std::vector<float> out(size_t(width * height * 4));
+    const GLuint texture = pass.render(input);
+    glGetTextureImage(texture, 0, GL_RGBA, GL_FLOAT, GLsizei(out.size() * sizeof(float)), out.data());
+    return out;
+  };
+  // `target` still holds the shadowed image.
+  const std::vector<float> without = composite(false), with = composite(true);
+  ASSERT_EQ(glGetError(), GLenum(GL_NO_ERROR));
+  double in_shadow_without = 0.0, in_shadow_with = 0.0;
+  for (const size_t i : shadowed_pixels) {
+    in_shadow_without += luminance(&without[4 * i]);
+    in_shadow_with += luminance(&with[4 * i]);
+  }
+  EXPECT_LT(in_shadow_with, 0.99 * in_shadow_without);
+  // The shadow map's matrix maps the shadowed ground into its clip cube.
+  for (const size_t i : shadowed_pixels) {
+    const int x = int(i % size_t(width)), y = int(i / size_t(width));
+    const glm::dvec4 clip = for_pass.matrix * glm::dvec4(pixel_point(view, x, y, images.depth_on[i]), 1.0);
+    EXPECT_LE(std::max({std::abs(clip.x), std::abs(clip.y), std::abs(clip.z)}), 1.0);
+  }
+}
+
+// No self-shadowing ("acne") on sunlit ground: from 2 m above the plain,
+// the sun 12 degrees up behind the camera, the plain (lit at 78 degrees from
+// its normal) and the mountain's flank facing the sun keep their colour
+// within 1 % in more than 99 % of the pixels the sun's ray clearly reaches,
+// through every cascade and every hand-over band between them.
+TEST_F(GlobeGpu, ShadowsLeaveSunlitSlopesUnchanged) {
+  const atmos::PlanetSurface surface = mountain_surface(earth_->bottom_radius_m);
+  atmos::Globe off(*earth_, surface, *pass_, shadow_settings(0));
+  atmos::Globe on(*earth_, surface, *pass_, shadow_settings(4));
+  const LocalFrame local(earth_->bottom_radius_m);
+  const glm::dvec3 sun = local.direction(200.0, 12.0);
+  const glm::dvec3 camera = local.at(300.0, -3500.0, on.height_m(local.at(300.0, -3500.0, 0.0)) + 2.0);
+  const int width = 128, height = 96;
+  atmos::GlobeView view = view_from(camera, glm::normalize(local.north + 0.08 * local.up), local.up, width, height);
+  view.sun_direction = sun;
+  Target target(width, height);
+  const Images images = draw_both(off, on, view, target);
+  EXPECT_EQ(on.last_stats().shadow_cascades, 4);
+  const double margin = 30.0 + 3.0 * on.shadow_map_for_pass().texel_m;
+  int lit = 0, unchanged = 0, flank = 0;
+  for (int y = 0; y < height; y += 2)
+    for (int x = 0; x < width; x += 2) {
+      const size_t i = size_t(y * width + x);
+      if (!(images.depth_on[i] > 0.0f)) continue;
+      const glm::dvec3 point = pixel_point(view, x, y, images.depth_on[i]);
+      if (!march_to_sun(on, atmos::PlanetFrame{}, earth_->bottom_radius_m, point, sun, margin).clear) continue;
+      ++lit;
+      flank += on.height_m(point) > 100.0 ? 1 : 0;
+      const double ratio = luminance(&images.on[4 * i]) / luminance(&images.off[4 * i]);
+      unchanged += std::abs(ratio - 1.0) <= 0.01 ? 1 : 0;
+    }
+  ASSERT_GE(lit, 1000);
+  EXPECT_GE(flank, 100);
+  EXPECT_GT(double(unchanged), 0.99 * double(lit));
+  RecordProperty("lit_pixels", lit);
+  RecordProperty("unchanged_pixels", unchanged);
+}
+
+// Shadows off draw the unshadowed image, bit for bit: the default settings
+// (no shadows) and a globe with shadows whose view has no ground within the
+// shadows' reach (from orbit, where no shadow map is drawn) draw the same
+// pixels; within reach but with nothing to shadow (the plain under a high
+// sun), the image with shadows differs only by float rounding (the sun's
+// and the sky's light then interpolated apart; a few more ulps in the long
+// triangles at the horizon).
+TEST_F(GlobeGpu, ShadowsOffDrawTheUnshadowedImage) {
+  const atmos::PlanetSurface surface = mountain_surface(earth_->bottom_radius_m);
+  atmos::GlobeSettings defaults;
+  defaults.complete_every_frame = true;
+  defaults.max_screen_error_px = 0.5;
+  atmos::Globe off(*earth_, surface, *pass_, defaults);
+  atmos::Globe on(*earth_, surface, *pass_, shadow_settings(3));
+  const LocalFrame local(earth_->bottom_radius_m);
+  const int width = 96, height = 64;
+  Target target(width, height);
+  {
+    const glm::dvec3 camera = local.up * (3.0 * earth_->bottom_radius_m);
+    atmos::GlobeView view = view_from(camera, -local.up, local.north, width, height);
+    view.sun_direction = local.direction(120.0, 30.0);
+    const Images images = draw_both(off, on, view, target);
+    EXPECT_EQ(on.last_stats().shadow_cascades, 0);
+    EXPECT_EQ(on.shadow_map_for_pass().texture, 0u);
+    EXPECT_EQ(images.on, images.off);
+    EXPECT_EQ(images.depth_on, images.depth_off);
+  }
+  {
+    // Far from the mountain, the sun near the zenith.
+    const glm::dvec3 camera = local.at(0.0, -40e3, 50.0);
+    atmos::GlobeView view = view_from(camera, glm::normalize(-local.north - 0.3 * local.up), local.up, width, height);
+    view.sun_direction = local.direction(0.0, 85.0);
+    const Images images = draw_both(off, on, view, target);
+    EXPECT_GT(on.last_stats().shadow_cascades, 0);
+    int drawn = 0;
+    double worst = 0.0;
+    for (size_t i = 0; i < images.depth_on.size(); ++i) {
+      if (!(images.depth_on[i] > 0.0f)) continue;
+      ++drawn;
+      for (int k = 0; k < 3; ++k) {
+        const double e = std::abs(double(images.on[4 * i + size_t(k)]) - images.off[4 * i + size_t(k)]) /
+                                    std::max(double(images.off[4 * i + size_t(k)]), 1e-6);
+        worst = std::max(worst, e);
+      }
+    }
+    EXPECT_GT(drawn, width * height / 2);
+    EXPECT_LT(worst, 1e-4);
+  }
+}
+
 TEST_F(GlobeGpu, RejectsBadInput) {
   atmos::GlobeSettings bad;
   bad.max_screen_error_px = 0.0;
@@ -486,6 +1085,26 @@ TEST_F(GlobeGpu, RejectsBadInput) {
   bad = {};
   bad.memory_cap_bytes = 1000;
   EXPECT_THROW(atmos::Globe(*earth_, atmos::PlanetSurface{}, *pass_, bad), atmos::Error);
+  // Shadows: 0 to 4 cascades, an even map size in 64..16384 texels, a
+  // positive shadow distance.
+  for (const int cascades : {-1, 5}) {
+    bad = {};
+    bad.shadow_cascades = cascades;
+    EXPECT_THROW(atmos::Globe(*earth_, atmos::PlanetSurface{}, *pass_, bad), atmos::Error) << cascades;
+  }
+  for (const int size : {32, 65, 20000}) {
+    bad = {};
+    bad.shadow_cascades = 2;
+    bad.shadow_map_size = size;
+    EXPECT_THROW(atmos::Globe(*earth_, atmos::PlanetSurface{}, *pass_, bad), atmos::Error) << size;
+  }
+  for (const double distance : {0.0, -1.0, std::numeric_limits<double>::infinity(),
+                                std::numeric_limits<double>::quiet_NaN()}) {
+    bad = {};
+    bad.shadow_cascades = 2;
+    bad.shadow_distance_m = distance;
+    EXPECT_THROW(atmos::Globe(*earth_, atmos::PlanetSurface{}, *pass_, bad), atmos::Error) << distance;
+  }
   // A sea level above the top of the atmosphere, or below the planet's centre.
   for (const double sea : {earth_->top_radius_m - earth_->bottom_radius_m + 1.0, -earth_->bottom_radius_m - 1.0,
                            std::numeric_limits<double>::infinity()})
@@ -516,6 +1135,21 @@ TEST_F(GlobeGpu, RejectsBadInput) {
   EXPECT_THROW(globe.draw(empty), atmos::Error);
   EXPECT_THROW(globe.height_m(glm::dvec3(std::numeric_limits<double>::infinity(), 0, 0)), atmos::Error);
   EXPECT_THROW(atmos::reversed_z_projection(0.0, 1.0, 1.0), atmos::Error);
+  // The cascades slice a perspective frustum: with shadows, an
+  // orthographic projection is refused, nothing drawn.
+  {
+    atmos::GlobeSettings shadowed;
+    shadowed.shadow_cascades = 2;
+    shadowed.shadow_map_size = 64;
+    atmos::Globe with_shadows(*earth_, surface_of(atmos::SurfaceStyle::flat, 1), *pass_, shadowed);
+    atmos::GlobeView orthographic = view_from(glm::dvec3(0, -radius - 100.0, 0), glm::dvec3(0, 1, 0),
+                                              glm::dvec3(0, 0, 1), 32, 32);
+    orthographic.projection = glm::ortho(-100.0, 100.0, -100.0, 100.0, 0.1, 1000.0);
+    Target small(32, 32);
+    small.clear();
+    EXPECT_THROW(with_shadows.draw(orthographic), atmos::Error);
+    EXPECT_NO_THROW(globe.draw(orthographic));
+  }
   // A camera at the planet's centre: nothing to see of the surface from
   // inside, but no crash and no error.
   atmos::GlobeView centre = view_from(glm::dvec3(0.0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1), 32, 32);

@@ -9,6 +9,11 @@
 // renders a descent of 5 frames from 2.5 planet radii to 2 m above the
 // ground (logarithmic in altitude), each a PNG, and prints per frame the
 // globe's tiles, triangles, CPU selection time and the frame's time.
+//
+// The terrain's sun shadows are on (four cascades near the camera); the
+// globe hands its farthest cascade to the pass, which removes the light the
+// shadowed air does not scatter (light shafts). --shadow-cascades 0 turns
+// both off.
 #include <epoxy/gl.h>
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
@@ -48,6 +53,10 @@ struct Options {
   double latitude = 20.0, longitude = 30.0;  // degrees, the ground point
   double exposure = 13.0;  // EV100 of the PNGs
   double max_screen_error_px = 1.0;
+  int shadow_cascades = 4;       // 0: no terrain shadows, no light shafts
+  int shadow_size = 2048;        // texels per cascade
+  double shadow_distance = 20e3;  // m
+  int shadow_steps = 24;         // the pass's shadow-map samples per view ray
   std::string out_dir = ".";
 };
 
@@ -87,6 +96,9 @@ int run(const Options& o) {
   atmos::GlobeSettings settings;
   settings.complete_every_frame = true;
   settings.max_screen_error_px = o.max_screen_error_px;
+  settings.shadow_cascades = o.shadow_cascades;
+  settings.shadow_map_size = o.shadow_size;
+  settings.shadow_distance_m = o.shadow_distance;
   atmos::Globe globe(planet, surface, pass, settings);
 
   // The engine's render targets: lit colour (RGBA32F) and reversed-Z depth.
@@ -158,6 +170,12 @@ int run(const Options& o) {
     input.sun_direction = sun;
     input.nits_per_unit = nits_per_unit;
     input.output = output;
+    // The terrain's shadow for the pass's light shafts (texture 0: none,
+    // when shadows are off or the ground is beyond their reach).
+    const atmos::GlobeShadowMap shadow = globe.shadow_map_for_pass();
+    input.shadow_map = shadow.texture;
+    input.shadow_matrix = shadow.matrix;
+    input.shadow_steps = o.shadow_steps;
     pass.render(input);
     glFinish();
     const double frame_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -169,9 +187,11 @@ int run(const Options& o) {
     atmos::write_png(read_image(output, o.width, o.height, nits_per_unit), path, o.exposure);
     std::printf(
         "%s: altitude %.6g m, %d tiles (%d generated in %.1f ms), %lld triangles, selection %.3f ms (%d nodes), "
+        "shadows %d cascades (%d casters, %lld triangles, %.3f ms selection), "
         "terrain %.1f ms, frame %.1f ms, resident %.1f MiB\n",
         path.c_str(), altitude, s.tiles_drawn, s.tiles_generated, s.generation_ms, s.triangles, s.selection_ms,
-        s.nodes_visited, terrain_ms, frame_ms, double(s.resident_bytes) / (1024.0 * 1024.0));
+        s.nodes_visited, s.shadow_cascades, s.shadow_casters, s.shadow_triangles, s.shadow_selection_ms, terrain_ms,
+        frame_ms, double(s.resident_bytes) / (1024.0 * 1024.0));
   }
   glDeleteFramebuffers(1, &target);
   glDeleteTextures(1, &colour);
@@ -215,6 +235,19 @@ int main(int argc, char** argv) {
   app.add_option("--max-error", o.max_screen_error_px, "Screen-space error bound of the terrain, pixels")
       ->capture_default_str()
       ->check(CLI::Range(0.05, 100.0));
+  app.add_option("--shadow-cascades", o.shadow_cascades,
+                 "Cascades of the terrain's sun shadows (0: no shadows, no light shafts)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 4));
+  app.add_option("--shadow-size", o.shadow_size, "Shadow map size per cascade, texels (even)")
+      ->capture_default_str()
+      ->check(CLI::Range(64, 16384));
+  app.add_option("--shadow-distance", o.shadow_distance, "How far from the camera shadows reach, metres")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1e7));
+  app.add_option("--shadow-steps", o.shadow_steps, "Shadow map samples per view ray for the light shafts (1-256)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 256));
   app.add_option("--out-dir", o.out_dir, "Directory of the PNG frames")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   o.seed_given = seed->count() > 0;

@@ -21,12 +21,22 @@
 // pass), heights in metres, radiance as FrameInput (cd/m² divided by
 // nits_per_unit, linear sRGB).
 //
+// Sun shadows of the terrain (opt-in, GlobeSettings::shadow_cascades):
+// cascaded shadow maps near the camera (Dimitrov 2007) at the practical
+// split scheme's distances (Zhang et al. 2006), which dim the sun's part of
+// the ground's light (not the sky's), and whose largest cascade the engine
+// hands to AtmospherePass::render() for its light shafts
+// (shadow_map_for_pass).
+//
 // Threading and GL state: as AtmospherePass (plugin.hpp): construct, draw
 // and destroy with the engine's OpenGL 4.5 core context current. draw()
 // changes the bound program, vertex array, buffers, texture units
 // first_unit..first_unit+4 of the pass's library, the clip control (left at
 // GL_LOWER_LEFT, GL_ZERO_TO_ONE), the depth function (GL_GREATER) and test
-// (enabled), and disables face culling and blending.
+// (enabled), and disables face culling and blending. With shadows it also
+// renders into its own framebuffers (then binds again the draw framebuffer
+// that was bound), binds texture unit first_unit+5 and a sampler object
+// there, and leaves depth clamping disabled.
 #pragma once
 
 #include <glm/mat4x4.hpp>
@@ -59,8 +69,26 @@ struct GlobeSettings {
   // Generate every tile the view needs before drawing (stills, tests,
   // benchmarks), within the memory cap: no ancestor stands in.
   bool complete_every_frame = false;
-  // The texture units of the atmosphere's GLSL library: first_unit..first_unit+4.
+  // The texture units of the atmosphere's GLSL library: first_unit..first_unit+4
+  // (and first_unit+5: the shadow maps).
   int first_unit = 0;
+
+  // Sun shadows of the terrain: the number of cascades, 0 (off: no shadow
+  // maps, no cost, the unshadowed image) to 4. Each cascade is a square
+  // depth map of shadow_map_size texels a side (even, 64..16384;
+  // GL_DEPTH_COMPONENT32F, owned by the globe) covering a slice of the view
+  // frustum between the nearest drawn ground and shadow_distance_m; the
+  // slices' texels grow with their distance from the camera (practical
+  // splits, Zhang et al. 2006). With 4 x 2048 texels over 20 km, a camera
+  // 2 m above the ground and a 60 degree field of view, the texels measure
+  // about 0.13, 0.4, 2.3 and 24 m from the nearest slice to the farthest.
+  int shadow_cascades = 0;
+  int shadow_map_size = 2048;  // texels
+  // How far shadows reach: view depth from the camera, m (> 0). They fade
+  // out over the last tenth of the farthest cascade; beyond, and from
+  // cameras whose nearest ground is farther (from orbit), the ground is
+  // sunlit and no shadow map is drawn.
+  double shadow_distance_m = 20e3;
 };
 
 // One view: the same frame as the FrameInput that follows it.
@@ -76,13 +104,30 @@ struct GlobeView {
 
 struct GlobeStats {
   int tiles_drawn = 0;      // including ancestors standing in for pending tiles
-  int tiles_pending = 0;    // selected but not yet resident
+  int tiles_pending = 0;    // selected (for the view or as shadow casters) but not yet resident
   int tiles_generated = 0;  // this draw
   int nodes_visited = 0;    // quadtree nodes visited by the selection
   long long triangles = 0;  // drawn, skirts included
   double selection_ms = 0.0;   // CPU: the quadtree traversal and culling
   double generation_ms = 0.0;  // CPU: this draw's new tiles (relief and meshes) and their upload
   std::size_t resident_bytes = 0;  // GPU memory of the resident tiles after the draw
+  int shadow_cascades = 0;        // cascades drawn (0: none this frame)
+  int shadow_casters = 0;         // tile draws into the cascades, all cascades together
+  long long shadow_triangles = 0;  // drawn into the cascades, skirts included
+  double shadow_selection_ms = 0.0;  // CPU: the cascades' fit and their casters' selections
+};
+
+// A cascade of the globe's sun shadows for AtmospherePass::render(): the
+// FrameInput's shadow_map and shadow_matrix.
+struct GlobeShadowMap {
+  // A GL_TEXTURE_2D of GL_DEPTH_COMPONENT32F (a view of one layer of the
+  // globe's cascades, owned by the globe; valid until its destruction),
+  // standard depth (0 towards the sun); 0: no shadows this frame.
+  std::uint32_t texture = 0;
+  // The engine's world (engine units) -> the cascade's clip space: an
+  // orthographic projection from the sun, standard [-1, 1] depth.
+  glm::dmat4 matrix{1.0};
+  double texel_m = 0.0;  // the side of a texel, m
 };
 
 class Globe {
@@ -102,9 +147,11 @@ class Globe {
   Globe& operator=(const Globe&) = delete;
 
   // Draws the surface into the bound framebuffer's colour attachment 0 (lit
-  // colour, RGB) and depth attachment (reversed-Z: clear it to 0 first).
-  // Throws atmos::Error, with nothing drawn, on non-finite or singular
-  // matrices, an empty viewport or a zero sun direction.
+  // colour, RGB) and depth attachment (reversed-Z: clear it to 0 first),
+  // after the shadow maps when shadows are on. Throws atmos::Error, with
+  // nothing drawn, on non-finite or singular matrices, an empty viewport,
+  // a zero sun direction, or, with shadows, a projection that is not a
+  // perspective one.
   void draw(const GlobeView& view);
 
   // Height of the drawn surface's relief above the datum, metres, below the
@@ -115,6 +162,11 @@ class Globe {
   double max_height_m() const;
 
   const GlobeStats& last_stats() const;
+
+  // The shadow map of the last draw() to hand to AtmospherePass::render()
+  // for its light shafts: the farthest cascade, which covers all the
+  // shadows' reach (texture 0 when shadows are off or out of reach).
+  GlobeShadowMap shadow_map_for_pass() const;
 
   struct Impl;
 

@@ -1,5 +1,6 @@
 // The terrain globe (include/atmos/globe.hpp): tile meshes with morph
-// targets and skirts, their GPU cache, and the drawing.
+// targets and skirts, their GPU cache, the sun's shadow maps and the
+// drawing.
 #include "atmos/globe.hpp"
 
 #include <epoxy/gl.h>
@@ -13,6 +14,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 #include <string>
@@ -21,6 +23,7 @@
 #include "data/embedded_files.hpp"
 #include "planet/cube_sphere.hpp"
 #include "planet/globe_mesh.hpp"
+#include "planet/globe_shadows.hpp"
 #include "planet/surface.hpp"
 #include "planet/tile_selection.hpp"
 
@@ -97,9 +100,76 @@ struct Resident {
   GLuint buffer = 0;
   glm::dvec3 origin{0.0};  // planet-centred m
   double min_height_m = 0.0, max_height_m = 0.0;
+  // A sphere holding every vertex, skirts and morph targets included
+  // (planet-centred m): the shadow casters' culling.
+  glm::dvec3 bound_centre{0.0};
+  double bound_radius_m = 0.0;
   int level = 0;
   long long last_drawn = -1;  // frame number
 };
+
+// The uniforms of a program drawing tiles.
+struct TileProgram {
+  GLuint id = 0;
+  GLint origin = -1, morph = -1, clip = -1, camera = -1, sun = -1, light = -1;
+  void locate() {
+    origin = glGetUniformLocation(id, "origin_from_camera");
+    morph = glGetUniformLocation(id, "morph_range");
+    clip = glGetUniformLocation(id, "clip_from_offset");
+    camera = glGetUniformLocation(id, "camera_planet");
+    sun = glGetUniformLocation(id, "sun_direction");
+    light = glGetUniformLocation(id, "light_scale");
+  }
+};
+
+// One tile to draw: a selected tile, or for a tile not resident yet its
+// nearest resident ancestor, whole and unmorphed; a tile met twice draws
+// the union of its quadrants.
+struct TileDraw {
+  TileKey key;
+  unsigned quadrants = 0u;
+  double morph_start = INFINITY, morph_end = INFINITY;
+};
+
+// The sun's cascaded shadow maps (globe_shadows.hpp): one depth texture
+// array, a 2D view of each layer for the engine plugin, a framebuffer per
+// layer, the depth-only program and the lit program that reads them.
+struct Shadows {
+  int count = 0, size = 0;
+  double distance_m = 0.0;
+  GLuint maps = 0;
+  std::array<GLuint, planet::kMaxShadowCascades> views{}, framebuffers{};
+  GLuint sampler = 0;
+  TileProgram depth;
+  TileProgram lit;
+  GLint u_cascade_count = -1, u_light_clip = -1, u_far = -1, u_blend = -1, u_texel = -1, u_depth_per_m = -1,
+        u_forward = -1, u_maps = -1;
+  // The last draw's view and cascades (none: no shadows this frame).
+  planet::ShadowView view;
+  planet::ShadowLight light;
+  std::vector<planet::ShadowCascade> cascades;
+
+  ~Shadows() {
+    for (GLuint& f : framebuffers)
+      if (f != 0) glDeleteFramebuffers(1, &f);
+    for (GLuint& v : views)
+      if (v != 0) glDeleteTextures(1, &v);
+    if (maps != 0) glDeleteTextures(1, &maps);
+    if (sampler != 0) glDeleteSamplers(1, &sampler);
+    if (depth.id != 0) glDeleteProgram(depth.id);
+    if (lit.id != 0) glDeleteProgram(lit.id);
+  }
+};
+
+// The nearest view depth of any point of a tile's volume between the
+// radii: its nearest distance times the cosine of the frustum's widest
+// angle from the view axis (a point at distance d inside the frustum is at
+// least d / sqrt(1 + s^2) deep, s the largest slope of a corner ray).
+double nearest_view_depth_m(const glm::dvec3& camera, const TileKey& key, double min_radius_m, double max_radius_m,
+                            double widest_slope) {
+  return planet::nearest_distance_m(camera, key, min_radius_m, max_radius_m) /
+         std::sqrt(1.0 + widest_slope * widest_slope);
+}
 
 }  // namespace
 
@@ -108,10 +178,10 @@ struct Globe::Impl {
   GlobeSettings settings;
   planet::Surface surface;
   planet::MeshBuilder builder;
-  GLuint program = 0;
+  TileProgram program;
   GLuint vertex_array = 0;
   GLuint index_buffer = 0;
-  GLint u_origin = -1, u_morph = -1, u_clip = -1, u_camera = -1, u_sun = -1, u_light = -1;
+  std::unique_ptr<Shadows> shadows;  // none when GlobeSettings::shadow_cascades is 0
   std::map<std::uint64_t, Resident> resident;
   std::size_t resident_bytes = 0;
   long long frame = 0;
@@ -124,10 +194,11 @@ struct Globe::Impl {
         builder(surface, a.bottom_radius_m) {}
 
   ~Impl() {
+    shadows.reset();
     for (auto& [key, tile] : resident) glDeleteBuffers(1, &tile.buffer);
     if (index_buffer != 0) glDeleteBuffers(1, &index_buffer);
     if (vertex_array != 0) glDeleteVertexArrays(1, &vertex_array);
-    if (program != 0) glDeleteProgram(program);
+    if (program.id != 0) glDeleteProgram(program.id);
   }
 
   void upload(const TileKey& key, const planet::TileMesh& mesh) {
@@ -138,10 +209,87 @@ struct Globe::Impl {
     r.origin = mesh.origin;
     r.min_height_m = mesh.min_height_m;
     r.max_height_m = mesh.max_height_m;
+    glm::dvec3 lo(INFINITY), hi(-INFINITY);
+    for (const planet::TileVertex& v : mesh.vertices) {
+      const glm::dvec3 p(v.position[0], v.position[1], v.position[2]);
+      const glm::dvec3 q = p + glm::dvec3(v.morph_offset[0], v.morph_offset[1], v.morph_offset[2]);
+      lo = glm::min(lo, glm::min(p, q));
+      hi = glm::max(hi, glm::max(p, q));
+    }
+    const glm::dvec3 middle = 0.5 * (lo + hi);
+    double radius2 = 0.0;
+    for (const planet::TileVertex& v : mesh.vertices) {
+      const glm::dvec3 p(v.position[0], v.position[1], v.position[2]);
+      const glm::dvec3 q = p + glm::dvec3(v.morph_offset[0], v.morph_offset[1], v.morph_offset[2]);
+      radius2 = std::max({radius2, glm::dot(p - middle, p - middle), glm::dot(q - middle, q - middle)});
+    }
+    r.bound_centre = mesh.origin + middle;
+    r.bound_radius_m = std::sqrt(radius2) * (1.0 + 1e-6) + 1e-3;
     r.level = key.level;
     resident[key.packed()] = r;
     resident_bytes += bytes;
   }
+
+  // The tiles to draw for a selection: each selected tile, or its nearest
+  // resident ancestor.
+  std::vector<TileDraw> resolve(const planet::Selection& selection) const {
+    std::vector<TileDraw> draws;
+    std::map<std::uint64_t, size_t> draw_of;
+    for (const planet::SelectedTile& s : selection.tiles) {
+      TileDraw d{s.key, s.quadrants, s.morph_start_m, s.morph_end_m};
+      while (resident.find(d.key.packed()) == resident.end()) {
+        d.key = planet::parent(d.key);
+        d.quadrants = 0xFu;
+        d.morph_start = d.morph_end = INFINITY;
+      }
+      const auto [it, added] = draw_of.emplace(d.key.packed(), draws.size());
+      if (added)
+        draws.push_back(d);
+      else
+        draws[it->second].quadrants |= d.quadrants;
+    }
+    return draws;
+  }
+
+  // Draws tiles with the program `with` (its clip_from_offset set); returns the
+  // triangles drawn.
+  long long draw_tiles(const std::vector<TileDraw>& draws, const TileProgram& with, const glm::dvec3& camera) {
+    const GLsizei quadrant_count = GLsizei(builder.quadrant_index_count());
+    const GLsizei tile_count = GLsizei(builder.tile_index_count());
+    long long triangles = 0;
+    for (const TileDraw& d : draws) {
+      Resident& tile = resident.find(d.key.packed())->second;
+      tile.last_drawn = frame;
+      const glm::dvec3 origin = tile.origin - camera;
+      glUniform3f(with.origin, float(origin.x), float(origin.y), float(origin.z));
+      glUniform2f(with.morph, std::isfinite(d.morph_start) ? float(d.morph_start) : 3.0e38f,
+                  std::isfinite(d.morph_end) ? float(d.morph_end) : 3.0e38f);
+      glVertexArrayVertexBuffer(vertex_array, 0, tile.buffer, 0, GLsizei(sizeof(planet::TileVertex)));
+      if (d.quadrants == 0xFu) {
+        const std::size_t offset = builder.tile_index_offset() * sizeof(std::uint32_t);
+        glDrawElements(GL_TRIANGLES, tile_count, GL_UNSIGNED_INT, reinterpret_cast<const void*>(offset));
+        triangles += tile_count / 3;
+        continue;
+      }
+      for (int q = 0; q < 4; ++q)
+        if (d.quadrants & (1u << q)) {
+          const std::size_t offset = std::size_t(q) * std::size_t(quadrant_count) * sizeof(std::uint32_t);
+          glDrawElements(GL_TRIANGLES, quadrant_count, GL_UNSIGNED_INT, reinterpret_cast<const void*>(offset));
+          triangles += quadrant_count / 3;
+        }
+    }
+    return triangles;
+  }
+
+  void create_shadows(const std::string& version);
+  // The cascades of a view (none when shadows are off or out of reach),
+  // into shadows->cascades; false when there are none.
+  bool fit_cascades(const GlobeView& view, const glm::dmat4& rotation, const glm::dvec3& camera,
+                    const glm::dvec3& sun, const std::vector<TileDraw>& draws);
+  // Renders the cascades' depth from the sun, cascade i with the tiles of
+  // casters[i] that may shadow the tiles the view draws (`receivers`).
+  void render_shadow_maps(const std::vector<std::vector<TileDraw>>& casters, const std::vector<TileDraw>& receivers,
+                          const glm::dvec3& camera, GlobeStats& out);
 
   // Evicts the least recently drawn tiles above the memory cap, never the
   // six roots nor a tile of the current frame.
@@ -161,6 +309,187 @@ struct Globe::Impl {
   }
 };
 
+void Globe::Impl::create_shadows(const std::string& version) {
+  auto s = std::make_unique<Shadows>();
+  s->count = settings.shadow_cascades;
+  s->size = settings.shadow_map_size;
+  s->distance_m = settings.shadow_distance_m;
+  GLint max_size = 0, max_units = 0;
+  glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
+  glGetIntegerv(GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS, &max_units);
+  if (s->size > max_size)
+    throw Error("globe settings: shadow_map_size " + std::to_string(s->size) +
+                " exceeds the context's largest texture, " + std::to_string(max_size));
+  if (settings.first_unit + 5 >= max_units)
+    throw Error("globe settings: first_unit + 5 (the shadow maps) is beyond the context's " +
+                std::to_string(max_units) + " texture units");
+  glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &s->maps);
+  glTextureStorage3D(s->maps, 1, GL_DEPTH_COMPONENT32F, s->size, s->size, s->count);
+  for (int i = 0; i < s->count; ++i) {
+    // A 2D view of layer i: what AtmospherePass reads (a GL_TEXTURE_2D).
+    glGenTextures(1, &s->views[size_t(i)]);
+    glTextureView(s->views[size_t(i)], GL_TEXTURE_2D, s->maps, GL_DEPTH_COMPONENT32F, 0, 1, GLuint(i), 1);
+    glCreateFramebuffers(1, &s->framebuffers[size_t(i)]);
+    const GLuint framebuffer = s->framebuffers[size_t(i)];
+    glNamedFramebufferTextureLayer(framebuffer, GL_DEPTH_ATTACHMENT, s->maps, 0, i);
+    glNamedFramebufferDrawBuffer(framebuffer, GL_NONE);
+    glNamedFramebufferReadBuffer(framebuffer, GL_NONE);
+    if (glCheckNamedFramebufferStatus(framebuffer, GL_DRAW_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE ||
+        glIsTexture(s->views[size_t(i)]) != GL_TRUE)
+      throw Error("globe: the context cannot render the shadow maps (a depth texture array and its views)");
+  }
+  // Depth comparison with bilinear weights of the four nearest texels
+  // (percentage-closer filtering by the texture unit); lit outside the map.
+  glCreateSamplers(1, &s->sampler);
+  glSamplerParameteri(s->sampler, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+  glSamplerParameteri(s->sampler, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+  glSamplerParameteri(s->sampler, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glSamplerParameteri(s->sampler, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glSamplerParameteri(s->sampler, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_BORDER);
+  glSamplerParameteri(s->sampler, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_BORDER);
+  const float far_depth[4] = {1.0f, 1.0f, 1.0f, 1.0f};
+  glSamplerParameterfv(s->sampler, GL_TEXTURE_BORDER_COLOR, far_depth);
+
+  const std::string depth_only = version + "#define ATMOS_GLOBE_DEPTH_ONLY 1\n";
+  s->depth.id = link(depth_only + shader_text("src/planet/globe.vert.glsl"),
+                     depth_only + shader_text("src/planet/globe.frag.glsl"));
+  s->depth.locate();
+  const std::string shadowed = version + "#define ATMOS_GLOBE_SHADOWS 1\n";
+  s->lit.id =
+      link(shadowed + pass->glsl_library(settings.first_unit) + "\n" + shader_text("src/planet/globe.vert.glsl"),
+           shadowed + shader_text("src/planet/globe.frag.glsl"));
+  s->lit.locate();
+  const GLuint lit = s->lit.id;
+  s->u_cascade_count = glGetUniformLocation(lit, "cascade_count");
+  s->u_light_clip = glGetUniformLocation(lit, "light_clip_from_offset");
+  s->u_far = glGetUniformLocation(lit, "cascade_far");
+  s->u_blend = glGetUniformLocation(lit, "cascade_blend");
+  s->u_texel = glGetUniformLocation(lit, "cascade_texel");
+  s->u_depth_per_m = glGetUniformLocation(lit, "cascade_depth_per_m");
+  s->u_forward = glGetUniformLocation(lit, "view_forward");
+  s->u_maps = glGetUniformLocation(lit, "shadow_maps");
+  glProgramUniform1i(lit, s->u_maps, settings.first_unit + 5);
+  shadows = std::move(s);
+}
+
+bool Globe::Impl::fit_cascades(const GlobeView& view, const glm::dmat4& rotation, const glm::dvec3& camera,
+                               const glm::dvec3& sun, const std::vector<TileDraw>& draws) {
+  Shadows& s = *shadows;
+  s.cascades.clear();
+  // The frustum's slopes: with z_view = -d, w_clip = c d (c = -P[2][3]) and
+  // x_clip = P[0][0] x - P[2][0] d, the side planes x_ndc = -1, 1 are
+  // x / d = (c x_ndc + P[2][0]) / P[0][0].
+  const glm::dmat4& projection = view.projection;
+  const double c = -projection[2][3];
+  planet::ShadowView v;
+  v.camera = camera;
+  v.right = glm::dvec3(rotation[0][0], rotation[1][0], rotation[2][0]);
+  v.up = glm::dvec3(rotation[0][1], rotation[1][1], rotation[2][1]);
+  v.forward = -glm::dvec3(rotation[0][2], rotation[1][2], rotation[2][2]);
+  const double x0 = (-c + projection[2][0]) / projection[0][0], x1 = (c + projection[2][0]) / projection[0][0];
+  const double y0 = (-c + projection[2][1]) / projection[1][1], y1 = (c + projection[2][1]) / projection[1][1];
+  v.x_min = std::min(x0, x1);
+  v.x_max = std::max(x0, x1);
+  v.y_min = std::min(y0, y1);
+  v.y_max = std::max(y0, y1);
+  const double widest = std::sqrt(std::max(v.x_min * v.x_min, v.x_max * v.x_max) +
+                                  std::max(v.y_min * v.y_min, v.y_max * v.y_max));
+  // The first cascade starts at the nearest ground the view may show (the
+  // tiles drawn, each within its vertices' heights widened by its mesh
+  // error): the slices nearer than that hold nothing.
+  const double radius = builder.bounds().radius_m;
+  double nearest = INFINITY;
+  for (const TileDraw& d : draws) {
+    const Resident& tile = resident.find(d.key.packed())->second;
+    const double error = builder.bounds().error_m(builder.spacing_m(d.key.level));
+    nearest = std::min(nearest, nearest_view_depth_m(camera, d.key, radius + tile.min_height_m - error,
+                                                     radius + tile.max_height_m + error, widest));
+  }
+  v.nearest_depth_m = std::max(nearest, 0.05);
+  v.sun = sun;
+  v.shadow_distance_m = s.distance_m;
+  s.view = v;
+  s.light = planet::shadow_light(sun);
+  s.cascades = planet::fit_shadow_cascades(v, s.light, s.count, s.size);
+  return !s.cascades.empty();
+}
+
+void Globe::Impl::render_shadow_maps(const std::vector<std::vector<TileDraw>>& casters,
+                                     const std::vector<TileDraw>& receivers, const glm::dvec3& camera,
+                                     GlobeStats& out) {
+  Shadows& s = *shadows;
+  GLint previous_framebuffer = 0;
+  glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &previous_framebuffer);
+  // Standard depth, as AtmospherePass reads a shadow map: clip z in [-1, 1]
+  // from the sun's side (the near plane) away from it.
+  glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  glDisable(GL_CULL_FACE);  // the terrain is a single-sided sheet: both sides cast
+  glDisable(GL_BLEND);
+  // Casters in front of the near plane are clamped onto it instead of
+  // clipped ("pancaking"): they still shadow everything behind them.
+  glEnable(GL_DEPTH_CLAMP);
+  glViewport(0, 0, s.size, s.size);
+  glUseProgram(s.depth.id);
+  glBindVertexArray(vertex_array);
+  const double inner = builder.bounds().radius_m + builder.bounds().min_height_m;
+  const double outer = builder.bounds().radius_m + builder.bounds().max_height_m;
+  const float clear_depth = 1.0f;
+  std::vector<TileDraw> kept;
+  std::vector<glm::dvec4> spheres;
+  for (size_t i = 0; i < s.cascades.size(); ++i) {
+    planet::ShadowCascade& c = s.cascades[i];
+    // A caster must lie between a receiver of the cascade (a drawn tile in
+    // its slice of view depths) and the sun, no farther than where the
+    // sun's ray from the slice leaves the highest ground's sphere; the
+    // receivers' lookups reach 4 texels beyond their points (normal offset
+    // and filter). The farthest cascade, handed to the engine plugin for the
+    // light shafts along the view rays through the air, holds the casters
+    // of the whole frustum up to the shadow distance.
+    const double shell = planet::sun_shell_distance_m(c.centre, c.radius_m, s.light.z, inner, outer);
+    const double limit = c.z_far_m + c.half_size_m + c.radius_m + shell;
+    planet::ShadowFootprint footprint;
+    if (i + 1 == s.cascades.size()) {
+      footprint = planet::shadow_footprint(s.view, s.light, s.cascades.front().near_depth_m, c.far_depth_m);
+    } else {
+      spheres.clear();
+      for (const TileDraw& d : receivers) {
+        const Resident& tile = resident.find(d.key.packed())->second;
+        const double depth = glm::dot(tile.bound_centre - camera, s.view.forward);
+        if (depth + tile.bound_radius_m >= c.near_depth_m && depth - tile.bound_radius_m <= c.far_depth_m)
+          spheres.emplace_back(tile.bound_centre, tile.bound_radius_m);
+      }
+      footprint = planet::sphere_footprint(s.light, spheres);
+    }
+    double top = -INFINITY;
+    kept.clear();
+    for (const TileDraw& d : casters[i]) {
+      const Resident& tile = resident.find(d.key.packed())->second;
+      const double r = tile.bound_radius_m;
+      const double x = glm::dot(tile.bound_centre, s.light.x) - c.box_centre.x;
+      const double y = glm::dot(tile.bound_centre, s.light.y) - c.box_centre.y;
+      const double z = glm::dot(tile.bound_centre, s.light.z);
+      if (std::abs(x) > c.half_size_m + r || std::abs(y) > c.half_size_m + r || z + r < c.z_far_m || z - r > limit ||
+          !planet::may_cast_onto(footprint, s.light, tile.bound_centre, r, 4.0 * c.texel_m, shell))
+        continue;
+      top = std::max(top, z + r);
+      kept.push_back(d);
+    }
+    planet::extend_towards_sun(c, top, shell);
+    const glm::mat4 clip(planet::cascade_clip_from_planet(s.light, c) * glm::translate(glm::dmat4(1.0), camera));
+    glUniformMatrix4fv(s.depth.clip, 1, GL_FALSE, glm::value_ptr(clip));
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, s.framebuffers[i]);
+    glClearNamedFramebufferfv(s.framebuffers[i], GL_DEPTH, 0, &clear_depth);
+    out.shadow_triangles += draw_tiles(kept, s.depth, camera);
+    out.shadow_casters += int(kept.size());
+  }
+  out.shadow_cascades = int(s.cascades.size());
+  glDisable(GL_DEPTH_CLAMP);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, GLuint(previous_framebuffer));
+}
+
 Globe::Globe(const Atmosphere& atmosphere, const PlanetSurface& surface, const AtmospherePass& pass,
              const GlobeSettings& settings) {
   if (epoxy_gl_version() < 45) throw Error("globe: needs a current OpenGL 4.5 core context");
@@ -174,6 +503,16 @@ Globe::Globe(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
     throw Error("globe settings: max_screen_error_px must be a positive number of pixels");
   if (settings.max_tiles_per_frame < 1) throw Error("globe settings: max_tiles_per_frame must be at least 1");
   if (settings.first_unit < 0) throw Error("globe settings: first_unit must be a texture unit (>= 0)");
+  if (settings.shadow_cascades < 0 || settings.shadow_cascades > planet::kMaxShadowCascades)
+    throw Error("globe settings: shadow_cascades must be 0 (off) to " + std::to_string(planet::kMaxShadowCascades) +
+                ", not " + std::to_string(settings.shadow_cascades));
+  if (settings.shadow_cascades > 0) {
+    if (settings.shadow_map_size < 64 || settings.shadow_map_size > 16384 || settings.shadow_map_size % 2 != 0)
+      throw Error("globe settings: shadow_map_size must be an even number of texels in 64..16384, not " +
+                  std::to_string(settings.shadow_map_size));
+    if (!(settings.shadow_distance_m > 0.0) || !std::isfinite(settings.shadow_distance_m))
+      throw Error("globe settings: shadow_distance_m must be a positive number of metres");
+  }
   impl_ = std::make_unique<Impl>(atmosphere, surface, pass, settings);
   Impl& p = *impl_;
   // The pass's tables must reach the lowest ground (as lowest_surface_height_m
@@ -191,14 +530,11 @@ Globe::Globe(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
                 " holds less than the six root tiles");
 
   const std::string version = "#version 450 core\n";
-  p.program = link(version + pass.glsl_library(settings.first_unit) + "\n" + shader_text("src/planet/globe.vert.glsl"),
-                   version + shader_text("src/planet/globe.frag.glsl"));
-  p.u_origin = glGetUniformLocation(p.program, "origin_from_camera");
-  p.u_morph = glGetUniformLocation(p.program, "morph_range");
-  p.u_clip = glGetUniformLocation(p.program, "clip_from_offset");
-  p.u_camera = glGetUniformLocation(p.program, "camera_planet");
-  p.u_sun = glGetUniformLocation(p.program, "sun_direction");
-  p.u_light = glGetUniformLocation(p.program, "light_scale");
+  p.program.id =
+      link(version + pass.glsl_library(settings.first_unit) + "\n" + shader_text("src/planet/globe.vert.glsl"),
+           version + shader_text("src/planet/globe.frag.glsl"));
+  p.program.locate();
+  if (settings.shadow_cascades > 0) p.create_shadows(version);
 
   // One vertex layout and one index buffer serve every tile.
   glCreateVertexArrays(1, &p.vertex_array);
@@ -240,6 +576,11 @@ void Globe::draw(const GlobeView& view) {
     throw Error("globe view: nits_per_unit must be positive");
   if (!(view.sun_illuminance_lux >= 0.0) || !std::isfinite(view.sun_illuminance_lux))
     throw Error("globe view: sun_illuminance_lux must be >= 0");
+  // The cascades slice a perspective frustum: w_clip = c x (distance along
+  // the view axis), c > 0, and x_clip, y_clip independent of w.
+  if (p.shadows && !(view.projection[2][3] < 0.0 && view.projection[0][3] == 0.0 && view.projection[1][3] == 0.0 &&
+                     view.projection[3][3] == 0.0 && std::abs(view.projection[0][0]) > 0.0))
+    throw Error("globe view: shadows need a perspective projection (w_clip proportional to the view depth)");
 
   // The camera in planet-centred metres, and the transform of
   // camera-relative metres to clip space: projection x the view's rotation
@@ -271,47 +612,101 @@ void Globe::draw(const GlobeView& view) {
     hi = it->second.max_height_m + error;
     return true;
   };
+  const planet::LodSettings lod_settings = p.builder.lod_settings(p.settings.max_screen_error_px);
   const planet::Selection selection =
-      planet::select_tiles(lod_camera, p.builder.lod_settings(p.settings.max_screen_error_px), p.builder.bounds(),
-                           known_range);
+      planet::select_tiles(lod_camera, lod_settings, p.builder.bounds(), known_range);
   GlobeStats stats;
   stats.selection_ms = ms_since(t0);
   stats.nodes_visited = selection.nodes_visited;
 
-  // --- New tiles: generated in parallel (CPU), uploaded here. ---
+  // --- New tiles: generated in parallel (CPU), uploaded here; first the
+  // view's, then the shadow casters' with what remains of the budget. ---
   const auto t1 = Clock::now();
-  std::vector<TileKey> missing;
-  for (const planet::SelectedTile& s : selection.tiles)
-    if (p.resident.find(s.key.packed()) == p.resident.end()) missing.push_back(s.key);
-  // Coarse levels first: they stand in for the others.
-  std::stable_sort(missing.begin(), missing.end(),
-                   [](const TileKey& a, const TileKey& b) { return a.level < b.level; });
-  std::vector<TileKey> batch = missing;
-  if (!p.settings.complete_every_frame && batch.size() > size_t(p.settings.max_tiles_per_frame))
-    batch.resize(size_t(p.settings.max_tiles_per_frame));
-  // The memory cap: the resident tiles this frame draws (the selected ones,
-  // and the nearest resident ancestors of the others) stay; new tiles fit in
-  // what remains. Tiles that do not fit stay pending, their ancestors drawn
-  // instead: the view is coarser, the cap holds.
-  {
-    std::set<std::uint64_t> kept;
-    for (const planet::SelectedTile& s : selection.tiles) {
-      TileKey key = s.key;
-      while (p.resident.find(key.packed()) == p.resident.end()) key = planet::parent(key);
-      kept.insert(key.packed());
+  const std::size_t tile_bytes = p.builder.vertex_count() * sizeof(planet::TileVertex);
+  int budget = p.settings.complete_every_frame ? std::numeric_limits<int>::max() : p.settings.max_tiles_per_frame;
+  const auto generate = [&](const std::vector<const planet::Selection*>& selections) {
+    std::vector<TileKey> missing;
+    {
+      std::set<std::uint64_t> listed;
+      for (const planet::Selection* s : selections)
+        for (const planet::SelectedTile& t : s->tiles)
+          if (p.resident.find(t.key.packed()) == p.resident.end() && listed.insert(t.key.packed()).second)
+            missing.push_back(t.key);
     }
-    const std::size_t tile_bytes = p.builder.vertex_count() * sizeof(planet::TileVertex);
-    const std::size_t kept_bytes = (kept.size() + 6) * tile_bytes;  // the roots always stay
-    const std::size_t room =
-        p.settings.memory_cap_bytes > kept_bytes ? (p.settings.memory_cap_bytes - kept_bytes) / tile_bytes : 0;
-    if (batch.size() > room) batch.resize(room);
-  }
-  std::vector<planet::TileMesh> meshes(batch.size());
-  tbb::parallel_for(size_t(0), batch.size(), [&](size_t i) { meshes[i] = p.builder.build(batch[i]); });
-  for (size_t i = 0; i < batch.size(); ++i) p.upload(batch[i], meshes[i]);
-  stats.tiles_generated = int(batch.size());
-  stats.tiles_pending = int(missing.size() - batch.size());
+    // Coarse levels first: they stand in for the others.
+    std::stable_sort(missing.begin(), missing.end(),
+                     [](const TileKey& a, const TileKey& b) { return a.level < b.level; });
+    std::vector<TileKey> batch = missing;
+    if (batch.size() > size_t(budget)) batch.resize(size_t(budget));
+    // The memory cap: the resident tiles this frame draws (the selected ones,
+    // and the nearest resident ancestors of the others) stay; new tiles fit in
+    // what remains. Tiles that do not fit stay pending, their ancestors drawn
+    // instead: the view is coarser, the cap holds.
+    {
+      std::set<std::uint64_t> kept;
+      for (const planet::Selection* s : selections)
+        for (const planet::SelectedTile& t : s->tiles) {
+          TileKey key = t.key;
+          while (p.resident.find(key.packed()) == p.resident.end()) key = planet::parent(key);
+          kept.insert(key.packed());
+        }
+      const std::size_t kept_bytes = (kept.size() + 6) * tile_bytes;  // the roots always stay
+      const std::size_t room =
+          p.settings.memory_cap_bytes > kept_bytes ? (p.settings.memory_cap_bytes - kept_bytes) / tile_bytes : 0;
+      if (batch.size() > room) batch.resize(room);
+    }
+    std::vector<planet::TileMesh> meshes(batch.size());
+    tbb::parallel_for(size_t(0), batch.size(), [&](size_t i) { meshes[i] = p.builder.build(batch[i]); });
+    for (size_t i = 0; i < batch.size(); ++i) p.upload(batch[i], meshes[i]);
+    budget -= int(batch.size());
+    stats.tiles_generated += int(batch.size());
+    return int(missing.size() - batch.size());
+  };
+  stats.tiles_pending = generate({&selection});
   stats.generation_ms = ms_since(t1);
+
+  // --- The sun's cascades and their casters: for each cascade the tiles
+  // of the view's level of detail inside its box's prism along the sun (the
+  // view's tiles there, and those outside the view that shadow it), no
+  // finer than the cascade's texels. ---
+  std::vector<planet::Selection> casters;
+  const auto t_shadows = Clock::now();
+  const bool shadowed = p.shadows && p.fit_cascades(view, rotation, camera, sun, p.resolve(selection));
+  if (shadowed) {
+    const Shadows& s = *p.shadows;
+    for (const planet::ShadowCascade& c : s.cascades) {
+      // The box's side planes as those of a "view-projection" (select_tiles
+      // uses its x, y and w rows only). A finest spacing of a texel keeps
+      // the tiles near the camera out of the far cascades (their receivers
+      // are far away, where the view's mesh is no finer either); the
+      // nearest cascades keep the view's levels, the mesh their receivers
+      // are drawn with.
+      planet::LodCamera light_camera = lod_camera;
+      light_camera.view_projection = planet::cascade_clip_from_planet(s.light, c);
+      planet::LodSettings light_settings = lod_settings;
+      light_settings.finest_spacing_m = std::max(lod_settings.finest_spacing_m, c.texel_m);
+      casters.push_back(planet::select_tiles(light_camera, light_settings, p.builder.bounds(), known_range));
+    }
+    stats.shadow_selection_ms = ms_since(t_shadows);
+    const auto t2 = Clock::now();
+    // The view's tiles count again: the memory cap holds all, and the
+    // pending tiles are the view's and the casters'.
+    std::vector<const planet::Selection*> all{&selection};
+    for (const planet::Selection& c : casters) all.push_back(&c);
+    stats.tiles_pending = generate(all);
+    stats.generation_ms += ms_since(t2);
+  }
+
+  ++p.frame;
+  const std::vector<TileDraw> draws = p.resolve(selection);
+  // --- The shadow maps. ---
+  if (shadowed) {
+    const auto t_resolve = Clock::now();
+    std::vector<std::vector<TileDraw>> caster_draws;
+    for (const planet::Selection& c : casters) caster_draws.push_back(p.resolve(c));
+    stats.shadow_selection_ms += ms_since(t_resolve);
+    p.render_shadow_maps(caster_draws, draws, camera, stats);
+  }
 
   // --- Draw: each selected tile, or its nearest resident ancestor. ---
   glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
@@ -321,66 +716,44 @@ void Globe::draw(const GlobeView& view) {
   glDisable(GL_CULL_FACE);
   glDisable(GL_BLEND);
   glViewport(0, 0, view.width, view.height);
-  glUseProgram(p.program);
+  const TileProgram& program = shadowed ? p.shadows->lit : p.program;
+  glUseProgram(program.id);
   glBindVertexArray(p.vertex_array);
   p.pass->bind_textures(p.settings.first_unit);
   const glm::mat4 clip_f(clip_from_offset);
-  glUniformMatrix4fv(p.u_clip, 1, GL_FALSE, glm::value_ptr(clip_f));
-  glUniform3f(p.u_camera, float(camera.x), float(camera.y), float(camera.z));
-  glUniform3f(p.u_sun, float(sun.x), float(sun.y), float(sun.z));
+  glUniformMatrix4fv(program.clip, 1, GL_FALSE, glm::value_ptr(clip_f));
+  glUniform3f(program.camera, float(camera.x), float(camera.y), float(camera.z));
+  glUniform3f(program.sun, float(sun.x), float(sun.y), float(sun.z));
   const double lux_scale = view.sun_illuminance_lux > 0.0 ? view.sun_illuminance_lux / p.pass->sun_illuminance_lux() : 1.0;
-  glUniform1f(p.u_light, float(lux_scale / view.nits_per_unit));
+  glUniform1f(program.light, float(lux_scale / view.nits_per_unit));
+  if (shadowed) {
+    const Shadows& s = *p.shadows;
+    const int n = int(s.cascades.size());
+    std::array<glm::mat4, planet::kMaxShadowCascades> light_clip{};
+    std::array<float, planet::kMaxShadowCascades> far{}, blend{}, texel{}, depth_per_m{};
+    for (int i = 0; i < n; ++i) {
+      const planet::ShadowCascade& c = s.cascades[size_t(i)];
+      light_clip[size_t(i)] =
+          glm::mat4(planet::cascade_clip_from_planet(s.light, c) * glm::translate(glm::dmat4(1.0), camera));
+      far[size_t(i)] = float(c.far_depth_m);
+      blend[size_t(i)] = float(c.blend_start_m);
+      texel[size_t(i)] = float(c.texel_m);
+      depth_per_m[size_t(i)] = float(1.0 / (c.z_near_m - c.z_far_m));
+    }
+    glUniform1i(s.u_cascade_count, n);
+    glUniformMatrix4fv(s.u_light_clip, n, GL_FALSE, glm::value_ptr(light_clip[0]));
+    glUniform1fv(s.u_far, n, far.data());
+    glUniform1fv(s.u_blend, n, blend.data());
+    glUniform1fv(s.u_texel, n, texel.data());
+    glUniform1fv(s.u_depth_per_m, n, depth_per_m.data());
+    const glm::dvec3 forward = -glm::dvec3(rotation[0][2], rotation[1][2], rotation[2][2]);
+    glUniform3f(s.u_forward, float(forward.x), float(forward.y), float(forward.z));
+    glBindTextureUnit(GLuint(p.settings.first_unit + 5), s.maps);
+    glBindSampler(GLuint(p.settings.first_unit + 5), s.sampler);
+  }
 
-  ++p.frame;
-  // What to draw: each selected tile (its drawn quadrants), or for a tile
-  // not resident yet its nearest resident ancestor, whole and unmorphed; a
-  // tile met twice draws the union of its quadrants.
-  struct Draw {
-    TileKey key;
-    unsigned quadrants = 0u;
-    double morph_start = INFINITY, morph_end = INFINITY;
-  };
-  std::vector<Draw> draws;
-  std::map<std::uint64_t, size_t> draw_of;
-  for (const planet::SelectedTile& s : selection.tiles) {
-    Draw d{s.key, s.quadrants, s.morph_start_m, s.morph_end_m};
-    while (p.resident.find(d.key.packed()) == p.resident.end()) {
-      d.key = planet::parent(d.key);
-      d.quadrants = 0xFu;
-      d.morph_start = d.morph_end = INFINITY;
-    }
-    const auto [it, added] = draw_of.emplace(d.key.packed(), draws.size());
-    if (added)
-      draws.push_back(d);
-    else
-      draws[it->second].quadrants |= d.quadrants;
-  }
-  const GLsizei quadrant_count = GLsizei(p.builder.quadrant_index_count());
-  const GLsizei tile_count = GLsizei(p.builder.tile_index_count());
-  long long triangles = 0;
-  for (const Draw& d : draws) {
-    Resident& tile = p.resident.find(d.key.packed())->second;
-    tile.last_drawn = p.frame;
-    const glm::dvec3 origin = tile.origin - camera;
-    glUniform3f(p.u_origin, float(origin.x), float(origin.y), float(origin.z));
-    glUniform2f(p.u_morph, std::isfinite(d.morph_start) ? float(d.morph_start) : 3.0e38f,
-                std::isfinite(d.morph_end) ? float(d.morph_end) : 3.0e38f);
-    glVertexArrayVertexBuffer(p.vertex_array, 0, tile.buffer, 0, GLsizei(sizeof(planet::TileVertex)));
-    if (d.quadrants == 0xFu) {
-      const std::size_t offset = p.builder.tile_index_offset() * sizeof(std::uint32_t);
-      glDrawElements(GL_TRIANGLES, tile_count, GL_UNSIGNED_INT, reinterpret_cast<const void*>(offset));
-      triangles += tile_count / 3;
-      continue;
-    }
-    for (int q = 0; q < 4; ++q)
-      if (d.quadrants & (1u << q)) {
-        const std::size_t offset = std::size_t(q) * std::size_t(quadrant_count) * sizeof(std::uint32_t);
-        glDrawElements(GL_TRIANGLES, quadrant_count, GL_UNSIGNED_INT, reinterpret_cast<const void*>(offset));
-        triangles += quadrant_count / 3;
-      }
-  }
+  stats.triangles = p.draw_tiles(draws, program, camera);
   stats.tiles_drawn = int(draws.size());
-  stats.triangles = triangles;
   p.evict();
   stats.resident_bytes = p.resident_bytes;
   p.stats = stats;
@@ -398,6 +771,22 @@ double Globe::height_m(const glm::dvec3& position) const {
 double Globe::min_height_m() const { return impl_->builder.min_surface_height_m(); }
 double Globe::max_height_m() const { return impl_->builder.max_surface_height_m(); }
 const GlobeStats& Globe::last_stats() const { return impl_->stats; }
+
+GlobeShadowMap Globe::shadow_map_for_pass() const {
+  GlobeShadowMap map;
+  const Impl& p = *impl_;
+  if (!p.shadows || p.shadows->cascades.empty()) return map;
+  const Shadows& s = *p.shadows;
+  const size_t last = s.cascades.size() - 1;
+  const PlanetFrame& frame = p.pass->frame();
+  map.texture = s.views[last];
+  // The engine's world -> planet-centred metres -> the cascade's clip space.
+  map.matrix = planet::cascade_clip_from_planet(s.light, s.cascades[last]) *
+               glm::scale(glm::dmat4(1.0), glm::dvec3(1.0 / frame.units_per_metre)) *
+               glm::translate(glm::dmat4(1.0), -frame.centre);
+  map.texel_m = s.cascades[last].texel_m;
+  return map;
+}
 
 double lowest_surface_height_m(const PlanetSurface& surface, double datum_radius_m) {
   return planet::lowest_height_m(surface, datum_radius_m);

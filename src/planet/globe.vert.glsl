@@ -24,30 +24,61 @@
 // rasteriser shades 5-10 times fewer vertices than pixels. The colour
 // written is radiance / nits_per_unit; the engine plugin then adds the
 // aerial perspective in front of it.
+//
+// Variants (a #define after the version line):
+//  - ATMOS_GLOBE_SHADOWS: the sun's and the sky's parts of the radiance go
+//    to the fragment shader separately, with the camera-relative position
+//    and the normal, for the terrain's shadow, which dims the sun's part
+//    only (globe.frag.glsl);
+//  - ATMOS_GLOBE_DEPTH_ONLY: the same morphed positions through the sun's
+//    cascade projection (clip_from_offset), nothing lit: the shadow maps'
+//    casters are the very surface that is drawn. Compiled without the
+//    atmosphere's library.
 
 layout(location = 0) in vec3 local_position;  // m, from the tile's origin
 layout(location = 1) in vec3 morph_offset;    // m, to the parent's surface
+#if !defined(ATMOS_GLOBE_DEPTH_ONLY)
 layout(location = 2) in vec3 normal;          // unit, this level's mesh
 layout(location = 3) in vec3 parent_normal;   // unit, the parent's mesh
 layout(location = 4) in vec3 albedo;          // linear reflectance
+#endif
 
 uniform vec3 origin_from_camera;  // m, the tile's origin minus the camera (planet axes)
 uniform vec2 morph_range;         // m: where the morph starts and ends
-uniform mat4 clip_from_offset;    // projection x view rotation x (engine units per metre)
+uniform mat4 clip_from_offset;    // projection x view rotation x (engine units per metre); the sun's: its clip space
+#if !defined(ATMOS_GLOBE_DEPTH_ONLY)
 uniform vec3 camera_planet;       // m, planet-centred
 uniform vec3 sun_direction;       // unit, planet axes
 uniform float light_scale;        // (sun illuminance / the atmosphere's own) / nits_per_unit
+#endif
 
+#if defined(ATMOS_GLOBE_DEPTH_ONLY)
+#elif defined(ATMOS_GLOBE_SHADOWS)
+out vec3 v_sun_radiance;  // the sun's part, linear sRGB, cd/m2 / nits_per_unit
+out vec3 v_sky_radiance;  // the sky's part
+out vec3 v_offset;        // m, from the camera (planet axes)
+out vec3 v_normal;        // unit at the vertices
+#else
 out vec3 v_radiance;  // linear sRGB, cd/m2 / nits_per_unit
+#endif
 
 void main() {
   vec3 offset = origin_from_camera + local_position;
   float k = clamp((length(offset) - morph_range.x) / max(morph_range.y - morph_range.x, 1e-30), 0.0, 1.0);
   offset += k * morph_offset;
+#if !defined(ATMOS_GLOBE_DEPTH_ONLY)
   vec3 point = camera_planet + offset;
   vec3 n = normalize(mix(normal, parent_normal, k));
   vec3 sky_irradiance;
   vec3 sun_irradiance = atmos_sun_and_sky_irradiance(point, n, sun_direction, sky_irradiance);
+#if defined(ATMOS_GLOBE_SHADOWS)
+  v_sun_radiance = albedo * (1.0 / 3.14159265358979) * sun_irradiance * light_scale;
+  v_sky_radiance = albedo * (1.0 / 3.14159265358979) * sky_irradiance * light_scale;
+  v_offset = offset;
+  v_normal = n;
+#else
   v_radiance = albedo * (1.0 / 3.14159265358979) * (sun_irradiance + sky_irradiance) * light_scale;
+#endif
+#endif
   gl_Position = clip_from_offset * vec4(offset, 1.0);
 }
