@@ -31,7 +31,8 @@ const glm::vec3 kSeaAlbedo(0.045f, 0.06f, 0.08f);
 // classification of the cells' centres. Distances are chamfer distances
 // (Borgefors 1986) with the steps of the sphere's metric at each row:
 // east-west R cos(latitude) dlon, north-south R dlat, and their diagonal;
-// their error is a few per cent, far below what the coastal profile needs.
+// their error is below 8 % of the distance (eight neighbours with exact
+// step lengths; Borgefors 1986), far below what the coastal profile needs.
 class CoastDistanceGrid {
  public:
   template <class IsLand>
@@ -229,7 +230,7 @@ void height_range(const Relief& relief, const RasterSource* elevation, double de
 
 // The relief's lowest point, estimated: the minimum over a Fibonacci
 // lattice of 40000 directions (about 110 km apart on Earth, 60 km on
-// Mars; Gonzalez 2010) minus a tenth of the sampled range, and never
+// Mars; González 2010) minus a tenth of the sampled range, and never
 // below the rigorous bound. That bound adds every term's worst case at
 // once, which no point reaches (Mars: -19 km, against -11 km sampled): an
 // atmosphere extended that far would put the tables' ground, and its
