@@ -232,6 +232,22 @@ TEST(Sweep, ThickPlanetOnCoarseTablesIsRefusedWithAClearErrorNotAFailure) {
   EXPECT_TRUE(result.failures.empty());
 }
 
+// A sweep resumed at an index runs the same runs as the whole sweep from
+// there (here the refused planet 2 of seed 2026 from its run 500).
+TEST(Sweep, ResumedSweepStartsAtItsFirstRun) {
+  const std::unique_ptr<atmos::GlContext> context = headless_context();
+  ASSERT_TRUE(context != nullptr);
+  sweep::SweepOptions options;
+  options.seed = 2026;
+  options.runs = 503;
+  options.runs_per_planet = 250;
+  options.first_run = 500;
+  const sweep::SweepResult result = sweep::run_sweep(options);
+  EXPECT_EQ(result.runs, 3);
+  EXPECT_EQ(result.planets, 1);
+  EXPECT_EQ(result.refused_runs, 3);
+}
+
 // The default tier's subset: 60 runs on two planets (the Mars preset at 2 %
 // of its density, and the Titan preset). Its cost is the plugin's program
 // variants, compiled at their first use, so it is kept to two planets.

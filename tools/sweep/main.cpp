@@ -79,12 +79,19 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 1000000));
   app.add_option("--replay", options.replay, "run only this index (with its planet) and print its configuration")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--first", options.first_run, "start at this run index (resume a sweep: the same --seed, --runs and "
+                                              "--runs-per-planet give the same runs)")
+      ->check(CLI::NonNegativeNumber);
   app.add_flag("--renderer-only", renderer_only, "only atmos::Renderer");
   app.add_flag("--plugin-only", plugin_only, "only atmos::AtmospherePass");
   app.add_flag("--quiet", quiet, "no progress line");
   bool verbose = false;
   app.add_flag("--verbose", verbose, "a line per planet and per run with their times");
   CLI11_PARSE(app, argc, argv);
+  if (options.first_run >= options.runs) {
+    std::cerr << "atmos_sweep: --first " << options.first_run << " must be below --runs " << options.runs << "\n";
+    return 2;
+  }
   if (renderer_only && plugin_only) {
     std::cerr << "atmos_sweep: --renderer-only and --plugin-only exclude each other\n";
     return 2;

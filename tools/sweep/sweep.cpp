@@ -334,7 +334,7 @@ SweepResult run_sweep(const SweepOptions& options) {
   const auto start = Clock::now();
   SweepResult result;
   const int per_planet = std::max(options.runs_per_planet, 1);
-  const int first = options.replay >= 0 ? options.replay : 0;
+  const int first = options.replay >= 0 ? options.replay : std::clamp(options.first_run, 0, options.runs);
   const int end = options.replay >= 0 ? options.replay + 1 : options.runs;
   std::unique_ptr<PlanetState> state;
   for (int index = first; index < end; ++index) {

@@ -190,6 +190,9 @@ struct SweepOptions {
   Targets targets = Targets::both;
   // Run only this index (its planet's tables and the one run); -1: all.
   int replay = -1;
+  // Without replay: start at this index (0 .. runs - 1), to resume a sweep;
+  // the runs before it are skipped, not run.
+  int first_run = 0;
   // Called after every run with the runs done and the total.
   std::function<void(int done, int total, const std::string& status)> progress;
   // Called with one line per planet (its preparation times) and per run
