@@ -124,7 +124,8 @@ struct RasterSource::Impl {
   GDALDatasetH dataset = nullptr;
   OGRSpatialReferenceH crs = nullptr, geographic = nullptr;
   OGRCoordinateTransformationH to_raster = nullptr, to_geographic = nullptr;
-  double angular_unit_deg = 1.0;  // degrees per geographic CRS unit
+  double angular_unit_deg = 1.0;  // degrees per unit of the raster's CRS, when geographic
+  double geographic_unit_deg = 1.0;  // degrees per unit of the raster's own geographic CRS
   bool is_geographic = true;
   long width = 0, height = 0;
   int bands = 1;
@@ -204,6 +205,8 @@ struct RasterSource::Impl {
     geographic = OSRCloneGeogCS(crs);
     if (geographic == nullptr) fail("its CRS has no geographic CRS (not a body-fixed CRS)");
     OSRSetAxisMappingStrategy(geographic, OAMS_TRADITIONAL_GIS_ORDER);
+    geographic_unit_deg = OSRGetAngularUnits(geographic, nullptr) / kDegree;
+    if (!(geographic_unit_deg > 0.0)) fail("its geographic CRS has no angular unit");
     is_geographic = OSRIsGeographic(crs) != 0;
     if (is_geographic) {
       angular_unit_deg = OSRGetAngularUnits(crs, nullptr) / kDegree;
@@ -267,8 +270,8 @@ struct RasterSource::Impl {
     if (!is_geographic) {
       int ok = 0;
       if (!OCTTransformEx(to_geographic, 1, &x, &y, nullptr, &ok) || !ok) return false;
-      lon_deg = x * OSRGetAngularUnits(geographic, nullptr) / kDegree;
-      lat_deg = y * OSRGetAngularUnits(geographic, nullptr) / kDegree;
+      lon_deg = x * geographic_unit_deg;
+      lat_deg = y * geographic_unit_deg;
       return std::isfinite(lat_deg) && std::isfinite(lon_deg);
     }
     lon_deg = x * angular_unit_deg;
@@ -446,9 +449,8 @@ struct RasterSource::Impl {
         px[i] = x;
         py[i] = lat / angular_unit_deg;
       } else {
-        const double unit = OSRGetAngularUnits(geographic, nullptr) / kDegree;
-        px[i] = lon / unit;
-        py[i] = lat / unit;
+        px[i] = lon / geographic_unit_deg;
+        py[i] = lat / geographic_unit_deg;
       }
     }
     if (!is_geographic && n > 0) {

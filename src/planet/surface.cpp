@@ -334,11 +334,11 @@ void Surface::albedos(const glm::dvec3* directions, std::size_t n, double spacin
     rgb.resize(3 * n);
     data_->imagery->sample(directions, n, spacing_m, relief_.settings().radius_m, rgb.data(), valid.data());
   }
+  // Below the imagery's pixel, down to twice the mesh's spacing (finer
+  // would alias between vertices), the style's brightness variation.
+  const double pixel = imagery_pixel_m();
   for (std::size_t i = 0; i < n; ++i) {
     if (valid[i]) {
-      // Below the imagery's pixel, down to twice the mesh's spacing (finer
-      // would alias between vertices), the style's brightness variation.
-      const double pixel = imagery_pixel_m();
       const double variation = pixel > 4.0 * spacing_m
                                    ? relief_.albedo_variation(directions[i], 0.5 * pixel, 2.0 * spacing_m)
                                    : 0.0;

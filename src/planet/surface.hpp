@@ -63,7 +63,6 @@ class Surface {
   // Bounds of the drawn surface's height, m.
   double min_height_m() const { return min_height_m_; }
   double max_height_m() const { return max_height_m_; }
-  double sea_level_m() const { return relief_.sea_level_m(); }
 
   // A direction for (u, v, w) in [0, 1)^3 where the surface's roughness is
   // that of its data: inside the elevation raster's extent when there is
