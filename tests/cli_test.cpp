@@ -670,9 +670,9 @@ TEST(Cli, GlobeFisheyeAllSkyMatchesTheSphereSky) {
 }
 
 // A partial eclipse dims the globe's ground as it dims the sphere's: the
-// globe lights its ground with the uneclipsed sun, and the CLI dims it with
-// the moons' factors for the sun's and the sky's light (atmos_eclipse). The
-// ground 4 m away (the north pole's flat sea ice and the flat sphere) has
+// globe lights its ground under the moons (GlobeView::moons: the moons'
+// factors for the sun's and the sky's light, atmos_eclipse). The ground 4 m
+// away (the north pole's flat sea ice and the flat sphere) has
 // the same mix of sun and sky light in both.
 TEST(Cli, GlobeGroundDimsInAnEclipse) {
   const std::string view = " --sun-elevation 40 --sun-azimuth 180 --look 180,-30 --fov 20 --size 32x32";

@@ -2,7 +2,8 @@
 // (morph targets, shared edges, skirts, precision) and its sun's shadow
 // cascades (fit, snapping, culling), and on the GPU a scripted descent from
 // 100 planet radii to a metre with no hole in the surface, its lighting
-// under the atmosphere, the terrain's shadows, and bad input.
+// under the atmosphere and in an eclipse, the terrain's shadows, and bad
+// input.
 #include <gtest/gtest.h>
 
 #include <epoxy/gl.h>
@@ -24,8 +25,13 @@
 #include "atmos/globe.hpp"
 #include "atmos/plugin.hpp"
 #include "gpu_fixture.hpp"
+#include "physics/eclipse_cpp.hpp"
+#include "physics/moons.hpp"
+#include "physics/parameters.hpp"
+#include "physics/ray_integration_cpp.hpp"
 #include "planet/globe_mesh.hpp"
 #include "planet/globe_shadows.hpp"
+#include "runtime/table_samplers.hpp"
 
 namespace {
 
@@ -1076,6 +1082,162 @@ TEST_F(GlobeGpu, ShadowsOffDrawTheUnshadowedImage) {
     EXPECT_GT(drawn, width * height / 2);
     EXPECT_LT(worst, 1e-4);
   }
+}
+
+// ---------------------------------------------------------------------------
+// Eclipses: GlobeView::moons.
+
+// The sun's irradiance (returned) and the sky's (`sky`) that the pass's GLSL
+// library (atmos_sun_and_sky_irradiance, what the globe lights its vertices
+// with) gives a surface at `point` with normal `normal`, linear sRGB.
+glm::dvec3 library_irradiance(const atmos::AtmospherePass& pass, const glm::dvec3& point, const glm::dvec3& normal,
+                              const glm::dvec3& sun, glm::dvec3& sky) {
+  const std::string fragment = "#version 450 core\n" + pass.glsl_library(0) + R"(
+layout(location = 0) uniform vec3 point;
+layout(location = 1) uniform vec3 normal;
+layout(location = 2) uniform vec3 sun;
+layout(location = 0) out vec4 result;
+void main() {
+  vec3 sky;
+  vec3 direct = atmos_sun_and_sky_irradiance(point, normal, sun, sky);
+  result = vec4(gl_FragCoord.x < 1.0 ? direct : sky, 1.0);
+}
+)";
+  const auto compile = [](GLenum type, const std::string& source) {
+    const GLuint shader = glCreateShader(type);
+    const char* text = source.c_str();
+    glShaderSource(shader, 1, &text, nullptr);
+    glCompileShader(shader);
+    GLint ok = 0;
+    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+      char log[2048];
+      glGetShaderInfoLog(shader, sizeof log, nullptr, log);
+      ADD_FAILURE() << log;
+    }
+    return shader;
+  };
+  const GLuint vs = compile(GL_VERTEX_SHADER,
+                            "#version 450 core\nvoid main() { vec2 p = vec2(float((gl_VertexID << 1) & 2), "
+                            "float(gl_VertexID & 2)); gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0); }\n");
+  const GLuint fs = compile(GL_FRAGMENT_SHADER, fragment);
+  const GLuint program = glCreateProgram();
+  glAttachShader(program, vs);
+  glAttachShader(program, fs);
+  glLinkProgram(program);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLuint target = 0, framebuffer = 0, vao = 0;
+  glCreateTextures(GL_TEXTURE_2D, 1, &target);
+  glTextureStorage2D(target, 1, GL_RGBA32F, 2, 1);
+  glCreateFramebuffers(1, &framebuffer);
+  glNamedFramebufferTexture(framebuffer, GL_COLOR_ATTACHMENT0, target, 0);
+  glCreateVertexArrays(1, &vao);
+  glProgramUniform3f(program, 0, float(point.x), float(point.y), float(point.z));
+  glProgramUniform3f(program, 1, float(normal.x), float(normal.y), float(normal.z));
+  glProgramUniform3f(program, 2, float(sun.x), float(sun.y), float(sun.z));
+  glUseProgram(program);
+  pass.bind_textures(0);
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+  glViewport(0, 0, 2, 1);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_BLEND);
+  glBindVertexArray(vao);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  float texels[8] = {};
+  glGetTextureImage(target, 0, GL_RGBA, GL_FLOAT, sizeof texels, texels);
+  glDeleteVertexArrays(1, &vao);
+  glDeleteFramebuffers(1, &framebuffer);
+  glDeleteTextures(1, &target);
+  glDeleteProgram(program);
+  sky = glm::dvec3(texels[4], texels[5], texels[6]);
+  return glm::dvec3(texels[0], texels[1], texels[2]);
+}
+
+// A moon centred on the sun as seen from the ground under the camera (0.8
+// times the sun's angular radius: an annular eclipse) dims the globe's
+// ground there as the pass dims its G-buffer surfaces: the sun's part of
+// the light by the fraction of the limb-darkened sun the moon leaves
+// (sunlight_visible_fraction, 0.29 here) and the sky's by the diffuse
+// light's approximation (diffuse_light_visible_fraction, near the uniform
+// disc's 1 - 0.8² = 0.36), both from their CPU twins. The parts come from
+// the GLSL library's irradiance at the point (the flat style's ground: the
+// datum, its normal the vertical), so that the expected colour is
+// U (f_sun s + f_sky (1 - s)) per channel, U the uneclipsed colour and s the
+// sun's share of its light. Applying either factor to both parts would be
+// off by (f_sky - f_sun) times the other part's share, 3 % and more of the
+// expected value here; the tolerance, 3e-3, allows for the vertices'
+// interpolated light (the pixel's point is not a vertex) and float
+// rounding. A moon far from the sun leaves the image as without moons; a
+// moon with a negative radius throws, nothing drawn.
+TEST_F(GlobeGpu, MoonOnTheSunDimsTheGroundByTheEclipseFactors) {
+  atmos::GlobeSettings settings;
+  settings.complete_every_frame = true;
+  atmos::Globe globe(*earth_, surface_of(atmos::SurfaceStyle::flat, 1), *pass_, settings);
+  const double radius = earth_->bottom_radius_m;
+  const glm::dvec3 up = glm::normalize(glm::dvec3(0.3, -0.5, 0.8));
+  const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), up));
+  const glm::dvec3 north = glm::cross(up, east);
+  const glm::dvec3 ground = up * (radius + globe.height_m(up * radius));
+  // 33 x 33: the centre pixel's ray is the view axis, straight down to `ground`.
+  const int size = 33, centre = 16;
+  Target target(size, size);
+  atmos::GlobeView view = view_from(ground + up * 2000.0, -up, north, size, size);
+  view.sun_direction = glm::normalize(up * std::sin(glm::radians(60.0)) + east * std::cos(glm::radians(60.0)));
+  const glm::dvec3 sun = view.sun_direction;
+  const auto draw = [&](const std::vector<atmos::Moon>& moons) {
+    atmos::GlobeView v = view;
+    v.moons = moons;
+    target.clear();
+    globe.draw(v);
+    return target.read_colour();
+  };
+  const std::vector<float> day = draw({});
+  const double a = earth_->sun_angular_radius_rad;
+  const atmos::Moon moon = atmos::moon_in_sky(ground, sun, 0.8 * a);
+  const std::vector<float> eclipse = draw({moon});
+  ASSERT_EQ(glGetError(), GLenum(GL_NO_ERROR));
+
+  // The CPU twins of the factors at the ground point.
+  using namespace atmos::physics;
+  const AtmosphereParams params = make_render_params(*earth_, tables_->sizes);
+  const Moons moons = make_moons(params, {moon});
+  const std::unique_ptr<SpectralSets> spectral = make_spectral_sets(*earth_, tables_->sizes);
+  const atmos::runtime::TableSamplers samplers = atmos::runtime::make_samplers(*tables_);
+  const double sun_factor = sunlight_visible_fraction(moons, float(a), vec3(ground), vec3(sun));
+  const double sky_factor = diffuse_light_visible_fraction(spectral->set[0], samplers.spectral_optical_depth, moons,
+                                                           vec3(ground), vec3(sun));
+  glm::dvec3 sky(0.0);
+  const glm::dvec3 direct = library_irradiance(*pass_, ground, up, sun, sky);
+  std::printf("annular eclipse at the ground point: sun factor %.4f, sky factor %.4f\n", sun_factor, sky_factor);
+  EXPECT_NEAR(sun_factor, 0.288, 0.01);  // 1 - the covered flux of the limb-darkened disc, 0.712
+  EXPECT_GT(sky_factor - sun_factor, 0.03);
+  for (int c = 0; c < 3; ++c) {
+    const size_t i = size_t(4 * (centre * size + centre) + c);
+    const double share = direct[c] / (direct[c] + sky[c]);
+    const double expected = day[i] * (sun_factor * share + sky_factor * (1.0 - share));
+    std::printf("channel %d: day %.5g, eclipse %.5g, expected %.5g (sun's share %.3f)\n", c, double(day[i]),
+                double(eclipse[i]), expected, share);
+    EXPECT_GT(share, 0.5);
+    EXPECT_LT(share, 0.97);
+    EXPECT_NEAR(eclipse[i] / expected, 1.0, 3e-3) << c;
+  }
+
+  // A moon 30 degrees from the sun eclipses nothing: the uneclipsed light
+  // (to float rounding: consecutive draws of one view may pick other tiles
+  // as the resident tiles' heights tighten the selection's bounds).
+  const atmos::Moon aside = atmos::moon_in_sky(ground, up, 0.8 * a);
+  const std::vector<float> aside_image = draw({aside});
+  for (size_t i = 0; i < day.size(); ++i) ASSERT_NEAR(aside_image[i], day[i], 1e-5 * std::abs(day[i])) << i;
+  // An invalid moon: an error, nothing drawn.
+  atmos::Moon bad = moon;
+  bad.radius_m = -1.0;
+  atmos::GlobeView invalid = view;
+  invalid.moons = {bad};
+  target.clear();
+  EXPECT_THROW(globe.draw(invalid), atmos::Error);
+  const std::vector<float> untouched = target.read_colour();
+  EXPECT_TRUE(std::all_of(untouched.begin(), untouched.end(), [](float v) { return v == -1.0f; }));
 }
 
 TEST_F(GlobeGpu, RejectsBadInput) {

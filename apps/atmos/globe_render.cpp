@@ -78,139 +78,27 @@ double pixel_angle_rad(const atmos::Camera& camera) {
   return camera.fov_deg * M_PI / 180.0 / std::min(camera.width, camera.height);
 }
 
-GLuint compile(GLenum type, const std::string& source) {
-  const GLuint shader = glCreateShader(type);
-  const char* text = source.c_str();
-  glShaderSource(shader, 1, &text, nullptr);
-  glCompileShader(shader);
-  GLint ok = 0;
-  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    std::string log(4096, '\0');
-    GLsizei length = 0;
-    glGetShaderInfoLog(shader, GLsizei(log.size()), &length, log.data());
-    glDeleteShader(shader);
-    log.resize(size_t(length));
-    throw atmos::Error("globe eclipse shader: " + log.substr(0, log.find('\n')));
-  }
-  return shader;
-}
-
-// A full-screen triangle.
-const char* const kFullScreenVertex = R"(#version 450 core
-void main() {
-  vec2 corner = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
-  gl_Position = vec4(corner * 2.0 - 1.0, 0.0, 1.0);
-}
-)";
-
-// The globe lights its ground with the uneclipsed sun and sky (GlobeView has
-// no moons), and the pass leaves lit-colour surfaces to the engine
-// (docs/plugin.md, Eclipses): this pass dims them as the pass dims the
-// surfaces it lights itself. The globe's radiance is albedo / π (E_sun +
-// E_sky), linear in the two irradiances, so the eclipsed radiance is the
-// drawn one times (f_sun E_sun + f_sky E_sky) / (E_sun + E_sky), with the
-// factors of atmos_eclipse and the irradiances of
-// atmos_sun_and_sky_irradiance at the pixel's point. The point is the
-// camera plus the view ray scaled to the reversed-Z depth (depth = near /
-// distance along the view axis), its normal the cross product of the
-// differences to the neighbouring pixels' points on the side where the
-// depth is continuous (the face normal of the mesh under the pixel; the
-// globe's vertex normals differ from it by the mesh's smoothing, which only
-// moves the weights between f_sun and f_sky).
-const char* const kEclipseFragment = R"(
-layout(binding = 5) uniform sampler2D lit_colour;
-layout(binding = 6) uniform sampler2D surface_depth;
-uniform vec3 camera_planet;  // m, planet-centred
-uniform vec3 camera_right;
-uniform vec3 camera_up;
-uniform vec3 camera_forward;
-uniform float pixel_scale;  // tan(fov_y / 2) / (height / 2)
-uniform float near_m;
-uniform vec2 image_size;
-uniform vec3 sun;
-uniform int moon_count;
-uniform vec4 moon_spheres[MOON_CAPACITY];
-layout(location = 0) out vec4 colour;
-
-vec3 offset_at(ivec2 p, float depth) {
-  vec2 xy = (vec2(p) + 0.5 - 0.5 * image_size) * pixel_scale;
-  return (camera_forward + camera_right * xy.x + camera_up * xy.y) * (near_m / depth);
-}
-
-// The difference to the neighbour along `step` (either side, the one whose
-// distance is nearer the pixel's), signed along +step; false if both are sky.
-bool tangent(ivec2 p, ivec2 step, vec3 centre, float depth, out vec3 along) {
-  float best = 3.0e38;
-  bool found = false;
-  along = vec3(0.0);
-  for (int s = -1; s <= 1; s += 2) {
-    ivec2 q = p + s * step;
-    if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(image_size)))) continue;
-    float dq = texelFetch(surface_depth, q, 0).r;
-    if (dq <= 0.0) continue;
-    float jump = abs(near_m / dq - near_m / depth);
-    if (jump < best) {
-      best = jump;
-      along = (offset_at(q, dq) - centre) * float(s);
-      found = true;
-    }
-  }
-  return found;
-}
-
-void main() {
-  ivec2 p = ivec2(gl_FragCoord.xy);
-  vec4 c = texelFetch(lit_colour, p, 0);
-  float depth = texelFetch(surface_depth, p, 0).r;
-  if (depth <= 0.0) {
-    colour = c;
-    return;
-  }
-  vec3 offset = offset_at(p, depth);
-  vec3 point = camera_planet + offset;
-  vec3 dx, dy;
-  vec3 n = normalize(point);
-  if (tangent(p, ivec2(1, 0), offset, depth, dx) && tangent(p, ivec2(0, 1), offset, depth, dy)) {
-    vec3 m = cross(dx, dy);
-    if (dot(m, m) > 0.0) n = normalize(dot(m, offset) > 0.0 ? -m : m);
-  }
-  vec3 sky;
-  vec3 direct = atmos_sun_and_sky_irradiance(point, n, sun, sky);
-  float sun_factor, sky_factor;
-  atmos_eclipse(point, sun, moon_count, moon_spheres, sun_factor, sky_factor);
-  vec3 total = direct + sky;
-  vec3 factor = (sun_factor * direct + sky_factor * sky) / max(total, vec3(1e-30));
-  colour = vec4(c.rgb * mix(vec3(1.0), factor, greaterThan(total, vec3(0.0))), c.a);
-}
-)";
-
 // The engine's render targets of one size: the globe's colour and depth,
-// the eclipse-dimmed colour and the pass's output.
+// and the pass's output.
 struct Targets {
-  GLuint colour = 0, depth = 0, dimmed = 0, output = 0;
-  GLuint framebuffer = 0, dimmed_framebuffer = 0;
+  GLuint colour = 0, depth = 0, output = 0;
+  GLuint framebuffer = 0;
 
   Targets(int width, int height) {
     glCreateTextures(GL_TEXTURE_2D, 1, &colour);
     glTextureStorage2D(colour, 1, GL_RGBA32F, width, height);
     glCreateTextures(GL_TEXTURE_2D, 1, &depth);
     glTextureStorage2D(depth, 1, GL_DEPTH_COMPONENT32F, width, height);
-    glCreateTextures(GL_TEXTURE_2D, 1, &dimmed);
-    glTextureStorage2D(dimmed, 1, GL_RGBA32F, width, height);
     glCreateTextures(GL_TEXTURE_2D, 1, &output);
     glTextureStorage2D(output, 1, GL_RGBA32F, width, height);
     glCreateFramebuffers(1, &framebuffer);
     glNamedFramebufferTexture(framebuffer, GL_COLOR_ATTACHMENT0, colour, 0);
     glNamedFramebufferTexture(framebuffer, GL_DEPTH_ATTACHMENT, depth, 0);
-    glCreateFramebuffers(1, &dimmed_framebuffer);
-    glNamedFramebufferTexture(dimmed_framebuffer, GL_COLOR_ATTACHMENT0, dimmed, 0);
   }
   ~Targets() {
     glDeleteFramebuffers(1, &framebuffer);
-    glDeleteFramebuffers(1, &dimmed_framebuffer);
-    const GLuint textures[] = {colour, depth, dimmed, output};
-    glDeleteTextures(4, textures);
+    const GLuint textures[] = {colour, depth, output};
+    glDeleteTextures(3, textures);
   }
   Targets(const Targets&) = delete;
   Targets& operator=(const Targets&) = delete;
@@ -222,7 +110,6 @@ struct GlobeRenderer::Impl {
   atmos::AtmospherePass pass;
   atmos::Globe globe;
   std::map<std::pair<int, int>, std::unique_ptr<Targets>> targets;
-  GLuint eclipse_program = 0, vertex_array = 0;
 
   static atmos::GlobeSettings settings() {
     atmos::GlobeSettings s;
@@ -233,11 +120,7 @@ struct GlobeRenderer::Impl {
   Impl(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, const atmos::PlanetSurface& surface)
       : pass(atmosphere, tables, atmos::PlanetFrame{}), globe(atmosphere, surface, pass, settings()) {}
 
-  ~Impl() {
-    targets.clear();
-    if (eclipse_program) glDeleteProgram(eclipse_program);
-    if (vertex_array) glDeleteVertexArrays(1, &vertex_array);
-  }
+  ~Impl() { targets.clear(); }
 
   Targets& targets_of(int width, int height) {
     auto& t = targets[{width, height}];
@@ -245,66 +128,8 @@ struct GlobeRenderer::Impl {
     return *t;
   }
 
-  void build_eclipse_program() {
-    const GLuint vertex = compile(GL_VERTEX_SHADER, kFullScreenVertex);
-    const GLuint fragment =
-        compile(GL_FRAGMENT_SHADER, "#version 450 core\n" + pass.glsl_library(0) + kEclipseFragment);
-    eclipse_program = glCreateProgram();
-    glAttachShader(eclipse_program, vertex);
-    glAttachShader(eclipse_program, fragment);
-    glLinkProgram(eclipse_program);
-    glDeleteShader(vertex);
-    glDeleteShader(fragment);
-    GLint ok = 0;
-    glGetProgramiv(eclipse_program, GL_LINK_STATUS, &ok);
-    if (!ok) throw atmos::Error("globe eclipse shader: link failed");
-    glCreateVertexArrays(1, &vertex_array);
-  }
-
-  // Dims the globe's colour by the moons' eclipse into t.dimmed.
-  void dim_by_eclipse(const Targets& t, const PinholeView& v, const glm::dvec3& sun,
-                      const std::vector<atmos::Moon>& moons) {
-    if (!eclipse_program) build_eclipse_program();
-    const GLuint p = eclipse_program;
-    auto uniform = [&](const char* name) { return glGetUniformLocation(p, name); };
-    auto vec3 = [&](const char* name, const glm::dvec3& x) {
-      glProgramUniform3f(p, uniform(name), float(x.x), float(x.y), float(x.z));
-    };
-    vec3("camera_planet", v.position);
-    vec3("camera_right", v.right);
-    vec3("camera_up", v.up);
-    vec3("camera_forward", v.forward);
-    vec3("sun", glm::normalize(sun));
-    glProgramUniform1f(p, uniform("pixel_scale"), float(std::tan(0.5 * v.fov_y_rad) / (0.5 * v.height)));
-    glProgramUniform1f(p, uniform("near_m"), float(kNearM));
-    glProgramUniform2f(p, uniform("image_size"), float(v.width), float(v.height));
-    std::array<float, 4 * atmos::kMaxMoons> spheres{};
-    const int count = int(std::min(moons.size(), size_t(atmos::kMaxMoons)));
-    for (int i = 0; i < count; ++i) {
-      spheres[size_t(4 * i)] = float(moons[size_t(i)].centre_m.x);
-      spheres[size_t(4 * i + 1)] = float(moons[size_t(i)].centre_m.y);
-      spheres[size_t(4 * i + 2)] = float(moons[size_t(i)].centre_m.z);
-      spheres[size_t(4 * i + 3)] = float(moons[size_t(i)].radius_m);
-    }
-    glProgramUniform1i(p, uniform("moon_count"), count);
-    glProgramUniform4fv(p, uniform("moon_spheres"), atmos::kMaxMoons, spheres.data());
-
-    glBindFramebuffer(GL_FRAMEBUFFER, t.dimmed_framebuffer);
-    glViewport(0, 0, v.width, v.height);
-    glDisable(GL_DEPTH_TEST);
-    glDisable(GL_BLEND);
-    glUseProgram(p);
-    pass.bind_textures(0);
-    glBindTextureUnit(5, t.colour);
-    glBindTextureUnit(6, t.depth);
-    glBindSampler(5, 0);
-    glBindSampler(6, 0);
-    glBindVertexArray(vertex_array);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-  }
-
-  // One pinhole view: the globe, the eclipse, the pass; the composited
-  // image read back in cd/m², rows top-down.
+  // One pinhole view: the globe (its ground eclipsed by the moons) and the
+  // pass; the composited image read back in cd/m², rows top-down.
   atmos::Image draw(const PinholeView& v, const glm::dvec3& sun, bool stars, const std::vector<atmos::Moon>& moons) {
     Targets& t = targets_of(v.width, v.height);
     atmos::GlobeView view;
@@ -314,6 +139,7 @@ struct GlobeRenderer::Impl {
     view.height = v.height;
     view.sun_direction = sun;
     view.nits_per_unit = kNitsPerUnit;
+    view.moons = moons;
 
     const float clear_colour[4] = {0, 0, 0, 0};
     const float clear_depth = 0.0f;
@@ -321,10 +147,9 @@ struct GlobeRenderer::Impl {
     glClearNamedFramebufferfv(t.framebuffer, GL_DEPTH, 0, &clear_depth);
     glBindFramebuffer(GL_FRAMEBUFFER, t.framebuffer);
     globe.draw(view);
-    if (!moons.empty()) dim_by_eclipse(t, v, sun, moons);
 
     atmos::FrameInput input;
-    input.colour = moons.empty() ? t.colour : t.dimmed;
+    input.colour = t.colour;
     input.depth = t.depth;
     input.width = v.width;
     input.height = v.height;

@@ -49,4 +49,16 @@ Moon moon_in_sky(const glm::dvec3& observer, const glm::dvec3& direction, double
 // planet's centre than top_radius_m + its radius).
 void validate_moons(const std::vector<Moon>& moons, double top_radius_m);
 
+// Whether any of `moons` can hide part of the sun (a disc of angular radius
+// sun_angular_radius_rad in the direction `sun_direction`, normalised here)
+// from some point of an atmosphere of top radius top_radius_m or of the air
+// up to 1000 km beyond it that feeds its diffuse light: the test by which
+// AtmospherePass and Globe drop, for a frame, moons that eclipse nothing
+// (their eclipse then costs nothing). An engine lighting its own surfaces
+// with atmos_eclipse (AtmospherePass::glsl_library) can skip it likewise.
+// Throws atmos::Error as validate_moons does, or for a zero or non-finite
+// sun direction.
+bool moons_may_eclipse(const std::vector<Moon>& moons, const glm::dvec3& sun_direction, double top_radius_m,
+                       double sun_angular_radius_rad);
+
 }  // namespace atmos

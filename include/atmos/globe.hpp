@@ -21,6 +21,13 @@
 // pass), heights in metres, radiance as FrameInput (cd/m² divided by
 // nits_per_unit, linear sRGB).
 //
+// Eclipses (GlobeView::moons): the moons dim each ground point's light as
+// the pass dims the G-buffer surfaces it lights itself, the sun's part by
+// the fraction of the limb-darkened sun they leave the point and the sky's
+// by the documented approximation for diffuse light (atmos_eclipse of
+// plugin.hpp's GLSL library), evaluated per pixel; so the lit colour
+// needs no dimming by the engine. Give the FrameInput the same moons.
+//
 // Sun shadows of the terrain (opt-in, GlobeSettings::shadow_cascades):
 // cascaded shadow maps near the camera (Dimitrov 2007) at the practical
 // split scheme's distances (Zhang et al. 2006), which dim the sun's part of
@@ -45,8 +52,10 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "atmos/atmosphere.hpp"
+#include "atmos/eclipse.hpp"
 #include "atmos/planet_file.hpp"
 #include "atmos/plugin.hpp"
 
@@ -100,6 +109,14 @@ struct GlobeView {
   glm::dvec3 sun_direction{0.0, 0.0, 1.0};  // world frame, towards the sun
   double sun_illuminance_lux = 0.0;          // as FrameInput: 0 = the atmosphere's own sun
   double nits_per_unit = 1.0;                // cd/m² per unit of the colour written
+  // Moons that eclipse the sun, as FrameInput::moons: at most kMaxMoons
+  // spheres in PLANET-CENTRED METRES in the world's axes (not engine
+  // units), validated as validate_moons does. Empty, or no moon near
+  // enough to the sun to hide any of it from the atmosphere
+  // (moons_may_eclipse): the uneclipsed light, at no cost. With an eclipse
+  // the ground's pixels run the eclipse's overlaps (~60 disc overlaps
+  // each), and the first such draw compiles the eclipse's shaders.
+  std::vector<Moon> moons;
 };
 
 struct GlobeStats {
@@ -150,8 +167,8 @@ class Globe {
   // colour, RGB) and depth attachment (reversed-Z: clear it to 0 first),
   // after the shadow maps when shadows are on. Throws atmos::Error, with
   // nothing drawn, on non-finite or singular matrices, an empty viewport,
-  // a zero sun direction, or, with shadows, a projection that is not a
-  // perspective one.
+  // a zero sun direction, invalid moons (validate_moons), or, with
+  // shadows, a projection that is not a perspective one.
   void draw(const GlobeView& view);
 
   // Height of the drawn surface's relief above the datum, metres, below the

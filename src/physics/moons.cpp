@@ -74,4 +74,16 @@ bool moons_may_eclipse(const AtmosphereParams& params, const Moons& moons, const
 }
 
 }  // namespace physics
+
+bool moons_may_eclipse(const std::vector<Moon>& moons, const glm::dvec3& sun_direction, double top_radius_m,
+                       double sun_angular_radius_rad) {
+  const double length = glm::length(sun_direction);
+  if (!(length > 0.0) || !std::isfinite(length)) throw Error("moons_may_eclipse: zero or non-finite sun direction");
+  // The two fields physics::moons_may_eclipse and make_moons read.
+  physics::AtmosphereParams params{};
+  params.top_radius = float(top_radius_m);
+  params.sun_angular_radius = float(sun_angular_radius_rad);
+  return physics::moons_may_eclipse(params, physics::make_moons(params, moons), glm::vec3(sun_direction / length));
+}
+
 }  // namespace atmos

@@ -108,10 +108,15 @@ struct Resident {
   long long last_drawn = -1;  // frame number
 };
 
-// The uniforms of a program drawing tiles.
+// The uniforms of a program drawing tiles (-1: not in this variant).
 struct TileProgram {
   GLuint id = 0;
   GLint origin = -1, morph = -1, clip = -1, camera = -1, sun = -1, light = -1;
+  // The shadowed variants' cascades (globe.frag.glsl).
+  GLint cascade_count = -1, light_clip = -1, far = -1, blend = -1, texel = -1, depth_per_m = -1, forward = -1,
+        maps = -1;
+  // The eclipse variants' moons.
+  GLint moon_count = -1, moon_spheres = -1;
   void locate() {
     origin = glGetUniformLocation(id, "origin_from_camera");
     morph = glGetUniformLocation(id, "morph_range");
@@ -119,6 +124,16 @@ struct TileProgram {
     camera = glGetUniformLocation(id, "camera_planet");
     sun = glGetUniformLocation(id, "sun_direction");
     light = glGetUniformLocation(id, "light_scale");
+    cascade_count = glGetUniformLocation(id, "cascade_count");
+    light_clip = glGetUniformLocation(id, "light_clip_from_offset");
+    far = glGetUniformLocation(id, "cascade_far");
+    blend = glGetUniformLocation(id, "cascade_blend");
+    texel = glGetUniformLocation(id, "cascade_texel");
+    depth_per_m = glGetUniformLocation(id, "cascade_depth_per_m");
+    forward = glGetUniformLocation(id, "view_forward");
+    maps = glGetUniformLocation(id, "shadow_maps");
+    moon_count = glGetUniformLocation(id, "moon_count");
+    moon_spheres = glGetUniformLocation(id, "moon_spheres");
   }
 };
 
@@ -142,8 +157,6 @@ struct Shadows {
   GLuint sampler = 0;
   TileProgram depth;
   TileProgram lit;
-  GLint u_cascade_count = -1, u_light_clip = -1, u_far = -1, u_blend = -1, u_texel = -1, u_depth_per_m = -1,
-        u_forward = -1, u_maps = -1;
   // The last draw's view and cascades (none: no shadows this frame).
   planet::ShadowView view;
   planet::ShadowLight light;
@@ -160,6 +173,22 @@ struct Shadows {
     if (lit.id != 0) glDeleteProgram(lit.id);
   }
 };
+
+// Programs that light tiles: the library of the pass, and the variant's
+// switches (globe.vert.glsl, globe.frag.glsl); the fragment shader has the
+// library too when it evaluates the eclipse.
+TileProgram lit_program(const AtmospherePass& pass, int first_unit, bool shadows, bool eclipse) {
+  std::string head = "#version 450 core\n";
+  if (shadows) head += "#define ATMOS_GLOBE_SHADOWS 1\n";
+  if (eclipse) head += "#define ATMOS_GLOBE_ECLIPSE 1\n";
+  const std::string library = pass.glsl_library(first_unit) + "\n";
+  TileProgram program;
+  program.id = link(head + library + shader_text("src/planet/globe.vert.glsl"),
+                    head + (eclipse ? library : std::string()) + shader_text("src/planet/globe.frag.glsl"));
+  program.locate();
+  if (shadows) glProgramUniform1i(program.id, program.maps, first_unit + 5);
+  return program;
+}
 
 // The nearest view depth of any point of a tile's volume between the
 // radii: its nearest distance times the cosine of the frustum's widest
@@ -179,6 +208,12 @@ struct Globe::Impl {
   planet::Surface surface;
   planet::MeshBuilder builder;
   TileProgram program;
+  // The eclipse's variants, [0] unshadowed and [1] shadowed, linked at the
+  // first draw with moons that eclipse (id 0 until then).
+  std::array<TileProgram, 2> eclipse_programs{};
+  // The atmosphere's top (m) and the sun's angular radius (rad): which
+  // moons may eclipse.
+  double top_radius_m = 0.0, sun_angular_radius_rad = 0.0;
   GLuint vertex_array = 0;
   GLuint index_buffer = 0;
   std::unique_ptr<Shadows> shadows;  // none when GlobeSettings::shadow_cascades is 0
@@ -199,6 +234,8 @@ struct Globe::Impl {
     if (index_buffer != 0) glDeleteBuffers(1, &index_buffer);
     if (vertex_array != 0) glDeleteVertexArrays(1, &vertex_array);
     if (program.id != 0) glDeleteProgram(program.id);
+    for (const TileProgram& e : eclipse_programs)
+      if (e.id != 0) glDeleteProgram(e.id);
   }
 
   void upload(const TileKey& key, const planet::TileMesh& mesh) {
@@ -354,21 +391,7 @@ void Globe::Impl::create_shadows(const std::string& version) {
   s->depth.id = link(depth_only + shader_text("src/planet/globe.vert.glsl"),
                      depth_only + shader_text("src/planet/globe.frag.glsl"));
   s->depth.locate();
-  const std::string shadowed = version + "#define ATMOS_GLOBE_SHADOWS 1\n";
-  s->lit.id =
-      link(shadowed + pass->glsl_library(settings.first_unit) + "\n" + shader_text("src/planet/globe.vert.glsl"),
-           shadowed + shader_text("src/planet/globe.frag.glsl"));
-  s->lit.locate();
-  const GLuint lit = s->lit.id;
-  s->u_cascade_count = glGetUniformLocation(lit, "cascade_count");
-  s->u_light_clip = glGetUniformLocation(lit, "light_clip_from_offset");
-  s->u_far = glGetUniformLocation(lit, "cascade_far");
-  s->u_blend = glGetUniformLocation(lit, "cascade_blend");
-  s->u_texel = glGetUniformLocation(lit, "cascade_texel");
-  s->u_depth_per_m = glGetUniformLocation(lit, "cascade_depth_per_m");
-  s->u_forward = glGetUniformLocation(lit, "view_forward");
-  s->u_maps = glGetUniformLocation(lit, "shadow_maps");
-  glProgramUniform1i(lit, s->u_maps, settings.first_unit + 5);
+  s->lit = lit_program(*pass, settings.first_unit, true, false);
   shadows = std::move(s);
 }
 
@@ -530,10 +553,9 @@ Globe::Globe(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
                 " holds less than the six root tiles");
 
   const std::string version = "#version 450 core\n";
-  p.program.id =
-      link(version + pass.glsl_library(settings.first_unit) + "\n" + shader_text("src/planet/globe.vert.glsl"),
-           version + shader_text("src/planet/globe.frag.glsl"));
-  p.program.locate();
+  p.program = lit_program(pass, settings.first_unit, false, false);
+  p.top_radius_m = atmosphere.top_radius_m;
+  p.sun_angular_radius_rad = atmosphere.sun_angular_radius_rad;
   if (settings.shadow_cascades > 0) p.create_shadows(version);
 
   // One vertex layout and one index buffer serve every tile.
@@ -581,6 +603,14 @@ void Globe::draw(const GlobeView& view) {
   if (p.shadows && !(view.projection[2][3] < 0.0 && view.projection[0][3] == 0.0 && view.projection[1][3] == 0.0 &&
                      view.projection[3][3] == 0.0 && std::abs(view.projection[0][0]) > 0.0))
     throw Error("globe view: shadows need a perspective projection (w_clip proportional to the view depth)");
+  // Moons that may hide part of the sun from some ground point select the
+  // eclipse's variant; others change nothing (as in AtmospherePass).
+  bool eclipse = false;
+  try {
+    eclipse = moons_may_eclipse(view.moons, view.sun_direction, p.top_radius_m, p.sun_angular_radius_rad);
+  } catch (const Error& e) {
+    throw Error(std::string("globe view: GlobeView::moons: ") + e.what());
+  }
 
   // The camera in planet-centred metres, and the transform of
   // camera-relative metres to clip space: projection x the view's rotation
@@ -716,7 +746,12 @@ void Globe::draw(const GlobeView& view) {
   glDisable(GL_CULL_FACE);
   glDisable(GL_BLEND);
   glViewport(0, 0, view.width, view.height);
-  const TileProgram& program = shadowed ? p.shadows->lit : p.program;
+  TileProgram* lit = shadowed ? &p.shadows->lit : &p.program;
+  if (eclipse) {
+    lit = &p.eclipse_programs[shadowed ? 1 : 0];
+    if (lit->id == 0) *lit = lit_program(*p.pass, p.settings.first_unit, shadowed, true);
+  }
+  const TileProgram& program = *lit;
   glUseProgram(program.id);
   glBindVertexArray(p.vertex_array);
   p.pass->bind_textures(p.settings.first_unit);
@@ -740,16 +775,24 @@ void Globe::draw(const GlobeView& view) {
       texel[size_t(i)] = float(c.texel_m);
       depth_per_m[size_t(i)] = float(1.0 / (c.z_near_m - c.z_far_m));
     }
-    glUniform1i(s.u_cascade_count, n);
-    glUniformMatrix4fv(s.u_light_clip, n, GL_FALSE, glm::value_ptr(light_clip[0]));
-    glUniform1fv(s.u_far, n, far.data());
-    glUniform1fv(s.u_blend, n, blend.data());
-    glUniform1fv(s.u_texel, n, texel.data());
-    glUniform1fv(s.u_depth_per_m, n, depth_per_m.data());
+    glUniform1i(program.cascade_count, n);
+    glUniformMatrix4fv(program.light_clip, n, GL_FALSE, glm::value_ptr(light_clip[0]));
+    glUniform1fv(program.far, n, far.data());
+    glUniform1fv(program.blend, n, blend.data());
+    glUniform1fv(program.texel, n, texel.data());
+    glUniform1fv(program.depth_per_m, n, depth_per_m.data());
     const glm::dvec3 forward = -glm::dvec3(rotation[0][2], rotation[1][2], rotation[2][2]);
-    glUniform3f(s.u_forward, float(forward.x), float(forward.y), float(forward.z));
+    glUniform3f(program.forward, float(forward.x), float(forward.y), float(forward.z));
     glBindTextureUnit(GLuint(p.settings.first_unit + 5), s.maps);
     glBindSampler(GLuint(p.settings.first_unit + 5), s.sampler);
+  }
+  if (eclipse) {
+    // In float, as the pass's moons (physics::make_moons).
+    std::array<glm::vec4, kMaxMoons> spheres{};
+    for (size_t i = 0; i < view.moons.size(); ++i)
+      spheres[i] = glm::vec4(glm::vec3(view.moons[i].centre_m), float(view.moons[i].radius_m));
+    glUniform1i(program.moon_count, int(view.moons.size()));
+    glUniform4fv(program.moon_spheres, kMaxMoons, glm::value_ptr(spheres[0]));
   }
 
   stats.triangles = p.draw_tiles(draws, program, camera);

@@ -4,21 +4,38 @@
 // ATMOS_GLOBE_SHADOWS: the sun's part times the terrain's visibility of the
 // sun at this pixel, from the cascaded shadow maps (Dimitrov 2007; the
 // cascades in src/planet/globe_shadows.hpp), plus the sky's part, which the
-// terrain's shadows leave as it is. ATMOS_GLOBE_DEPTH_ONLY: nothing but the
-// depth the rasteriser writes (the shadow maps).
+// terrain's shadows leave as it is. ATMOS_GLOBE_ECLIPSE (with or without
+// shadows; appended after AtmospherePass::glsl_library()): the sun's part
+// and the sky's part times the factors of the moons at the pixel's point
+// (atmos_eclipse: the fraction of the limb-darkened sun they leave it, and
+// the documented approximation for the diffuse light), the factors the
+// pass applies to the G-buffer surfaces it lights; per pixel, as the umbra
+// can be narrower than the vertices' spacing seen from afar.
+// ATMOS_GLOBE_DEPTH_ONLY: nothing but the depth the rasteriser writes (the
+// shadow maps).
 
 #if defined(ATMOS_GLOBE_DEPTH_ONLY)
 
 void main() {}
 
-#elif defined(ATMOS_GLOBE_SHADOWS)
+#elif defined(ATMOS_GLOBE_SHADOWS) || defined(ATMOS_GLOBE_ECLIPSE)
 
 in vec3 v_sun_radiance;
 in vec3 v_sky_radiance;
 in vec3 v_offset;  // m, from the camera
-in vec3 v_normal;
 
 layout(location = 0) out vec4 colour;
+
+uniform vec3 sun_direction;  // unit, planet axes
+
+#if defined(ATMOS_GLOBE_ECLIPSE)
+uniform vec3 camera_planet;                   // m, planet-centred
+uniform int moon_count;                       // 1..MOON_CAPACITY (this variant draws eclipses only)
+uniform vec4 moon_spheres[MOON_CAPACITY];     // xyz: centre (m, planet-centred), w: radius (m)
+#endif
+
+#if defined(ATMOS_GLOBE_SHADOWS)
+in vec3 v_normal;
 
 const int kMaxCascades = 4;
 // The shadow maps' depth, one layer per cascade, standard depth (0 towards
@@ -31,7 +48,6 @@ uniform float cascade_blend[kMaxCascades];          // view depth where it start
 uniform float cascade_texel[kMaxCascades];          // its texel's side, m
 uniform float cascade_depth_per_m[kMaxCascades];    // window depth per metre along the sun
 uniform vec3 view_forward;                          // unit, planet axes: view depth = dot(offset, view_forward)
-uniform vec3 sun_direction;                         // unit, planet axes
 
 // The lookup's offset from the surface, in texels of the cascade: along the
 // normal, kNormalOffset sin(theta) (theta between the normal and the sun),
@@ -61,7 +77,8 @@ float cascade_visibility(int i, vec3 offset, vec3 n, float sin_theta) {
   return 0.25 * lit;
 }
 
-void main() {
+// The terrain's visibility of the sun at this pixel.
+float terrain_sun_visibility() {
   float visibility = 1.0;
   if (any(greaterThan(v_sun_radiance, vec3(0.0)))) {
     float depth = dot(v_offset, view_forward);
@@ -81,7 +98,23 @@ void main() {
       }
     }
   }
-  colour = vec4(max(v_sun_radiance * visibility + v_sky_radiance, vec3(0.0)), 1.0);
+  return visibility;
+}
+#endif
+
+void main() {
+  vec3 sun = v_sun_radiance;
+  vec3 sky = v_sky_radiance;
+#if defined(ATMOS_GLOBE_SHADOWS)
+  sun *= terrain_sun_visibility();
+#endif
+#if defined(ATMOS_GLOBE_ECLIPSE)
+  float sun_factor, sky_factor;
+  atmos_eclipse(camera_planet + v_offset, sun_direction, moon_count, moon_spheres, sun_factor, sky_factor);
+  sun *= sun_factor;
+  sky *= sky_factor;
+#endif
+  colour = vec4(max(sun + sky, vec3(0.0)), 1.0);
 }
 
 #else

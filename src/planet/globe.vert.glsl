@@ -30,6 +30,9 @@
 //    to the fragment shader separately, with the camera-relative position
 //    and the normal, for the terrain's shadow, which dims the sun's part
 //    only (globe.frag.glsl);
+//  - ATMOS_GLOBE_ECLIPSE: the same separate parts and position, for the
+//    moons' factors, which dim the sun's part and the sky's part each by
+//    its own (globe.frag.glsl);
 //  - ATMOS_GLOBE_DEPTH_ONLY: the same morphed positions through the sun's
 //    cascade projection (clip_from_offset), nothing lit: the shadow maps'
 //    casters are the very surface that is drawn. Compiled without the
@@ -53,11 +56,13 @@ uniform float light_scale;        // (sun illuminance / the atmosphere's own) / 
 #endif
 
 #if defined(ATMOS_GLOBE_DEPTH_ONLY)
-#elif defined(ATMOS_GLOBE_SHADOWS)
+#elif defined(ATMOS_GLOBE_SHADOWS) || defined(ATMOS_GLOBE_ECLIPSE)
 out vec3 v_sun_radiance;  // the sun's part, linear sRGB, cd/m2 / nits_per_unit
 out vec3 v_sky_radiance;  // the sky's part
 out vec3 v_offset;        // m, from the camera (planet axes)
+#if defined(ATMOS_GLOBE_SHADOWS)
 out vec3 v_normal;        // unit at the vertices
+#endif
 #else
 out vec3 v_radiance;  // linear sRGB, cd/m2 / nits_per_unit
 #endif
@@ -71,11 +76,13 @@ void main() {
   vec3 n = normalize(mix(normal, parent_normal, k));
   vec3 sky_irradiance;
   vec3 sun_irradiance = atmos_sun_and_sky_irradiance(point, n, sun_direction, sky_irradiance);
-#if defined(ATMOS_GLOBE_SHADOWS)
+#if defined(ATMOS_GLOBE_SHADOWS) || defined(ATMOS_GLOBE_ECLIPSE)
   v_sun_radiance = albedo * (1.0 / 3.14159265358979) * sun_irradiance * light_scale;
   v_sky_radiance = albedo * (1.0 / 3.14159265358979) * sky_irradiance * light_scale;
   v_offset = offset;
+#if defined(ATMOS_GLOBE_SHADOWS)
   v_normal = n;
+#endif
 #else
   v_radiance = albedo * (1.0 / 3.14159265358979) * (sun_irradiance + sky_irradiance) * light_scale;
 #endif
