@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -22,6 +23,7 @@
 
 #include "data/embedded_files.hpp"
 #include "planet/cube_sphere.hpp"
+#include "planet/globe_internal.hpp"
 #include "planet/globe_mesh.hpp"
 #include "planet/globe_shadows.hpp"
 #include "planet/surface.hpp"
@@ -35,6 +37,9 @@ using planet::TileKey;
 using Clock = std::chrono::steady_clock;
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+// set_globe_morph (globe_internal.hpp).
+std::atomic<bool> morph_enabled{true};
 
 const char* shader_text(const char* path) {
   const char* text = data::embedded_file(path);
@@ -202,6 +207,10 @@ double nearest_view_depth_m(const glm::dvec3& camera, const TileKey& key, double
 
 }  // namespace
 
+namespace planet {
+void set_globe_morph(bool enabled) { morph_enabled.store(enabled, std::memory_order_relaxed); }
+}  // namespace planet
+
 struct Globe::Impl {
   const AtmospherePass* pass = nullptr;
   GlobeSettings settings;
@@ -299,8 +308,9 @@ struct Globe::Impl {
       tile.last_drawn = frame;
       const glm::dvec3 origin = tile.origin - camera;
       glUniform3f(with.origin, float(origin.x), float(origin.y), float(origin.z));
-      glUniform2f(with.morph, std::isfinite(d.morph_start) ? float(d.morph_start) : 3.0e38f,
-                  std::isfinite(d.morph_end) ? float(d.morph_end) : 3.0e38f);
+      const bool morph = morph_enabled.load(std::memory_order_relaxed);
+      glUniform2f(with.morph, morph && std::isfinite(d.morph_start) ? float(d.morph_start) : 3.0e38f,
+                  morph && std::isfinite(d.morph_end) ? float(d.morph_end) : 3.0e38f);
       glVertexArrayVertexBuffer(vertex_array, 0, tile.buffer, 0, GLsizei(sizeof(planet::TileVertex)));
       if (d.quadrants == 0xFu) {
         const std::size_t offset = builder.tile_index_offset() * sizeof(std::uint32_t);
