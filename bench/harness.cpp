@@ -185,6 +185,25 @@ void time_plugin(const atmos::Atmosphere& atmosphere, const atmos::Tables& table
   }
 }
 
+void time_ground_albedo(const atmos::Atmosphere& atmosphere, const atmos::PrecomputeOptions& options,
+                        const FigureSink& sink) {
+  using Clock = std::chrono::steady_clock;
+  atmos::PrecomputeOptions o = options;
+  o.ground_albedo_response = true;
+  const auto t0 = Clock::now();
+  const atmos::Tables tables = atmos::precompute_tables(atmosphere, o);
+  sink({"precompute.ground_albedo_response", std::chrono::duration<double>(Clock::now() - t0).count(), "s"});
+  atmos::AtmospherePass pass(atmosphere, tables, atmos::PlanetFrame{});
+  std::vector<double> times;
+  for (int i = 0; i < 6; ++i) {
+    const auto t1 = Clock::now();
+    pass.set_ground_albedo(glm::dvec3(i % 2 == 0 ? 0.3 : 0.35));
+    glFinish();
+    times.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t1).count());
+  }
+  sink({"plugin.ground_albedo", median(times), "ms"});
+}
+
 namespace {
 
 // A camera `altitude_m` above the ground at latitude 20°, longitude 30°,
@@ -395,6 +414,7 @@ void run_all(const atmos::Atmosphere& atmosphere, const atmos::PrecomputeOptions
   time_frames(spectral_renderer, camera, atmos::direction_from_azimuth_elevation(150.0, -3.0), 3,
               "render.spectral15.twilight", sink);
   time_plugin(atmosphere, tables, width, height, sink);
+  time_ground_albedo(atmosphere, options, sink);
   time_post(renderer, camera, sink);
   time_globe(atmosphere, tables, width, height, sink);
 }

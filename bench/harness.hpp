@@ -107,6 +107,13 @@ void time_plugin(const atmos::Atmosphere& atmosphere, const atmos::Tables& table
 // filmic operator, bloom (strength 0.05) and auto exposure, each pass's GPU
 // time the median of 5 frames (`post.bloom.<W>x<H>`, `post.exposure.*`,
 // `post.tonemap.*`).
+// The tables' ground albedo response: precompute.ground_albedo_response
+// (s, the tables with their response, never from the cache) and
+// plugin.ground_albedo (ms, median of AtmospherePass::set_ground_albedo
+// moving between two albedos: the CPU blend and the upload).
+void time_ground_albedo(const atmos::Atmosphere& atmosphere, const atmos::PrecomputeOptions& options,
+                        const FigureSink& sink);
+
 void time_post(atmos::Renderer& renderer, const atmos::Camera& camera, const FigureSink& sink);
 
 // The terrain globe (atmos::Globe, Earth style) under the atmosphere's

@@ -211,6 +211,23 @@ class AtmospherePass {
   // Binds the textures glsl_library() declares.
   void bind_textures(int first_unit) const;
 
+  // The albedo of the ground below the air, per channel of the tables
+  // (linear sRGB in spectral mode, the three working wavelengths' in
+  // three-wavelength mode), dimensionless, in [0, 1]. The light the air
+  // scatters and the sky light on the ground then follow it
+  // (tables_for_ground_albedo): give the regional mean albedo of the ground
+  // around the camera (Globe::regional_albedo) instead of the atmosphere's
+  // constant. The tables must hold a ground response
+  // (PrecomputeOptions::ground_albedo_response). A change of more than
+  // 0.001 in a channel re-blends the three ground-dependent tables on the
+  // CPU and uploads them (atmos bench: plugin.ground_albedo); a smaller one
+  // keeps them. The Lambertian sphere the pass draws where nothing was drawn
+  // keeps the atmosphere's albedo. Throws atmos::Error, changing nothing, on
+  // tables without a ground response or an albedo outside [0, 1].
+  void set_ground_albedo(const glm::dvec3& albedo);
+  // The ground albedo of the current tables (the atmosphere's until set).
+  glm::dvec3 ground_albedo() const;
+
   const PlanetFrame& frame() const;
   // The radius of the atmosphere's ground (its bottom_radius), m: the
   // lowest point its tables reach.

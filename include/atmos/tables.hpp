@@ -46,6 +46,14 @@ struct PrecomputeOptions {
   bool solve_tail = true;
   double tail_tolerance = 1e-5;
   int tail_iterations = 200;
+  // Also compute the tables over a second, uniform ground albedo
+  // (Tables::ground_response), from which the run time lights the air and
+  // the ground over the albedo actually below them (a regional average, not
+  // the planet file's constant): tables_for_ground_albedo,
+  // AtmospherePass::set_ground_albedo. The scattering orders (not the
+  // transmittance or the single scattering) are computed a second time, and
+  // the tables hold three more scattering-sized arrays.
+  bool ground_albedo_response = false;
   // Called from the calling thread with the name of the running step and the
   // fraction of the whole precomputation done, in [0, 1].
   std::function<void(const std::string& step, double fraction)> progress;
@@ -85,6 +93,33 @@ struct OrderContribution {
   double residual = 0.0;
 };
 
+// How the render tables depend on the albedo of the ground below the air:
+// the same tables over a second, uniform albedo (PrecomputeOptions::
+// ground_albedo_response). Light reflected by a Lambertian ground of albedo
+// a and sent back down by the air, reflected again, and so on, adds up as a
+// geometric series of ratio a S, S the atmosphere's spherical albedo seen
+// from below (Tanré et al. 1979, eq. 8; Vermote et al. 1997): every
+// albedo-dependent quantity is L(a) = L(0) + a G / (1 - a S), G its part
+// per unit albedo of the first reflection. Two sets (the planet's albedo
+// and this one) fix S from the sky irradiance on the ground and G per
+// texel; tables_for_ground_albedo applies the series at any albedo.
+struct GroundAlbedoResponse {
+  // The ground albedo of these tables, per channel (uniform over wavelength).
+  glm::vec3 albedo{0.0f};
+  // The ground albedo of Tables::set per channel: the atmosphere's at the
+  // three wavelengths, or its sunlight-weighted mean per sRGB channel in
+  // spectral mode.
+  glm::vec3 planet_albedo{0.0f};
+  // S per channel, dimensionless in [0, 1): the fraction of the light leaving
+  // a Lambertian ground upwards that the air scatters back down to it.
+  glm::vec3 spherical_albedo{0.0f};
+  // As TableSet, over a ground of `albedo` (the other tables do not depend on it).
+  std::vector<glm::vec3> indirect_irradiance;
+  std::vector<glm::vec3> scattering;
+  std::vector<glm::vec3> multiple_scattering;
+  bool empty() const { return scattering.empty(); }
+};
+
 struct Tables {
   TableSizes sizes;
   int scattering_orders = 0;           // the orders computed (with auto orders: where it stopped)
@@ -100,6 +135,7 @@ struct Tables {
   std::vector<glm::vec3> spectral_optical_depth;
   std::vector<OrderContribution> convergence;  // orders 2..K, then the tail if solved (filled by precompute_tables)
   std::vector<StepTiming> timings;             // filled by precompute_tables (empty when loaded from the cache)
+  GroundAlbedoResponse ground_response;        // empty unless PrecomputeOptions::ground_albedo_response
 
   int spectral_sets() const { return int((wavelengths_nm.size() + 2) / 3); }
   // Tiles of spectral_optical_depth: one per wavelength triple for the true
@@ -113,6 +149,17 @@ struct Tables {
 
 // Computes all tables on the CPU with all cores (TBB).
 Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& options);
+
+// The render tables over a Lambertian ground of albedo `albedo` per channel
+// (dimensionless, in [0, 1]; the three working wavelengths' in
+// three-wavelength mode, linear sRGB in spectral mode): Tables::set with its
+// sky irradiance and multiple scattering moved along the series of
+// GroundAlbedoResponse. Exact at the planet's albedo and at the response's;
+// between and beyond, as exact as the series' premise that every
+// reflection's light has the first one's angular distribution
+// (docs/accuracy.md, Ground albedo). Throws Error when `tables` have no
+// ground response or the albedo is not in [0, 1].
+TableSet tables_for_ground_albedo(const Tables& tables, const glm::vec3& albedo);
 
 // Throws Error unless `tables` were computed for the wavelengths of
 // `atmosphere` and hold as many texels as their sizes say (what the renderers

@@ -109,6 +109,9 @@ struct AtmospherePass::Impl {
   PlanetFrame frame;
   double bottom_radius_m = 0.0;
   std::unique_ptr<gpu::GpuTables> tables;
+  // The tables and their ground response (set_ground_albedo), when they have one.
+  std::unique_ptr<Tables> ground_response;
+  glm::dvec3 ground_albedo{0.0};
   std::unique_ptr<gpu::GpuTimer> timer;
   // The program variants (gpu::PassVariant::index), compiled on first use.
   GLuint programs[gpu::PassVariant::kCount] = {};
@@ -169,6 +172,11 @@ AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const Tables& table
   gpu::clear_gl_errors();
   try {
     p.tables = std::make_unique<gpu::GpuTables>(atmosphere, tables, TexturePrecision::full);
+    p.ground_albedo = glm::dvec3(p.tables->params().ground_albedo);
+    if (!tables.ground_response.empty()) {
+      p.ground_response = std::make_unique<Tables>(tables);
+      p.ground_albedo = glm::dvec3(tables.ground_response.planet_albedo);
+    }
     p.timer = std::make_unique<gpu::GpuTimer>();
     p.own_sun_lux = gpu::own_sun_illuminance(p.tables->params(), p.tables->radiance_to_srgb());
     glCreateVertexArrays(1, &p.vertex_array);
@@ -234,6 +242,25 @@ AtmospherePass::~AtmospherePass() {
 }
 
 const PassTimings& AtmospherePass::last_timings() const { return impl_->timings; }
+
+void AtmospherePass::set_ground_albedo(const glm::dvec3& albedo) {
+  Impl& p = *impl_;
+  if (!p.ground_response)
+    throw Error("AtmospherePass::set_ground_albedo: the tables have no ground albedo response (precompute them "
+                "with PrecomputeOptions::ground_albedo_response)");
+  for (int c = 0; c < 3; ++c)
+    if (!(albedo[c] >= 0.0 && albedo[c] <= 1.0))
+      throw Error("AtmospherePass::set_ground_albedo: albedo " + number(albedo[c]) + " is outside [0, 1]");
+  // Over Earth the scattering table's light moves by about 1 % per 0.01 of
+  // albedo (tests/ground_albedo_test.cpp): a change of 0.001 or less, about
+  // 0.1 %, keeps the tables.
+  const glm::dvec3 change = glm::abs(albedo - p.ground_albedo);
+  if (std::max({change.x, change.y, change.z}) <= 0.001) return;
+  p.tables->replace_ground_dependent_tables(tables_for_ground_albedo(*p.ground_response, glm::vec3(albedo)));
+  p.ground_albedo = albedo;
+}
+
+glm::dvec3 AtmospherePass::ground_albedo() const { return impl_->ground_albedo; }
 
 const PlanetFrame& AtmospherePass::frame() const { return impl_->frame; }
 

@@ -289,6 +289,8 @@ GpuTables::GpuTables(const Atmosphere& atmosphere, const Tables& tables, Texture
     const TableSizes& s = tables.sizes;
     const TableSet& t = tables.set;
     const GLenum format = precision == TexturePrecision::half ? GL_RGB16F : GL_RGB32F;
+    sizes_ = s;
+    format_ = format;
     // The optical depth of every wavelength triple, side by side (32-bit
     // whatever the precision, see TexturePrecision).
     textures_[0] = make_texture_2d(s.transmittance_mu * tables.transmittance_tiles(), s.transmittance_r,
@@ -308,6 +310,21 @@ GpuTables::GpuTables(const Atmosphere& atmosphere, const Tables& tables, Texture
 }
 
 GpuTables::~GpuTables() { release(); }
+
+void GpuTables::replace_ground_dependent_tables(const TableSet& set) {
+  const TableSizes& s = sizes_;
+  const int width = s.scattering_nu * s.scattering_mu_s;
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  const TexelData irradiance = texel_data(set.indirect_irradiance, format_);
+  glTextureSubImage2D(textures_[3], 0, 0, 0, s.irradiance_mu_s, s.irradiance_r, GL_RGB, irradiance.type,
+                      irradiance.pixels);
+  for (const auto& [index, texels] : {std::pair{1, &set.scattering}, std::pair{4, &set.multiple_scattering}}) {
+    const TexelData data = texel_data(*texels, format_);
+    glTextureSubImage3D(textures_[index], 0, 0, 0, 0, width, s.scattering_mu, s.scattering_r, GL_RGB, data.type,
+                        data.pixels);
+  }
+  check_gl("while replacing the ground-dependent tables");
+}
 
 void GpuTables::release() {
   for (GLuint& program : sky_view_programs_) {

@@ -126,6 +126,11 @@ class GpuTables {
   GLuint texture(int index) const { return textures_[index]; }
   GLuint sky_view_texture(int index) const { return sky_view_textures_[index]; }
 
+  // Replaces the tables that depend on the ground's albedo (sky
+  // irradiance, scattering, multiple scattering) with those of `set`, of the
+  // same sizes (tables_for_ground_albedo).
+  void replace_ground_dependent_tables(const TableSet& set);
+
   // The frame of the sky-view table for a camera (m, planet-centred, in the
   // atmosphere; below the ground counts as on it) and the sun's direction:
   // computed once per frame here, uploaded to the table's pass and to its
@@ -146,6 +151,8 @@ class GpuTables {
   std::unique_ptr<physics::AtmosphereParams> params_;
   std::unique_ptr<physics::SpectralSets> spectral_;
   glm::mat3 radiance_to_srgb_{1.0f};
+  TableSizes sizes_;
+  GLenum format_ = 0;  // of the radiance tables 1..4
   GLuint textures_[5] = {0, 0, 0, 0, 0};
   // Without, with the low-sun integration, and eclipsed (compiled on first use).
   GLuint sky_view_programs_[3] = {0, 0, 0};

@@ -93,13 +93,23 @@ std::size_t set_floats(const TableSizes& s) {
   return 3 * (2 * e + 3 * sc);  // 2 irradiance, 3 scattering tables
 }
 
+// The ground albedo response (GroundAlbedoResponse): its three albedos per
+// channel, then its irradiance and two scattering tables.
+std::size_t response_floats(const TableSizes& s) {
+  const std::size_t e = std::size_t(s.irradiance_mu_s) * s.irradiance_r;
+  const std::size_t sc = std::size_t(s.scattering_nu) * s.scattering_mu_s * s.scattering_mu * s.scattering_r;
+  return 3 * 3 + 3 * (e + 2 * sc);
+}
+
 // The length of a file of tables of sizes `s` at `wavelengths` working
-// wavelengths with `convergence` report entries: the header, the wavelengths,
-// the report, the texels and the checksum.
-std::size_t file_bytes(const TableSizes& s, std::size_t wavelengths, std::size_t convergence) {
+// wavelengths with `convergence` report entries (and a ground albedo
+// response or not): the header, the wavelengths, the report, the texels and
+// the checksum.
+std::size_t file_bytes(const TableSizes& s, std::size_t wavelengths, std::size_t convergence, bool ground_response) {
   const std::size_t sets = (wavelengths + 2) / 3;
   const std::size_t transmittance_floats = 3 * std::size_t(s.transmittance_mu) * s.transmittance_r;
-  const std::size_t floats = set_floats(s) + transmittance_floats * 2 * sets;
+  std::size_t floats = set_floats(s) + transmittance_floats * 2 * sets;
+  if (ground_response) floats += response_floats(s);
   return kHeaderBytes + wavelengths * 8 + convergence * kConvergenceEntryBytes + floats * 4 + 8;
 }
 
@@ -135,6 +145,7 @@ std::string tables_cache_key(const Atmosphere& a, const PrecomputeOptions& optio
       h.value(std::int32_t(options.tail_iterations));
     }
   }
+  if (options.ground_albedo_response) h.value(options.ground_albedo_response);
   h.value(a.bottom_radius_m);
   h.value(a.top_radius_m);
   h.value(a.sun_angular_radius_rad);
@@ -207,7 +218,8 @@ std::string read_tables_file(std::string_view data, const std::string& key, cons
   if (!(s == options.sizes) || !orders_match || wavelengths != std::int32_t(atmosphere.wavelengths_nm.size()) ||
       sets != (wavelengths + 2) / 3 || convergence < 0 || convergence > kMaxConvergenceEntries)
     return "parameters mismatch";
-  const std::size_t expected = file_bytes(s, std::size_t(wavelengths), std::size_t(convergence));
+  const std::size_t expected =
+      file_bytes(s, std::size_t(wavelengths), std::size_t(convergence), options.ground_albedo_response);
   if (data.size() != expected)
     return "size " + std::to_string(data.size()) + " bytes, expected " + std::to_string(expected) + " (truncated?)";
   Fnv1a check;
@@ -252,6 +264,19 @@ std::string read_tables_file(std::string_view data, const std::string& key, cons
       !take_vec3(set.indirect_irradiance, e) || !take_vec3(set.scattering, sc) || !take_vec3(set.single_aerosol, sc) ||
       !take_vec3(set.multiple_scattering, sc) || !take_vec3(tables.spectral_optical_depth, t * std::size_t(2 * sets)))
     return "non-finite texels";
+  if (options.ground_albedo_response) {
+    GroundAlbedoResponse& g = tables.ground_response;
+    std::vector<glm::vec3> albedos;
+    if (!take_vec3(albedos, 3) || !take_vec3(g.indirect_irradiance, e) || !take_vec3(g.scattering, sc) ||
+        !take_vec3(g.multiple_scattering, sc))
+      return "non-finite texels";
+    for (const glm::vec3& v : albedos)
+      for (int c = 0; c < 3; ++c)
+        if (!(v[c] >= 0.0f && v[c] <= 1.0f)) return "ground albedo response outside [0, 1]";
+    g.albedo = albedos[0];
+    g.planet_albedo = albedos[1];
+    g.spherical_albedo = albedos[2];
+  }
   return "";
 }
 
@@ -266,7 +291,8 @@ std::string read_cache(const std::string& path, const std::string& key, const Pr
   const std::uintmax_t size = std::filesystem::file_size(path, ec);
   if (ec) return "cannot open";
   const std::size_t longest =
-      file_bytes(options.sizes, atmosphere.wavelengths_nm.size(), std::size_t(kMaxConvergenceEntries));
+      file_bytes(options.sizes, atmosphere.wavelengths_nm.size(), std::size_t(kMaxConvergenceEntries),
+                 options.ground_albedo_response);
   if (size > longest)
     return "size " + std::to_string(size) + " bytes, more than the " + std::to_string(longest) +
            " of any file of these tables";
@@ -308,6 +334,11 @@ std::string write_cache(const std::string& path, const std::string& key, const T
   for (const auto* v : {&set.direct_irradiance, &set.indirect_irradiance, &set.scattering,
                         &set.single_aerosol, &set.multiple_scattering, &tables.spectral_optical_depth})
     put(v->data(), v->size() * sizeof(glm::vec3));
+  if (const GroundAlbedoResponse& g = tables.ground_response; !g.empty()) {
+    for (const glm::vec3* v : {&g.albedo, &g.planet_albedo, &g.spherical_albedo}) put(v, sizeof(glm::vec3));
+    for (const auto* v : {&g.indirect_irradiance, &g.scattering, &g.multiple_scattering})
+      put(v->data(), v->size() * sizeof(glm::vec3));
+  }
   Fnv1a check;
   check.bytes(data.data(), data.size());
   put(&check.h, 8);

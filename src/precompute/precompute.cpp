@@ -14,6 +14,7 @@
 #include <cmath>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,7 @@
 #include "atmos/tables.hpp"
 #include "physics/parameters.hpp"
 #include "physics/precomputation_integrands_cpp.hpp"
+#include "precompute/ground_albedo.hpp"
 #include "precompute/steps.hpp"
 
 namespace atmos {
@@ -40,6 +42,10 @@ void check_tables_match(const Atmosphere& atmosphere, const Tables& tables) {
       t.single_aerosol.size() != scattering || t.multiple_scattering.size() != scattering ||
       tables.spectral_optical_depth.size() != transmittance * size_t(tables.transmittance_tiles()))
     throw Error("the tables hold fewer or more texels than their sizes say");
+  const GroundAlbedoResponse& g = tables.ground_response;
+  if (!g.empty() && (g.indirect_irradiance.size() != irradiance || g.scattering.size() != scattering ||
+                     g.multiple_scattering.size() != scattering))
+    throw Error("the tables' ground albedo response holds fewer or more texels than their sizes say");
   if (tables.spectral_sets() > SPECTRAL_SET_CAPACITY)
     throw Error("the tables have more wavelengths than the run time supports");
 }
@@ -64,6 +70,11 @@ constexpr int kTailDeflation = 10;
 // the tail; tests/convergence_accuracy.cpp checks 16 orders and the tail
 // against 600 orders.
 constexpr int kEarliestTailHandoff = 16;
+
+// The least difference between the ground albedos of Tables::set and of the
+// ground response per channel: the series' G per texel is the difference of
+// the two tables divided by that of their albedo terms.
+constexpr float kLeastResponseAlbedoDifference = 0.25f;
 
 // --- Checks -----------------------------------------------------------------
 
@@ -104,6 +115,8 @@ struct StepCosts {
   StepCosts(const PrecomputeOptions& options, bool may_solve_tail) {
     tail = may_solve_tail ? order * options.tail_iterations : 0.0;
     set = 0.05 + single + order * (options.scattering_orders - 1) + tail;
+    // The second ground albedo's orders and tail (ground_albedo_response).
+    if (options.ground_albedo_response) set += order * (options.scattering_orders - 1) + tail;
   }
 };
 
@@ -656,6 +669,13 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
   const glm::vec3 luminance_of_srgb(0.2126f, 0.7152f, 0.0722f);
   const glm::mat3 to_srgb = physics::channels_to_srgb_matrix(wavelengths);
   std::vector<OrderSeries> series(static_cast<size_t>(set_count));
+  // The response's ground: at each wavelength the far end of [0, 1] from
+  // the planet's albedo, so that the series is interpolated over most
+  // albedos, not extrapolated. Its albedo per channel is weighted by the
+  // sunlight as the planet's (physics::make_render_params).
+  Tables response;
+  response.sizes = options.sizes;
+  glm::dvec3 response_reflected(0.0), response_sun(0.0);
 
   for (int set = 0; set < set_count; ++set) {
     const AtmosphereParams a = physics::make_atmosphere_params(atmosphere, options.sizes, set);
@@ -667,15 +687,48 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
     const AtmosphereParams ms = medium_of_orders(a, steps, t);
     compute_single_scattering(a, ms, costs, steps, t);
     t.multiple = Table3D(t.single_rayleigh.width, t.single_rayleigh.height, t.single_rayleigh.depth);
+    // The response's orders start from the same transmittance and single
+    // scattering, which do not see the ground.
+    std::optional<SetTables> bright;
+    if (options.ground_albedo_response) bright = t;
     OrderTables order_tables;
     OrderSeries& s = series[size_t(set)];
     s = compute_scattering_orders(atmosphere, options, set, a, ms, to_luminance, costs, steps, t, order_tables);
     tables.scattering_orders = std::max(tables.scattering_orders, 1 + int(s.added.size()));
     if (may_solve_tail && !s.converged) solve_tail(options, a, ms, to_luminance, costs, steps, t, order_tables, s);
     add_to_render_tables(wavelengths, set, set_count, a, t, tables);
+    if (bright) {
+      AtmosphereParams a_bright = a, ms_bright = ms;
+      for (int c = 0; c < 3; ++c) a_bright.ground_albedo[c] = a.ground_albedo[c] < 0.5f ? 1.0f : 0.0f;
+      ms_bright.ground_albedo = a_bright.ground_albedo;
+      const glm::dmat3 m(physics::set_to_channels(wavelengths, set));
+      response_reflected += m * glm::dvec3(a_bright.ground_albedo * a.solar_irradiance);
+      response_sun += m * glm::dvec3(a.solar_irradiance);
+      OrderTables bright_tables;
+      OrderSeries s_bright = compute_scattering_orders(atmosphere, options, set, a_bright, ms_bright, to_luminance,
+                                                       costs, steps, *bright, bright_tables);
+      if (may_solve_tail && !s_bright.converged)
+        solve_tail(options, a_bright, ms_bright, to_luminance, costs, steps, *bright, bright_tables, s_bright);
+      add_to_render_tables(wavelengths, set, set_count, a_bright, *bright, response);
+    }
   }
   if (physics::srgb_channels(wavelengths)) divide_single_aerosol_by_render_phase(atmosphere, options.sizes, tables);
   tables.convergence = convergence_report(series, tables.scattering_orders);
+  if (options.ground_albedo_response) {
+    GroundAlbedoResponse& g = tables.ground_response;
+    g.albedo = glm::clamp(glm::vec3(response_reflected / response_sun), 0.0f, 1.0f);
+    g.planet_albedo = physics::make_render_params(atmosphere, options.sizes).ground_albedo;
+    for (int c = 0; c < 3; ++c)
+      if (!(std::abs(g.albedo[c] - g.planet_albedo[c]) >= kLeastResponseAlbedoDifference))
+        throw Error(atmosphere.origin + ": the ground albedo response needs a second ground albedo at least " +
+                    std::to_string(kLeastResponseAlbedoDifference) +
+                    " from the planet's in every colour channel, and the planet's albedo spectrum crosses 0.5 "
+                    "within channel " + std::to_string(c));
+    g.spherical_albedo = spherical_albedo_from_below(options.sizes, tables.set, response.set, g.planet_albedo, g.albedo);
+    g.indirect_irradiance = std::move(response.set.indirect_irradiance);
+    g.scattering = std::move(response.set.scattering);
+    g.multiple_scattering = std::move(response.set.multiple_scattering);
+  }
   return tables;
 }
 
