@@ -1169,8 +1169,9 @@ void main() {
 // off by (f_sky - f_sun) times the other part's share, 3 % and more of the
 // expected value here; the tolerance, 3e-3, allows for the vertices'
 // interpolated light (the pixel's point is not a vertex) and float
-// rounding. A moon far from the sun leaves the image as without moons; a
-// moon with a negative radius throws, nothing drawn.
+// rounding. The terrain's shadows change nothing on this flat ground; a
+// moon far from the sun leaves the image as without moons; a moon with a
+// negative radius throws, nothing drawn.
 TEST_F(GlobeGpu, MoonOnTheSunDimsTheGroundByTheEclipseFactors) {
   atmos::GlobeSettings settings;
   settings.complete_every_frame = true;
@@ -1224,6 +1225,19 @@ TEST_F(GlobeGpu, MoonOnTheSunDimsTheGroundByTheEclipseFactors) {
     EXPECT_NEAR(eclipse[i] / expected, 1.0, 3e-3) << c;
   }
 
+  // With the terrain's shadows (the shadowed eclipse variant) the flat
+  // ground, which casts none, is the same to float rounding.
+  {
+    atmos::Globe shadowed(*earth_, surface_of(atmos::SurfaceStyle::flat, 1), *pass_, shadow_settings(2));
+    atmos::GlobeView v = view;
+    v.moons = {moon};
+    target.clear();
+    shadowed.draw(v);
+    EXPECT_GT(shadowed.last_stats().shadow_cascades, 0);
+    const std::vector<float> shadowed_eclipse = target.read_colour();
+    for (size_t i = 0; i < eclipse.size(); ++i)
+      ASSERT_NEAR(shadowed_eclipse[i], eclipse[i], 1e-4 * std::abs(eclipse[i])) << i;
+  }
   // A moon 30 degrees from the sun eclipses nothing: the uneclipsed light
   // (to float rounding: consecutive draws of one view may pick other tiles
   // as the resident tiles' heights tighten the selection's bounds).
