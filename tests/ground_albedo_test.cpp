@@ -19,6 +19,7 @@
 
 #include "atmos/atmosphere.hpp"
 #include "atmos/planet_file.hpp"
+#include "atmos/globe.hpp"
 #include "atmos/plugin.hpp"
 #include "atmos/renderer.hpp"
 #include "atmos/tables.hpp"
@@ -344,4 +345,38 @@ TEST_F(GroundAlbedoGpu, PassFollowsTheGroundAlbedo) {
   EXPECT_THROW(direct.set_ground_albedo(glm::dvec3(0.3)), atmos::Error);  // no response
 }
 
+
+// The regional albedo of Earth's default surface (Blue Marble imagery,
+// GSHHG coasts): the Sahara is bright, the open Pacific dark, the
+// Antarctic ice brightest; from 2.5 radii the cap is the visible
+// hemisphere, between the extremes. The pass takes it.
+TEST_F(GroundAlbedoGpu, GlobeRegionalAlbedoFollowsTheGround) {
+  const atmos::PlanetFrame frame;
+  atmos::AtmospherePass pass(*earth_, *tables_, frame);
+  atmos::GlobeSettings settings;
+  settings.complete_every_frame = true;
+  const atmos::Globe globe(*earth_, atmos::load_surface("earth"), pass, settings);
+  const auto above = [&](double lat_deg, double lon_deg, double altitude_m) {
+    const double lat = glm::radians(lat_deg), lon = glm::radians(lon_deg);
+    const glm::dvec3 up(std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat));
+    return up * (earth_->bottom_radius_m + altitude_m);
+  };
+  const glm::dvec3 sahara = globe.regional_albedo(above(23.0, 12.0, 2.0));
+  const glm::dvec3 pacific = globe.regional_albedo(above(-5.0, -140.0, 2.0));
+  const glm::dvec3 antarctica = globe.regional_albedo(above(-82.0, 60.0, 10e3));
+  const glm::dvec3 far = globe.regional_albedo(above(23.0, 12.0, 2.5 * earth_->bottom_radius_m));
+  std::printf("regional albedo: Sahara %.3f %.3f %.3f, Pacific %.3f %.3f %.3f, Antarctica %.3f %.3f %.3f, "
+              "2.5 radii above the Sahara %.3f %.3f %.3f\n",
+              sahara.x, sahara.y, sahara.z, pacific.x, pacific.y, pacific.z, antarctica.x, antarctica.y,
+              antarctica.z, far.x, far.y, far.z);
+  EXPECT_GT(sahara.x, 0.25);
+  EXPECT_GT(sahara.x, sahara.z);  // reddish sand
+  EXPECT_LT(pacific.y, 0.1);
+  EXPECT_GT(antarctica.y, 0.5);
+  EXPECT_GT(far.y, pacific.y);
+  EXPECT_LT(far.y, sahara.y);
+  pass.set_ground_albedo(sahara);
+  EXPECT_EQ(pass.ground_albedo(), sahara);
+  EXPECT_THROW(globe.regional_albedo(glm::dvec3(NAN, 0.0, 0.0)), atmos::Error);
+}
 }  // namespace

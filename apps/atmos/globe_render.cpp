@@ -109,6 +109,7 @@ struct Targets {
 struct GlobeRenderer::Impl {
   atmos::AtmospherePass pass;
   atmos::Globe globe;
+  bool regional_albedo = false;  // tables with a ground response: the air over the globe's regional albedo
   std::map<std::pair<int, int>, std::unique_ptr<Targets>> targets;
 
   static atmos::GlobeSettings settings() {
@@ -118,7 +119,9 @@ struct GlobeRenderer::Impl {
   }
 
   Impl(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, const atmos::PlanetSurface& surface)
-      : pass(atmosphere, tables, atmos::PlanetFrame{}), globe(atmosphere, surface, pass, settings()) {}
+      : pass(atmosphere, tables, atmos::PlanetFrame{}),
+        globe(atmosphere, surface, pass, settings()),
+        regional_albedo(!tables.ground_response.empty()) {}
 
   ~Impl() { targets.clear(); }
 
@@ -146,6 +149,9 @@ struct GlobeRenderer::Impl {
     glClearNamedFramebufferfv(t.framebuffer, GL_COLOR, 0, clear_colour);
     glClearNamedFramebufferfv(t.framebuffer, GL_DEPTH, 0, &clear_depth);
     glBindFramebuffer(GL_FRAMEBUFFER, t.framebuffer);
+    // The air lit by the ground around the camera (before the globe's draw,
+    // which lights its ground with the pass's sky light).
+    if (regional_albedo) pass.set_ground_albedo(globe.regional_albedo(v.position));
     globe.draw(view);
 
     atmos::FrameInput input;

@@ -25,7 +25,10 @@ class GlobeRenderer {
  public:
   // With an OpenGL 4.5 context current (atmos::Error otherwise, or on a
   // surface the globe cannot open). `surface`: atmos::load_surface of the
-  // planet. Every tile a view needs is generated before it is drawn
+  // planet. With `tables` holding their ground albedo response the air is
+  // lit by the globe's regional albedo around each camera, else by the
+  // atmosphere's constant. Every tile a view
+  // needs is generated before it is drawn
   // (GlobeSettings::complete_every_frame): stills have no next frame.
   GlobeRenderer(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, const atmos::PlanetSurface& surface);
   ~GlobeRenderer();

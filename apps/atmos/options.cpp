@@ -174,10 +174,11 @@ void CacheOptions::add(CLI::App& app) {
 }
 
 LoadedTables load_tables(const PlanetOptions& planet, const TableOptions& tables, const CacheOptions& cache,
-                         bool progress) {
+                         bool progress, bool ground_albedo_response) {
   LoadedTables out;
   out.atmosphere = planet.atmosphere();
   atmos::PrecomputeOptions options = tables.precompute_options();
+  options.ground_albedo_response = ground_albedo_response;
   if (progress) attach_progress(options);
   if (cache.disabled) {
     out.tables = atmos::precompute_tables(out.atmosphere, options);
@@ -328,6 +329,10 @@ void SurfaceOption::add(CLI::App& app) {
                  "with --cpu or --precision half")
       ->type_name("globe|sphere")
       ->check(CLI::IsMember({"globe", "sphere"}).description(""));
+  app.add_flag("--planet-albedo", planet_albedo,
+               "With the globe: light the air and the sky light with the planet file's constant ground albedo "
+               "instead of the mean albedo of the globe's ground around the camera (its regional albedo; the "
+               "tables then hold their ground albedo response)");
 }
 
 // ---------------------------------------------------------------------------

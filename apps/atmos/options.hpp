@@ -91,8 +91,10 @@ struct LoadedTables {
 };
 
 // `progress`: a progress bar on stderr while precomputing, if it is a terminal.
+// `ground_albedo_response`: the tables' response to the ground albedo too
+// (the globe's regional albedo, PrecomputeOptions::ground_albedo_response).
 LoadedTables load_tables(const PlanetOptions& planet, const TableOptions& tables, const CacheOptions& cache,
-                         bool progress);
+                         bool progress, bool ground_albedo_response = false);
 
 // Where the camera (render) or the observer (sample) is, and its local frame:
 // the columns of `local` are east, north and up at the point of the ground
@@ -143,6 +145,7 @@ struct MoonOptions {
 // the sphere supports.
 struct SurfaceOption {
   std::string surface;  // "" = not given
+  bool planet_albedo = false;  // --planet-albedo: the air over the globe lit by the planet file's albedo
 
   void add(CLI::App& app);
   bool globe(bool cpu, bool half_precision) const {

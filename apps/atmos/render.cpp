@@ -205,7 +205,9 @@ int run_render(const RenderOptions& o) {
   // errors come first.
   const atmos::PlanetSurface surface =
       o.surface.globe(o.cpu, o.precision == "half") ? atmos::load_surface(o.planet.planet) : atmos::PlanetSurface{};
-  const LoadedTables loaded = load_tables(o.planet, o.tables, o.cache, true);
+  const LoadedTables loaded =
+      load_tables(o.planet, o.tables, o.cache, true,
+                  o.surface.globe(o.cpu, o.precision == "half") && !o.surface.planet_albedo);
   const atmos::Atmosphere& a = loaded.atmosphere;
 
   // The context outlives every GL object below (declared first, destroyed last).
@@ -326,7 +328,7 @@ Command add_render_command(CLI::App& app) {
             // --wavelengths 15).
             const std::set<std::string> gallery_options = {
                 "--planet",    "--orders",   "--wavelengths", "--density-scale", "--solar",  "--tables",
-                "--cache-dir", "--no-cache", "--surface",     "--precision",     "--cpu"};
+                "--cache-dir", "--no-cache", "--surface",     "--planet-albedo", "--precision",     "--cpu"};
             o->gallery = true;
             for (const auto* opt : cmd->get_options())
               if (opt->count() > 0 && gallery_options.count(opt->get_name()) == 0) o->gallery = false;

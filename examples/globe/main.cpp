@@ -87,8 +87,11 @@ int run(const Options& o) {
   // The pass's air reaches down to the lowest ground (Mars's lowlands lie
   // kilometres below its datum); the globe keeps the planet's datum.
   const atmos::Atmosphere air = atmos::extend_below_datum(planet, surface);
-  const atmos::CacheResult cached =
-      atmos::load_or_precompute_tables(air, atmos::PrecomputeOptions{}, atmos::default_cache_directory());
+  // With the tables' response to the ground albedo, the air is lit by the
+  // ground below the camera (Globe::regional_albedo), not by a constant.
+  atmos::PrecomputeOptions precompute;
+  precompute.ground_albedo_response = true;
+  const atmos::CacheResult cached = atmos::load_or_precompute_tables(air, precompute, atmos::default_cache_directory());
   // The engine's world: kilometres, planet centred at the origin.
   atmos::PlanetFrame frame;
   frame.units_per_metre = 1e-3;
@@ -155,6 +158,8 @@ int run(const Options& o) {
     glClearNamedFramebufferfv(target, GL_COLOR, 0, clear_colour);
     glClearNamedFramebufferfv(target, GL_DEPTH, 0, &clear_depth);
     glBindFramebuffer(GL_FRAMEBUFFER, target);
+    // Before the globe's draw: its ground is lit with the pass's sky light.
+    pass.set_ground_albedo(globe.regional_albedo(camera));
     globe.draw(view);
     glFinish();
     const double terrain_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

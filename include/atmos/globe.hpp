@@ -174,6 +174,16 @@ class Globe {
   // Height of the drawn surface's relief above the datum, metres, below the
   // world position `position` (engine units): what a camera must stay above.
   double height_m(const glm::dvec3& position) const;
+  // The mean albedo of the ground around the point below `position` (engine
+  // units), linear RGB in [0, 1]: over the spherical cap centred there whose
+  // radius is the distance to the horizon from `position` (at least 50 km,
+  // at most the part of the planet visible from there), uniformly in area,
+  // from 256 points of the surface's albedo at the cap's scale. Hand it to
+  // AtmospherePass::set_ground_albedo, so that the air and the sky light
+  // follow the ground below the camera (snow, desert, sea) rather than the
+  // atmosphere's constant. Throws atmos::Error for a non-finite position.
+  glm::dvec3 regional_albedo(const glm::dvec3& position) const;
+
   // The lowest and highest surface of the planet above the datum, metres.
   double min_height_m() const;
   double max_height_m() const;

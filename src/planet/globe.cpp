@@ -821,6 +821,44 @@ double Globe::height_m(const glm::dvec3& position) const {
   return impl_->builder.surface_height_m(r / length);
 }
 
+glm::dvec3 Globe::regional_albedo(const glm::dvec3& position) const {
+  const PlanetFrame& frame = impl_->pass->frame();
+  const glm::dvec3 r = (position - frame.centre) / frame.units_per_metre;
+  const double length = glm::length(r);
+  if (!std::isfinite(length)) throw Error("globe: regional_albedo of a non-finite position");
+  const double radius = impl_->builder.bounds().radius_m;
+  const glm::dvec3 nadir = length > 0.0 ? r / length : glm::dvec3(0.0, 0.0, 1.0);
+  // The cap: the horizon's distance sqrt(2 R h + h^2) as an angle on the
+  // sphere, at least 50 km, at most the visible cap acos(R / (R + h)).
+  const double h = std::max(length - radius, 0.0);
+  const double visible = std::acos(radius / (radius + h));
+  const double horizon = std::sqrt(2.0 * radius * h + h * h) / radius;
+  const double angle = std::max(std::min(horizon, visible), 50e3 / radius);
+  // A Fibonacci lattice on the cap, uniform in area (cos theta uniform in
+  // [cos angle, 1]; González 2010), around the nadir.
+  constexpr int kSamples = 256;
+  const glm::dvec3 helper = std::abs(nadir.z) < 0.9 ? glm::dvec3(0.0, 0.0, 1.0) : glm::dvec3(1.0, 0.0, 0.0);
+  const glm::dvec3 east = glm::normalize(glm::cross(helper, nadir));
+  const glm::dvec3 north = glm::cross(nadir, east);
+  const double golden_angle = M_PI * (3.0 - std::sqrt(5.0));
+  std::vector<glm::dvec3> directions(kSamples);
+  for (int i = 0; i < kSamples; ++i) {
+    const double cos_theta = 1.0 - (i + 0.5) / kSamples * (1.0 - std::cos(angle));
+    const double sin_theta = std::sqrt(std::max(0.0, 1.0 - cos_theta * cos_theta));
+    const double phi = golden_angle * i;
+    directions[size_t(i)] =
+        cos_theta * nadir + sin_theta * (std::cos(phi) * east + std::sin(phi) * north);
+  }
+  // The albedo at the scale of the samples' spacing (the imagery's overview
+  // of that resolution averages what lies between them).
+  const double spacing_m = radius * angle * std::sqrt(M_PI / kSamples);
+  std::vector<glm::vec3> albedos(kSamples);
+  impl_->surface.albedos(directions.data(), directions.size(), spacing_m, albedos.data());
+  glm::dvec3 sum(0.0);
+  for (const glm::vec3& a : albedos) sum += glm::dvec3(a);
+  return glm::clamp(sum / double(kSamples), 0.0, 1.0);
+}
+
 double Globe::min_height_m() const { return impl_->builder.min_surface_height_m(); }
 double Globe::max_height_m() const { return impl_->builder.max_surface_height_m(); }
 const GlobeStats& Globe::last_stats() const { return impl_->stats; }
