@@ -454,6 +454,8 @@ struct RasterSource::Impl {
       }
     }
     if (!is_geographic && n > 0) {
+      // A PROJ transformation is not to be used by two threads at once.
+      std::lock_guard<std::mutex> lock(mutex);
       ScopedErrorCapture errors;
       OCTTransformEx(to_raster, int(n), px.data(), py.data(), nullptr, ok.data());
     }
@@ -567,8 +569,12 @@ const std::string& RasterSource::source() const { return impl_->settings.source;
 
 glm::dvec3 RasterSource::direction_in_extent(double u, double v) const {
   double lat = 0, lon = 0;
-  if (!impl_->pixel_to_geographic(u * double(impl_->width), v * double(impl_->height), lat, lon))
-    return {0.0, 0.0, 1.0};
+  bool ok = false;
+  {
+    std::lock_guard<std::mutex> lock(impl_->mutex);  // the PROJ transformation
+    ok = impl_->pixel_to_geographic(u * double(impl_->width), v * double(impl_->height), lat, lon);
+  }
+  if (!ok) return {0.0, 0.0, 1.0};
   return direction_of(lat, lon);
 }
 

@@ -24,7 +24,8 @@
 // filtered pyramid there.
 //
 // Thread safety: a RasterSource may be sampled from several threads (a
-// mutex serialises GDAL's dataset, which is not thread-safe).
+// mutex serialises GDAL's dataset and the PROJ transformations, which are
+// not thread-safe).
 #pragma once
 
 #include <glm/vec3.hpp>
