@@ -43,7 +43,10 @@
 // (enabled), and disables face culling and blending. With shadows it also
 // renders into its own framebuffers (then binds again the draw framebuffer
 // that was bound), binds texture unit first_unit+5 and a sampler object
-// there, and leaves depth clamping disabled.
+// there, and leaves depth clamping disabled. Unless
+// GlobeSettings::complete_every_frame, a globe runs one thread of its own
+// that builds tile meshes on the CPU (it makes no GL call); the destructor
+// stops it, waiting for the tile it is building.
 #pragma once
 
 #include <glm/mat4x4.hpp>
@@ -66,17 +69,23 @@ struct GlobeSettings {
   // the viewport's height (the bound refines tiles until it holds, down to
   // the finest level).
   double max_screen_error_px = 1.0;
-  // Tiles generated and uploaded per draw() at most (bounds a frame's CPU
-  // time): until its tile is ready an area is drawn by its nearest resident
-  // ancestor, never left open.
+  // Tiles uploaded per draw() at most (bounds a frame's upload time; about
+  // 23 KB each). A background thread, one per globe, builds the tiles a
+  // draw lacks and their ancestors, coarse levels first, then the nearest;
+  // the draw uploads those it has finished, and until its tile arrives an
+  // area is drawn by its nearest resident ancestor, never left open. The
+  // thread keeps at most twice this many finished tiles waiting (CPU
+  // memory).
   int max_tiles_per_frame = 48;
   // GPU memory of the resident tiles, bytes, never exceeded: the least
   // recently drawn tiles are evicted, and new tiles that would not fit
   // beside the current frame's stay pending, drawn by their ancestors (a
-  // coarser view, not more memory).
+  // coarser view, not more memory); they are not built either. At least
+  // the 30 tiles of levels 0 and 1 (0.7 MB), always resident.
   std::size_t memory_cap_bytes = std::size_t(256) << 20;
-  // Generate every tile the view needs before drawing (stills, tests,
-  // benchmarks), within the memory cap: no ancestor stands in.
+  // Build every tile the view needs in draw() (in parallel, with TBB) and
+  // upload it before drawing (stills, tests, benchmarks), within the memory
+  // cap: no ancestor stands in, no background thread, no upload bound.
   bool complete_every_frame = false;
   // The texture units of the atmosphere's GLSL library: first_unit..first_unit+4
   // (and first_unit+5: the shadow maps).
@@ -122,11 +131,15 @@ struct GlobeView {
 struct GlobeStats {
   int tiles_drawn = 0;      // including ancestors standing in for pending tiles
   int tiles_pending = 0;    // selected (for the view or as shadow casters) but not yet resident
-  int tiles_generated = 0;  // this draw
+  int tiles_generated = 0;  // made resident this draw (built, here or by the background thread, and uploaded)
+  int tiles_queued = 0;     // after the draw: requests the background thread has yet to build
+  int tiles_ready = 0;      // after the draw: tiles built and waiting for an upload (CPU memory)
   int nodes_visited = 0;    // quadtree nodes visited by the selection
   long long triangles = 0;  // drawn, skirts included
   double selection_ms = 0.0;   // CPU: the quadtree traversal and culling
-  double generation_ms = 0.0;  // CPU: this draw's new tiles (relief and meshes) and their upload
+  // CPU time of draw()'s thread for new tiles: their requests and uploads,
+  // and with complete_every_frame their building (relief and meshes).
+  double generation_ms = 0.0;
   std::size_t resident_bytes = 0;  // GPU memory of the resident tiles after the draw
   int shadow_cascades = 0;        // cascades drawn (0: none this frame)
   int shadow_casters = 0;         // tile draws into the cascades, all cascades together

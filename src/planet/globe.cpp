@@ -28,6 +28,7 @@
 #include "planet/globe_shadows.hpp"
 #include "planet/surface.hpp"
 #include "planet/tile_selection.hpp"
+#include "planet/tile_streamer.hpp"
 
 namespace atmos {
 
@@ -195,6 +196,13 @@ TileProgram lit_program(const AtmospherePass& pass, int first_unit, bool shadows
   return program;
 }
 
+// The tiles always resident: levels 0 and 1, the coarsest stand-ins, whose
+// chords lie within a few kilometres of the datum sphere (a level-0 tile's
+// 16 quads span 5.6 degrees each, and the middle of their triangles sags
+// about 15 km below the sphere; a level-1 tile's, 4 km).
+constexpr int kPermanentLevel = 1;
+constexpr int kPermanentTiles = 6 * (1 + 4);
+
 // The nearest view depth of any point of a tile's volume between the
 // radii: its nearest distance times the cosine of the frustum's widest
 // angle from the view axis (a point at distance d inside the frustum is at
@@ -230,6 +238,9 @@ struct Globe::Impl {
   std::size_t resident_bytes = 0;
   long long frame = 0;
   GlobeStats stats;
+  // The background builder of tiles, without complete_every_frame (none
+  // with it). After the builder it reads, and stopped first.
+  std::unique_ptr<planet::TileStreamer> streamer;
 
   Impl(const Atmosphere& a, const PlanetSurface& s, const AtmospherePass& p, const GlobeSettings& g)
       : pass(&p),
@@ -238,6 +249,7 @@ struct Globe::Impl {
         builder(surface, a.bottom_radius_m) {}
 
   ~Impl() {
+    streamer.reset();  // joins its thread, which reads builder and surface
     shadows.reset();
     for (auto& [key, tile] : resident) glDeleteBuffers(1, &tile.buffer);
     if (index_buffer != 0) glDeleteBuffers(1, &index_buffer);
@@ -338,21 +350,122 @@ struct Globe::Impl {
   void render_shadow_maps(const std::vector<std::vector<TileDraw>>& casters, const std::vector<TileDraw>& receivers,
                           const glm::dvec3& camera, GlobeStats& out);
 
-  // Evicts the least recently drawn tiles above the memory cap, never the
-  // six roots nor a tile of the current frame.
-  void evict() {
-    const std::size_t tile_bytes = builder.vertex_count() * sizeof(planet::TileVertex);
-    if (resident_bytes <= settings.memory_cap_bytes) return;
+  std::size_t tile_bytes() const { return builder.vertex_count() * sizeof(planet::TileVertex); }
+
+  // The resident tiles a frame keeps: those that selections draw (each
+  // selected tile, or its nearest resident ancestor) and their resident
+  // ancestors.
+  std::set<std::uint64_t> kept_by(const std::vector<const planet::Selection*>& selections) const {
+    std::set<std::uint64_t> kept;
+    for (const planet::Selection* s : selections)
+      for (const planet::SelectedTile& t : s->tiles) {
+        TileKey key = t.key;
+        while (resident.find(key.packed()) == resident.end()) key = planet::parent(key);
+        for (;; key = planet::parent(key)) {
+          if (resident.find(key.packed()) != resident.end() && !kept.insert(key.packed()).second) break;
+          if (key.level == 0) break;
+        }
+      }
+    return kept;
+  }
+
+  // The tiles selections need that are not resident, each once: the
+  // selected tiles and their ancestors. An ancestor's heights bound its
+  // descendants' more tightly than the planet's (the selection culls and
+  // refines less: tile_selection.hpp), and it stands in for them while they
+  // load.
+  std::vector<TileKey> needed_by(const std::vector<const planet::Selection*>& selections) const {
+    std::vector<TileKey> out;
+    std::set<std::uint64_t> listed;
+    for (const planet::Selection* s : selections)
+      for (const planet::SelectedTile& t : s->tiles)
+        for (TileKey key = t.key; resident.find(key.packed()) == resident.end(); key = planet::parent(key)) {
+          if (!listed.insert(key.packed()).second) break;
+          out.push_back(key);
+        }
+    return out;
+  }
+
+  // The selected tiles that are not resident, each once.
+  int pending_in(const std::vector<const planet::Selection*>& selections) const {
+    std::set<std::uint64_t> listed;
+    for (const planet::Selection* s : selections)
+      for (const planet::SelectedTile& t : s->tiles)
+        if (resident.find(t.key.packed()) == resident.end()) listed.insert(t.key.packed());
+    return int(listed.size());
+  }
+
+  // The memory cap: the resident tiles a frame keeps (kept_by) and the
+  // permanent ones stay; this many new tiles fit in what remains. Tiles
+  // beyond it stay pending, their ancestors drawn instead: the view is
+  // coarser, the cap holds.
+  std::size_t room_for(const std::set<std::uint64_t>& kept) const {
+    const std::size_t kept_bytes = (kept.size() + std::size_t(kPermanentTiles)) * tile_bytes();
+    return settings.memory_cap_bytes > kept_bytes ? (settings.memory_cap_bytes - kept_bytes) / tile_bytes() : 0;
+  }
+
+  // Evicts the least recently drawn tiles, never a permanent one nor a tile
+  // of `kept`, until `incoming` new tiles (at most room_for(kept)) fit
+  // under the memory cap: the cap holds at every upload, not only after
+  // the draw.
+  void make_room(std::size_t incoming, const std::set<std::uint64_t>& kept) {
+    const std::size_t bytes = tile_bytes(), needed = incoming * bytes;
+    if (resident_bytes + needed <= settings.memory_cap_bytes) return;
     std::vector<std::pair<long long, std::uint64_t>> candidates;
     for (const auto& [packed, tile] : resident)
-      if (tile.last_drawn < frame && tile.level > 0) candidates.emplace_back(tile.last_drawn, packed);
+      if (tile.level > kPermanentLevel && kept.count(packed) == 0) candidates.emplace_back(tile.last_drawn, packed);
     std::sort(candidates.begin(), candidates.end());
     for (const auto& [last, packed] : candidates) {
-      if (resident_bytes <= settings.memory_cap_bytes) break;
+      if (resident_bytes + needed <= settings.memory_cap_bytes) break;
       glDeleteBuffers(1, &resident[packed].buffer);
       resident.erase(packed);
-      resident_bytes -= tile_bytes;
+      resident_bytes -= bytes;
     }
+  }
+
+  // complete_every_frame: builds every tile the selections need that fits
+  // under the cap, coarse levels first, in parallel (TBB), and uploads
+  // them. Returns the selected tiles still pending (those beyond the cap).
+  int complete(const std::vector<const planet::Selection*>& selections, GlobeStats& out) {
+    std::vector<TileKey> batch = needed_by(selections);
+    std::stable_sort(batch.begin(), batch.end(), [](const TileKey& a, const TileKey& b) { return a.level < b.level; });
+    const std::set<std::uint64_t> kept = kept_by(selections);
+    batch.resize(std::min(batch.size(), room_for(kept)));
+    std::vector<planet::TileMesh> meshes(batch.size());
+    tbb::parallel_for(size_t(0), batch.size(), [&](size_t i) { meshes[i] = builder.build(batch[i]); });
+    make_room(batch.size(), kept);
+    for (size_t i = 0; i < batch.size(); ++i) upload(batch[i], meshes[i]);
+    out.tiles_generated += int(batch.size());
+    return pending_in(selections);
+  }
+
+  // Streaming: asks the worker for the tiles the selections need that fit
+  // under the cap (coarse levels first, then the nearest to the camera),
+  // and uploads at most max_tiles_per_frame of those it has finished.
+  // Returns the selected tiles still pending.
+  int stream(const std::vector<const planet::Selection*>& selections, const glm::dvec3& camera, GlobeStats& out) {
+    const std::vector<TileKey> wanted = needed_by(selections);
+    const std::set<std::uint64_t> kept = kept_by(selections);
+    const std::size_t room = room_for(kept);
+    const planet::ReliefBounds& bounds = builder.bounds();
+    std::vector<planet::TileRequest> requests;
+    requests.reserve(wanted.size());
+    for (const TileKey& key : wanted)
+      requests.push_back({key, planet::nearest_distance_m(camera, key, bounds.radius_m + bounds.min_height_m,
+                                                          bounds.radius_m + bounds.max_height_m)});
+    streamer->request(requests, room);
+    std::vector<planet::ReadyTile> ready =
+        streamer->take(std::min(room, std::size_t(settings.max_tiles_per_frame)));
+    make_room(ready.size(), kept);
+    for (const planet::ReadyTile& t : ready)
+      if (resident.find(t.key.packed()) == resident.end()) {
+        upload(t.key, t.mesh);
+        ++out.tiles_generated;
+      }
+    const planet::TileStreamer::Counts counts = streamer->counts();
+    out.tiles_queued = int(counts.queued);
+    out.tiles_ready = int(counts.ready);
+    return pending_in(selections);
   }
 };
 
@@ -558,9 +671,9 @@ Globe::Globe(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
                 " m, below the bottom of the pass's atmosphere (" +
                 std::to_string(pass.bottom_radius_m() - atmosphere.bottom_radius_m) +
                 " m): build the pass from extend_below_datum(atmosphere, surface)");
-  if (settings.memory_cap_bytes < 6 * p.builder.vertex_count() * sizeof(planet::TileVertex))
+  if (settings.memory_cap_bytes < std::size_t(kPermanentTiles) * p.builder.vertex_count() * sizeof(planet::TileVertex))
     throw Error("globe settings: memory_cap_bytes " + std::to_string(settings.memory_cap_bytes) +
-                " holds less than the six root tiles");
+                " holds less than the " + std::to_string(kPermanentTiles) + " tiles of levels 0 and 1");
 
   const std::string version = "#version 450 core\n";
   p.program = lit_program(pass, settings.first_unit, false, false);
@@ -585,10 +698,19 @@ Globe::Globe(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
   glNamedBufferStorage(p.index_buffer, GLsizeiptr(indices.size() * sizeof(std::uint32_t)), indices.data(), 0);
   glVertexArrayElementBuffer(p.vertex_array, p.index_buffer);
 
-  for (int face = 0; face < 6; ++face) {
-    const TileKey root{face, 0, 0, 0};
-    p.upload(root, p.builder.build(root));
-  }
+  // The permanent tiles, levels 0 and 1: every area is drawn at least by
+  // its level-1 tile, even before its own has arrived.
+  std::vector<TileKey> base;
+  for (int face = 0; face < 6; ++face)
+    for (int level = 0; level <= kPermanentLevel; ++level)
+      for (std::uint32_t y = 0; y < (1u << level); ++y)
+        for (std::uint32_t x = 0; x < (1u << level); ++x) base.push_back({face, level, x, y});
+  std::vector<planet::TileMesh> meshes(base.size());
+  tbb::parallel_for(size_t(0), base.size(), [&](size_t i) { meshes[i] = p.builder.build(base[i]); });
+  for (size_t i = 0; i < base.size(); ++i) p.upload(base[i], meshes[i]);
+  // Finished meshes wait for at most two frames' uploads.
+  if (!settings.complete_every_frame)
+    p.streamer = std::make_unique<planet::TileStreamer>(p.builder, 2 * std::size_t(settings.max_tiles_per_frame));
 }
 
 Globe::~Globe() = default;
@@ -659,50 +781,13 @@ void Globe::draw(const GlobeView& view) {
   stats.selection_ms = ms_since(t0);
   stats.nodes_visited = selection.nodes_visited;
 
-  // --- New tiles: generated in parallel (CPU), uploaded here; first the
-  // view's, then the shadow casters' with what remains of the budget. ---
+  // --- New tiles. complete_every_frame: every missing tile built here (in
+  // parallel) and uploaded, first the view's, then the shadow casters'.
+  // Otherwise the worker's finished tiles are uploaded once the casters
+  // are known (below). ---
+  const bool complete = p.settings.complete_every_frame;
   const auto t1 = Clock::now();
-  const std::size_t tile_bytes = p.builder.vertex_count() * sizeof(planet::TileVertex);
-  int budget = p.settings.complete_every_frame ? std::numeric_limits<int>::max() : p.settings.max_tiles_per_frame;
-  const auto generate = [&](const std::vector<const planet::Selection*>& selections) {
-    std::vector<TileKey> missing;
-    {
-      std::set<std::uint64_t> listed;
-      for (const planet::Selection* s : selections)
-        for (const planet::SelectedTile& t : s->tiles)
-          if (p.resident.find(t.key.packed()) == p.resident.end() && listed.insert(t.key.packed()).second)
-            missing.push_back(t.key);
-    }
-    // Coarse levels first: they stand in for the others.
-    std::stable_sort(missing.begin(), missing.end(),
-                     [](const TileKey& a, const TileKey& b) { return a.level < b.level; });
-    std::vector<TileKey> batch = missing;
-    if (batch.size() > size_t(budget)) batch.resize(size_t(budget));
-    // The memory cap: the resident tiles this frame draws (the selected ones,
-    // and the nearest resident ancestors of the others) stay; new tiles fit in
-    // what remains. Tiles that do not fit stay pending, their ancestors drawn
-    // instead: the view is coarser, the cap holds.
-    {
-      std::set<std::uint64_t> kept;
-      for (const planet::Selection* s : selections)
-        for (const planet::SelectedTile& t : s->tiles) {
-          TileKey key = t.key;
-          while (p.resident.find(key.packed()) == p.resident.end()) key = planet::parent(key);
-          kept.insert(key.packed());
-        }
-      const std::size_t kept_bytes = (kept.size() + 6) * tile_bytes;  // the roots always stay
-      const std::size_t room =
-          p.settings.memory_cap_bytes > kept_bytes ? (p.settings.memory_cap_bytes - kept_bytes) / tile_bytes : 0;
-      if (batch.size() > room) batch.resize(room);
-    }
-    std::vector<planet::TileMesh> meshes(batch.size());
-    tbb::parallel_for(size_t(0), batch.size(), [&](size_t i) { meshes[i] = p.builder.build(batch[i]); });
-    for (size_t i = 0; i < batch.size(); ++i) p.upload(batch[i], meshes[i]);
-    budget -= int(batch.size());
-    stats.tiles_generated += int(batch.size());
-    return int(missing.size() - batch.size());
-  };
-  stats.tiles_pending = generate({&selection});
+  if (complete) stats.tiles_pending = p.complete({&selection}, stats);
   stats.generation_ms = ms_since(t1);
 
   // --- The sun's cascades and their casters: for each cascade the tiles
@@ -728,14 +813,17 @@ void Globe::draw(const GlobeView& view) {
       casters.push_back(planet::select_tiles(light_camera, light_settings, p.builder.bounds(), known_range));
     }
     stats.shadow_selection_ms = ms_since(t_shadows);
-    const auto t2 = Clock::now();
-    // The view's tiles count again: the memory cap holds all, and the
-    // pending tiles are the view's and the casters'.
-    std::vector<const planet::Selection*> all{&selection};
-    for (const planet::Selection& c : casters) all.push_back(&c);
-    stats.tiles_pending = generate(all);
-    stats.generation_ms += ms_since(t2);
   }
+  // The view's tiles count again: the memory cap holds all, and the pending
+  // tiles are the view's and the casters'.
+  std::vector<const planet::Selection*> all{&selection};
+  for (const planet::Selection& c : casters) all.push_back(&c);
+  const auto t2 = Clock::now();
+  if (!complete)
+    stats.tiles_pending = p.stream(all, camera, stats);
+  else if (shadowed)
+    stats.tiles_pending = p.complete(all, stats);
+  stats.generation_ms += ms_since(t2);
 
   ++p.frame;
   const std::vector<TileDraw> draws = p.resolve(selection);
@@ -807,7 +895,6 @@ void Globe::draw(const GlobeView& view) {
 
   stats.triangles = p.draw_tiles(draws, program, camera);
   stats.tiles_drawn = int(draws.size());
-  p.evict();
   stats.resident_bytes = p.resident_bytes;
   p.stats = stats;
 }
