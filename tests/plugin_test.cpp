@@ -474,6 +474,95 @@ TEST_F(Plugin, ClassifiedPixelsMatchTheCpuTwinFromOrbit) {
   EXPECT_LE(rms, kRmsRelative);
 }
 
+// From above the atmosphere the surfaces the space volume covers
+// (composite.glsl: space_volume_covers; 13 % and 37 % of them here) read
+// it, whose texels are the exact per-pixel evaluation at their directions
+// and distances: the volume's error is its interpolation. Against the exact
+// evaluation of every pixel (the CPU twin both ways), surfaces only,
+// relative to the pixel's luminance:
+// from 400 km looking towards the limb with the sun 6° up (the low-sun band,
+// grazing rays near the limb, a 6 km mountain), and from 2.5 planet radii
+// looking down at the whole disc with the terminator across it. The
+// volume's directions are the image's (128 x 72 texels whatever the image
+// size), so a small image with the field of view of a full-size one tests
+// the same angular texel spacing.
+constexpr double kSpaceVolumeMaxRelative = 0.03;  // measured 1.3e-2 (400 km), 1.6e-2 (2.5 radii)
+constexpr double kSpaceVolumeRmsRelative = 0.01;  // measured 1.7e-3, 5.4e-3
+
+TEST_F(Plugin, SpaceVolumeMatchesTheExactEvaluation) {
+  const glm::dvec3 site = glm::normalize(glm::dvec3(0.3, 0.2, 0.93));
+  const LocalFrame l = local_frame(site);
+  std::vector<std::pair<std::string, Shot>> shots;
+  Shot limb;
+  limb.camera = site * (kEarthRadius + 400e3);
+  limb.forward = direction(l, 0.0, -17.0);
+  limb.up_hint = l.up;
+  limb.fov_deg = 60.0;
+  limb.width = 192;
+  limb.height = 108;
+  limb.encoding = DepthEncoding::reversed_z;
+  limb.sun = direction(l, -60.0, 6.0);
+  limb.mountain_centre = glm::normalize(site * kEarthRadius + l.north * 900e3) * (kEarthRadius - 14e3);
+  limb.mountain_radius_m = 20e3;
+  shots.push_back({"400 km, low sun, limb", limb});
+  Shot disc = limb;
+  disc.camera = site * (kEarthRadius * 3.5);
+  disc.forward = -site;
+  disc.up_hint = l.north;
+  disc.sun = direction(l, 0.0, 25.0);
+  disc.mountain_radius_m = 0.0;
+  shots.push_back({"2.5 radii, terminator", disc});
+  for (auto& [name, shot] : shots) {
+    EngineFrame e = make_engine_frame(shot);
+    std::vector<glm::ivec2> pixels;
+    for (int y = 0; y < shot.height; ++y)
+      for (int x = 0; x < shot.width; ++x)
+        if (e.buffers.depth[size_t(y) * size_t(shot.width) + size_t(x)] > 0.0f) pixels.push_back({x, y});
+    ASSERT_GT(pixels.size(), 1000u) << name;
+    const std::vector<glm::vec3> volume =
+        atmos::gpu::composite_cpu(*earth_, *tables_, engine_frame(), e.input, e.buffers, pixels, true);
+    const std::vector<glm::vec3> exact =
+        atmos::gpu::composite_cpu(*earth_, *tables_, engine_frame(), e.input, e.buffers, pixels, false);
+    double max_relative = 0.0, sum_squares = 0.0, changed = 0.0;
+    size_t worst = 0;
+    // The surfaces the volume covers (the others are evaluated exactly).
+    const atmos::physics::AtmosphereParams params = atmos::physics::make_render_params(*earth_, tables_->sizes);
+    const glm::mat3 matrix = atmos::physics::channels_to_srgb_matrix(tables_->wavelengths_nm);
+    const atmos::physics::PassFrame frame = atmos::gpu::make_pass_frame(
+        e.input, engine_frame(), params, matrix, atmos::gpu::own_sun_illuminance(params, matrix));
+    ASSERT_TRUE(frame.space_volume) << name;
+    const atmos::gpu::SpaceVolumeColumns columns = atmos::gpu::space_volume_columns(params, frame);
+    const atmos::physics::sampler2D regular{SPACE_VOLUME_WIDTH, SPACE_VOLUME_HEIGHT, columns.regular.data()};
+    size_t covered = 0;
+    for (const glm::ivec2& pixel : pixels) {
+      const glm::vec2 ndc = (glm::vec2(pixel) + 0.5f) / glm::vec2(float(shot.width), float(shot.height)) * 2.0f - 1.0f;
+      covered += atmos::physics::space_volume_covers(
+                     frame, regular, atmos::physics::pixel_ray(frame.inverse_projection, frame.view_to_world, ndc))
+                     ? 1
+                     : 0;
+    }
+    for (size_t k = 0; k < pixels.size(); ++k) {
+      const double reference = std::max(luminance(exact[k]), 1e-3);
+      const double difference = glm::length(glm::dvec3(volume[k]) - glm::dvec3(exact[k])) / reference;
+      if (difference > max_relative) worst = k;
+      max_relative = std::max(max_relative, difference);
+      sum_squares += difference * difference;
+      changed = std::max(changed, double(glm::length(volume[k] - exact[k])));
+    }
+    const double rms = std::sqrt(sum_squares / double(pixels.size()));
+    std::printf("%s: %zu surface pixels, %zu from the volume; against exact: max %.3e at (%d, %d) [exact %.5g, "
+                "volume %.5g], rms %.3e\n",
+                name.c_str(), pixels.size(), covered, max_relative, pixels[worst].x, pixels[worst].y,
+                luminance(exact[worst]), luminance(volume[worst]), rms);
+    atmos_test::record_figure("space volume, " + name + ": max relative difference", max_relative, "", "<= 3e-2");
+    atmos_test::record_figure("space volume, " + name + ": RMS relative difference", rms, "", "<= 1e-2");
+    EXPECT_GT(changed, 0.0) << name << ": the volume was not used";
+    EXPECT_GT(double(covered), 0.1 * double(pixels.size())) << name;
+    EXPECT_LE(max_relative, kSpaceVolumeMaxRelative) << name;
+    EXPECT_LE(rms, kSpaceVolumeRmsRelative) << name;
+  }
+}
+
 // The same view with standard depth (finite and infinite far plane, as a
 // depth texture), reversed-Z and logarithmic depth: the images agree. The
 // encodings quantise the surfaces' distances differently (float depth), so

@@ -170,7 +170,7 @@ struct FrameInput {
 // Renderer::last_frame_ms); zero for untimed frames.
 struct PassTimings {
   double sky_view_ms = 0.0;   // the per-frame sky-view table (cameras in the atmosphere)
-  double volume_ms = 0.0;     // the per-frame aerial-perspective volume (cameras in the atmosphere)
+  double volume_ms = 0.0;     // the per-frame aerial-perspective volume (cameras low in the atmosphere or above it)
   double composite_ms = 0.0;  // the full-screen pass: sky, surfaces, aerial perspective, shafts
   double total_ms() const { return sky_view_ms + volume_ms + composite_ms; }
 };

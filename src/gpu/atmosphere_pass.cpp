@@ -35,6 +35,7 @@ constexpr GLuint kAlbedoUnit = 9;
 constexpr GLuint kNormalUnit = 10;
 constexpr GLuint kShadowUnit = 11;
 constexpr GLuint kVolumeUnit = 12;  // 12..15: the aerial-perspective volume
+constexpr GLuint kSpaceRegularColumnsUnit = 16;  // the space volume's regular columns
 
 bool is_finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
@@ -119,6 +120,12 @@ struct AtmospherePass::Impl {
   // eclipse) and textures (see composite.glsl).
   GLuint volume_programs[3] = {0, 0, 0};
   GLuint volume[4] = {0, 0, 0, 0};
+  // The space volume (cameras above the atmosphere, see composite.glsl):
+  // its compute program, textures and the buffer of its column list.
+  GLuint space_program = 0;
+  GLuint space_volume[4] = {0, 0, 0, 0};
+  GLuint space_columns = 0;
+  GLuint space_regular_columns = 0;  // 1 or 0 per column (composite.glsl: space_volume_covers)
   std::unique_ptr<physics::AtmosphereParams> params;
   GLuint vertex_array = 0;
   GLuint framebuffer = 0;
@@ -145,6 +152,14 @@ struct AtmospherePass::Impl {
     }
     glDeleteTextures(4, volume);
     for (GLuint& texture : volume) texture = 0;
+    if (space_program != 0) glDeleteProgram(space_program);
+    space_program = 0;
+    glDeleteTextures(4, space_volume);
+    for (GLuint& texture : space_volume) texture = 0;
+    if (space_columns != 0) glDeleteBuffers(1, &space_columns);
+    space_columns = 0;
+    if (space_regular_columns != 0) glDeleteTextures(1, &space_regular_columns);
+    space_regular_columns = 0;
     if (vertex_array != 0) glDeleteVertexArrays(1, &vertex_array);
     if (framebuffer != 0) glDeleteFramebuffers(1, &framebuffer);
     if (own_output != 0) glDeleteTextures(1, &own_output);
@@ -186,6 +201,17 @@ AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const Tables& table
       glTextureStorage3D(texture, 1, GL_RGBA32F, AP_WIDTH, AP_HEIGHT, AP_SLICES);
       gpu::set_table_sampling(texture);
     }
+    glCreateTextures(GL_TEXTURE_3D, 4, p.space_volume);
+    for (GLuint texture : p.space_volume) {
+      glTextureStorage3D(texture, 1, GL_RGBA32F, SPACE_VOLUME_WIDTH, SPACE_VOLUME_HEIGHT, SPACE_VOLUME_SLICES);
+      gpu::set_table_sampling(texture);
+    }
+    glCreateTextures(GL_TEXTURE_2D, 1, &p.space_regular_columns);
+    glTextureStorage2D(p.space_regular_columns, 1, GL_RGBA32F, SPACE_VOLUME_WIDTH, SPACE_VOLUME_HEIGHT);
+    gpu::set_table_sampling(p.space_regular_columns);
+    glCreateBuffers(1, &p.space_columns);
+    glNamedBufferStorage(p.space_columns, GLsizeiptr(sizeof(GLint)) * SPACE_VOLUME_WIDTH * SPACE_VOLUME_HEIGHT,
+                         nullptr, GL_DYNAMIC_STORAGE_BIT);
     glCreateSamplers(1, &p.depth_sampler);
     glSamplerParameteri(p.depth_sampler, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glSamplerParameteri(p.depth_sampler, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
@@ -378,7 +404,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     GLuint& volume_program = p.volume_programs[eclipse ? 2 : low_sun ? 1 : 0];
     if (volume_program == 0)
       volume_program = gpu::link_compute_program(gpu::aerial_perspective_compute_shader_source(
-          p.tables->params(), p.tables->spectral(), low_sun, eclipse));
+          p.tables->params(), p.tables->spectral(), low_sun, eclipse, false, true));
     glUseProgram(volume_program);
     if (eclipse) gpu::set_moons_uniforms(volume_program, frame.moons);
     glProgramUniform3f(volume_program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
@@ -397,6 +423,47 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
     if (input.timed) timings.volume_ms = p.timer->end_ms();
     for (GLuint i = 0; i < 4; ++i) glBindImageTexture(i, 0, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+  }
+
+  // Pass 2': the space volume, for cameras above the atmosphere: its
+  // regular columns (gpu::space_volume_columns, listed by the CPU), the only
+  // ones that covered pixels read.
+  if (frame.space_volume) {
+    const gpu::SpaceVolumeColumns columns = gpu::space_volume_columns(p.tables->params(), frame);
+    const int count = int(columns.order.size());
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTextureSubImage2D(p.space_regular_columns, 0, 0, 0, SPACE_VOLUME_WIDTH, SPACE_VOLUME_HEIGHT, GL_RGB, GL_FLOAT,
+                        columns.regular.data());
+    if (count > 0) {
+      glNamedBufferSubData(p.space_columns, 0, GLsizeiptr(sizeof(GLint)) * count, columns.order.data());
+      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, p.space_columns);
+      for (GLuint unit = 0; unit < 5; ++unit) {
+        glBindTextureUnit(unit, p.tables->texture(int(unit)));
+        glBindSampler(unit, 0);
+      }
+      for (GLuint i = 0; i < 4; ++i)
+        glBindImageTexture(i, p.space_volume[i], 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+      if (p.space_program == 0)
+        p.space_program = gpu::link_compute_program(gpu::aerial_perspective_compute_shader_source(
+            p.tables->params(), p.tables->spectral(), false, false, true, false));
+      const GLuint program = p.space_program;
+      glUseProgram(program);
+      glProgramUniform3f(program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
+      glProgramUniform3f(program, 1, frame.sun_direction.x, frame.sun_direction.y, frame.sun_direction.z);
+      glProgramUniformMatrix4fv(program, 2, 1, GL_FALSE, glm::value_ptr(frame.inverse_projection));
+      glProgramUniformMatrix3fv(program, 6, 1, GL_FALSE, glm::value_ptr(frame.view_to_world));
+      glProgramUniform1i(program, 9, frame.depth_encoding);
+      glProgramUniform4fv(program, 30, 1, glm::value_ptr(frame.depth_column));
+      glProgramUniform1f(program, 37, frame.surface_shell_radius);
+      glProgramUniform1i(program, 38, 0);
+      glProgramUniform1i(program, 39, count);
+      if (input.timed) p.timer->begin();
+      glDispatchCompute(GLuint((count + 63) / 64), 1, 1);
+      glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
+      if (input.timed) timings.volume_ms = p.timer->end_ms();
+      for (GLuint i = 0; i < 4; ++i) glBindImageTexture(i, 0, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
+    }
   }
 
   // The composite: every pixel, sorted into classes in a stencil mask, each
@@ -426,6 +493,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   constexpr GLint kSkyBit = 1;
   constexpr GLint kLowSunBit = 2;
   constexpr GLint kSpaceBit = 4;
+  constexpr GLint kSpaceVolumeBit = 8;
   // Which pixels need the low-sun integration, when some may and the
   // composite evaluates it: not with moons (every pixel integrates), nor for
   // cameras whose surfaces read the volume alone and whose sky reads the
@@ -438,7 +506,8 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     // each.
     const bool classifying = pixels == gpu::PassVariant::Pixels::classify ||
                              pixels == gpu::PassVariant::Pixels::classify_low_sun ||
-                             pixels == gpu::PassVariant::Pixels::classify_space;
+                             pixels == gpu::PassVariant::Pixels::classify_space ||
+                             pixels == gpu::PassVariant::Pixels::classify_space_volume;
     gpu::PassVariant v = classifying ? gpu::PassVariant{} : variant;
     v.pixels = pixels;
     if (!classifying) v.low_sun = pixel_low_sun;
@@ -450,18 +519,37 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     return program;
   };
   // The draws: the classifying ones set their bit where they keep the
-  // pixel; the shading ones draw where the mask equals `bits`.
+  // pixel (with `sky_only`, among the sky pixels alone); the shading ones
+  // draw where the mask's bits under `compare` equal `bits`.
   struct Draw {
     GLuint program;
     bool classify;
     GLint bits;
+    bool sky_only = false;
+    GLint compare = 0xFF;
   };
   std::vector<Draw> draws;
   draws.push_back({program_of(gpu::PassVariant::Pixels::classify, false), true, kSkyBit});
   if (classify_low_sun)
     draws.push_back({program_of(gpu::PassVariant::Pixels::classify_low_sun, false), true, kLowSunBit});
   if (classify_space)
-    draws.push_back({program_of(gpu::PassVariant::Pixels::classify_space, false), true, kSpaceBit});
+    draws.push_back({program_of(gpu::PassVariant::Pixels::classify_space, false), true, kSpaceBit, true});
+  // The surfaces the space volume covers (with or without the low-sun
+  // bit), by the one program that reads it; the others never do.
+  variant.space_volume = false;
+  if (frame.space_volume) {
+    draws.push_back({program_of(gpu::PassVariant::Pixels::classify_space_volume, false), true, kSpaceVolumeBit});
+    gpu::PassVariant v = variant;
+    v.pixels = gpu::PassVariant::Pixels::surface;
+    v.low_sun = false;
+    v.space_volume = true;
+    GLuint& program = p.programs[v.index()];
+    if (program == 0)
+      program = gpu::link_program(gpu::atmosphere_pass_vertex_shader_source(),
+                                  gpu::atmosphere_pass_fragment_shader_source(p.tables->params(),
+                                                                              p.tables->spectral(), v));
+    draws.push_back({program, false, kSpaceVolumeBit, false, kSpaceVolumeBit | kSkyBit});
+  }
   if (classify_low_sun) {
     // Without the integration where no pixel needs it, with it where some do.
     draws.push_back({program_of(gpu::PassVariant::Pixels::sky, false), false, kSkyBit});
@@ -497,6 +585,8 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     glProgramUniform4fv(program, 30, 1, glm::value_ptr(frame.depth_column));
     glProgramUniform1f(program, 31, frame.depth_column_view_z);
     glProgramUniform1f(program, 32, frame.stars.sigma);
+    glProgramUniformMatrix4fv(program, 33, 1, GL_FALSE, glm::value_ptr(frame.world_to_clip));
+    glProgramUniform1f(program, 37, frame.surface_shell_radius);
     gpu::set_sky_view_frame_uniforms(program, sky_view);
     if (eclipse && !draw.classify) gpu::set_moons_uniforms(program, frame.moons);
   }
@@ -514,9 +604,11 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   for (GLuint unit : {kDepthUnit, kColourUnit, kNormalUnit}) glBindSampler(unit, p.depth_sampler);
   glBindSampler(kShadowUnit, p.shadow_sampler);
   for (GLuint i = 0; i < 4; ++i) {
-    glBindTextureUnit(kVolumeUnit + i, p.volume[i]);
+    glBindTextureUnit(kVolumeUnit + i, frame.space_volume ? p.space_volume[i] : p.volume[i]);
     glBindSampler(kVolumeUnit + i, 0);
   }
+  glBindTextureUnit(kSpaceRegularColumnsUnit, p.space_regular_columns);
+  glBindSampler(kSpaceRegularColumnsUnit, 0);
   glBindVertexArray(p.vertex_array);
   glBindFramebuffer(GL_FRAMEBUFFER, p.framebuffer);
   glViewport(0, 0, input.width, input.height);
@@ -529,12 +621,15 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     if (draw.classify) {
       // Set this draw's bit where the classifying program keeps the pixel.
       glStencilMask(GLuint(draw.bits));
-      glStencilFunc(GL_ALWAYS, draw.bits, 0xFF);
+      if (draw.sky_only)
+        glStencilFunc(GL_EQUAL, draw.bits | kSkyBit, GLuint(kSkyBit));
+      else
+        glStencilFunc(GL_ALWAYS, draw.bits, 0xFF);
       glStencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
       glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
     } else {
       glStencilMask(0);
-      glStencilFunc(GL_EQUAL, draw.bits, 0xFF);
+      glStencilFunc(GL_EQUAL, draw.bits, GLuint(draw.compare));
       glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
       glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     }

@@ -4,9 +4,10 @@
 // draws one full-screen triangle over the engine's image; the program
 // variant (gpu/shader_source.cpp) defines VARIANT_PIXELS and the constants
 // SKY_VIEW_CAMERA, VARIANT_SURFACE_MODE, VARIANT_LOW_SUN, VARIANT_SHADOWS,
-// VARIANT_VOLUME, VARIANT_BLEND, VARIANT_STARS and VARIANT_ECLIPSE (1: the
-// frame's moons from the uniforms of table_bindings.glsl, uniform_moons;
-// 0: no_moons(), whose code folds away).
+// VARIANT_VOLUME, VARIANT_BLEND, VARIANT_SPACE_VOLUME, VARIANT_STARS and
+// VARIANT_ECLIPSE (1: the frame's moons from the uniforms of
+// table_bindings.glsl, uniform_moons; 0: no_moons(), whose code folds
+// away).
 //
 // Why several programs. Software rasterisers run both sides of every
 // branch, so one program for every pixel would charge each pixel for the sky
@@ -23,6 +24,12 @@
 //    terminator where the whole frame would otherwise pay for it;
 //  - bit 2, PIXELS_CLASSIFY_SPACE (cameras above the atmosphere): a sky
 //    pixel whose ray misses the atmosphere (sky_ray_misses_atmosphere).
+//  - bit 3, PIXELS_CLASSIFY_SPACE_VOLUME (cameras above the atmosphere): a
+//    surface that the space volume covers (composite.glsl:
+//    space_volume_covers), drawn by the program with VARIANT_SPACE_VOLUME;
+//    the exact programs draw the other surfaces.
+// The draw of bit 2 runs on the sky pixels only (the stencil test on bit
+// 0).
 // Then each class is drawn by its own program where the stencil holds its
 // bits: the sky (PIXELS_SKY) and the surfaces (PIXELS_SURFACE), each with
 // and without the low-sun integration (VARIANT_LOW_SUN), and the space
@@ -34,6 +41,7 @@
 #define PIXELS_SPACE 3
 #define PIXELS_CLASSIFY_LOW_SUN 4
 #define PIXELS_CLASSIFY_SPACE 5
+#define PIXELS_CLASSIFY_SPACE_VOLUME 6
 
 // The engine's textures (texelFetch: one texel per pixel). Colour and albedo
 // share a unit: a surface mode reads one of them.
@@ -52,6 +60,8 @@ layout(binding = 12) uniform sampler3D ap_rayleigh;
 layout(binding = 13) uniform sampler3D ap_single_rayleigh;
 layout(binding = 14) uniform sampler3D ap_aerosol;
 layout(binding = 15) uniform sampler3D ap_transmittance;
+// The space volume's regular columns (composite.glsl: space_volume_covers).
+layout(binding = 16) uniform sampler2D space_volume_regular_columns;
 
 layout(location = 0) uniform vec3 camera;
 layout(location = 1) uniform vec3 sun_direction;
@@ -72,6 +82,8 @@ layout(location = 29) uniform vec3 inverse_sun_srgb;
 layout(location = 30) uniform vec4 depth_column;
 layout(location = 31) uniform float depth_column_view_z;
 layout(location = 32) uniform float star_sigma;
+layout(location = 33) uniform mat4 world_to_clip;       // 33-36
+layout(location = 37) uniform float surface_shell_radius;
 // The sky-view frame: locations 40-44, the moons: 45-49 (table_bindings.glsl).
 
 // The pixel's PixelRay, interpolated from the vertex shader's corners
@@ -104,6 +116,9 @@ PassFrame pass_frame_from_uniforms() {
   frame.volume_weight = VARIANT_BLEND ? volume_weight : 1.0;
   frame.ap_t_far = ap_t_far;
   frame.ap_t_min = ap_t_min;
+  frame.space_volume = VARIANT_SPACE_VOLUME;
+  frame.world_to_clip = world_to_clip;
+  frame.surface_shell_radius = surface_shell_radius;
   frame.low_sun = VARIANT_LOW_SUN;
   frame.shadows = VARIANT_SHADOWS;
   frame.shadow_steps = shadow_steps;
@@ -125,10 +140,12 @@ void main() {
   frag_color = vec4(0.0);
 }
 
-#elif VARIANT_PIXELS == PIXELS_CLASSIFY_LOW_SUN || VARIANT_PIXELS == PIXELS_CLASSIFY_SPACE
+#elif VARIANT_PIXELS == PIXELS_CLASSIFY_LOW_SUN || VARIANT_PIXELS == PIXELS_CLASSIFY_SPACE || \
+    VARIANT_PIXELS == PIXELS_CLASSIFY_SPACE_VOLUME
 
-// Keeps the pixels that need the low-sun integration, or the sky pixels
-// whose rays miss the atmosphere (the draw's stencil operation marks them).
+// Keeps the pixels that need the low-sun integration, the sky pixels whose
+// rays miss the atmosphere, or the surfaces the space volume covers (the
+// draw's stencil operation marks them).
 // Only the frame's geometry is read: one program for every variant.
 void main() {
   PassFrame frame = pass_frame_from_uniforms();
@@ -138,6 +155,8 @@ void main() {
   float depth = texelFetch(engine_depth, ivec2(gl_FragCoord.xy), 0).r;
 #if VARIANT_PIXELS == PIXELS_CLASSIFY_LOW_SUN
   if (!pixel_needs_low_sun_path(ATMOSPHERE, frame, ray, depth)) discard;
+#elif VARIANT_PIXELS == PIXELS_CLASSIFY_SPACE_VOLUME
+  if (depth_is_sky(depth, depth_encoding) || !space_volume_covers(frame, space_volume_regular_columns, ray)) discard;
 #else
   if (!depth_is_sky(depth, depth_encoding) || !sky_ray_misses_atmosphere(ATMOSPHERE, frame, ray)) discard;
 #endif

@@ -82,11 +82,38 @@ void aerial_perspective_reach(const physics::AtmosphereParams& params, const glm
 // single aerosol, transmittance; all zero / one when !frame.volume),
 // eclipsed by frame.moons.
 struct CpuVolume {
+  int width = AP_WIDTH;
+  int height = AP_HEIGHT;
+  int slices = AP_SLICES;
   std::vector<glm::vec3> textures[4];
-  physics::sampler3D sampler(int i) const { return {AP_WIDTH, AP_HEIGHT, AP_SLICES, textures[i].data()}; }
+  physics::sampler3D sampler(int i) const { return {width, height, slices, textures[i].data()}; }
 };
 CpuVolume compute_volume_cpu(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
                              const runtime::TableSamplers& samplers, const physics::PassFrame& frame);
+
+// Whether surfaces read the space volume (composite.glsl: space_volume_lookup):
+// a camera above the atmosphere, in a frame without a shadow map (the
+// shafts' segments need not end in the shell of the surfaces) and without
+// moons (every column would need the low-sun integration: none is regular).
+bool uses_space_volume(const physics::AtmosphereParams& params, const physics::PassFrame& frame);
+
+// The regular columns of the space volume (composite.glsl:
+// space_volume_covers): `regular`, per column, 1 where its ray meets the
+// ground sphere steeply enough, needs no low-sun integration
+// (space_volume_column_needs_low_sun) and its neighbours' air mass is close
+// to its own, else 0; `order`, their indices (y * SPACE_VOLUME_WIDTH + x),
+// the only columns the pass computes (no covered pixel reads another).
+struct SpaceVolumeColumns {
+  std::vector<int> order;
+  std::vector<glm::vec3> regular;
+};
+SpaceVolumeColumns space_volume_columns(const physics::AtmosphereParams& params, const physics::PassFrame& frame);
+
+// The space volume on the CPU, as the compute pass fills it (the same four
+// textures as CpuVolume's, SPACE_VOLUME_WIDTH x SPACE_VOLUME_HEIGHT x
+// SPACE_VOLUME_SLICES; the regular columns, zero elsewhere).
+CpuVolume compute_space_volume_cpu(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
+                                   const runtime::TableSamplers& samplers, const physics::PassFrame& frame);
 
 // The light between a camera (m, planet-centred) and the points
 // camera + offsets[i], in the tables' channels (for three wavelengths: the
@@ -118,8 +145,11 @@ struct CpuEngineBuffers {
 // The CPU twin of AtmospherePass::render() at the given pixels (x, y from the
 // bottom-left, as gl_FragCoord): the same PassFrame, tables, sky-view table
 // and composite_pixel(). Validates the numbers as render() does.
+// `space_volume` false evaluates the surfaces of a camera above the
+// atmosphere exactly, per pixel, instead of through the space volume (the
+// volume's accuracy test).
 std::vector<glm::vec3> composite_cpu(const Atmosphere& atmosphere, const Tables& tables, const PlanetFrame& planet,
                                      const FrameInput& input, const CpuEngineBuffers& buffers,
-                                     const std::vector<glm::ivec2>& pixels);
+                                     const std::vector<glm::ivec2>& pixels, bool space_volume = true);
 
 }  // namespace atmos::gpu

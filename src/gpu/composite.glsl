@@ -47,6 +47,9 @@ struct PassFrame {
   float volume_weight;      // 1: the volume alone; below 1, mixed with the exact evaluation (a constant 1 or not)
   float ap_t_min;           // m, no surface is nearer (the camera's altitude above the highest surfaces)
   float ap_t_far;           // m, distance of the volume's last slice
+  bool space_volume;        // surfaces read the volume of cameras above the atmosphere (see space_volume_lookup)
+  mat4 world_to_clip;       // a direction in the world's axes -> the engine's clip space (projection x rotation)
+  float surface_shell_radius;  // m, planet-centred: no surface is higher (see aerial_perspective_reach)
   bool low_sun;             // the sun may be low (< 10°) somewhere in view: integrate single scattering there
                             // (surfaces, and from above the atmosphere the sky's rays through it)
   bool shadows;             // a shadow map is given
@@ -473,6 +476,163 @@ INLINE vec2 aerial_perspective_uv(IN(AtmosphereParams) atmosphere, IN(PassFrame)
   return sky_view_uv_of_size(frame.sky_view, view_ray, ground, AP_WIDTH, AP_HEIGHT);
 }
 
+// --- The volume of cameras above the atmosphere ------------------------------
+
+// Seen from above the atmosphere every surface lies in the shell between the
+// ground sphere and surface_shell_radius, so the light between the camera
+// and a surface depends on the pixel's direction and on where in that shell
+// its ray ends. Each frame fills a volume with it:
+//  - x, y: the image's directions, texel centres at the NDC (2 x + 1) /
+//    SPACE_VOLUME_WIDTH - 1 (resp. height): a pixel's direction is
+//    interpolated between the four nearest (world_to_clip projects a view
+//    ray back to its NDC);
+//  - z: SPACE_VOLUME_SLICES distances along the ray from t_0, where it
+//    enters the shell, to t_1, where it meets the ground sphere or, if it
+//    misses it, its point nearest to the planet (space_volume_span; the two
+//    points meet at the limb, so t_1 is continuous across it), quadratic
+//    towards t_1, t = t_1 - (t_1 - t_0) (1 - z)², z = k / (SLICES - 1):
+//    the slices are densest where the air is (a vertical ray's 25 km in 15
+//    intervals, the last 110 m long, the one at 2 km about 0.9 km). A
+//    surface beyond t_1 on a ray that misses the ground sphere (a mountain
+//    behind the limb, past the ray's lowest point) reads the light to t_1.
+// Each texel holds the exact light to its point, from the function the
+// pixels would evaluate (eclipsed_scattering_to_point), so the volume's
+// only error is the interpolation between texels, and each pixel pays three
+// texture reads instead of the table differences (eight reads of the 4D
+// tables). Between two slices the weight is linear in t, as
+// aerial_perspective_lookup's. Where the light changes faster than the
+// texels (about 0.8° apart with a 60° field of view) the interpolation
+// would blur it: across the limb (rays that meet the ground sphere and rays
+// that miss it, whose table half and horizon fix differ), near it (the air
+// mass grows as 1 / cos of the ground's zenith angle, which seen from afar
+// changes by degrees from one texel to the next) and in the low-sun band
+// (the terminator's twilight, hundreds of kilometres wide, is a few texels
+// seen from afar). So only the surfaces whose four nearest columns are all
+// regular (gpu/pass_frame.cpp: space_volume_columns: their rays meet the
+// ground sphere less than 75.5° from the zenith with an air mass within 10
+// % of their neighbours', and need no low-sun integration) read the volume
+// (space_volume_covers: the CPU marks the columns in a texture, 1 or 0,
+// whose bilinear value is 1 only if the four are); the others are evaluated
+// exactly, per pixel, and only the regular columns are computed. Frames
+// with moons or a shadow map do without it (gpu::uses_space_volume).
+#define SPACE_VOLUME_WIDTH 128
+#define SPACE_VOLUME_HEIGHT 72
+#define SPACE_VOLUME_SLICES 16
+
+// The part [t_0, t_1] (distances from the camera) of a view ray from a
+// camera above the atmosphere where it may meet a surface; t_0 = t_1 = 0
+// for a ray that misses the atmosphere. Discriminants written without
+// cancellation, as distance_to_top_atmosphere_boundary's.
+INLINE void space_volume_span(IN(AtmosphereParams) atmosphere, IN(PassFrame) frame, vec3 view_ray, OUT(float) t_0,
+                              OUT(float) t_1) {
+  t_0 = 0.0f;
+  t_1 = 0.0f;
+  vec3 start = frame.camera;
+  if (!enter_atmosphere(atmosphere, start, view_ray)) return;
+  float entry = length(start - frame.camera);
+  float r = length(start);
+  float mu = clamp_cosine(dot(start, view_ray) / r);
+  float nearest = max(-r * mu, 0.0f);
+  float to_end = ray_intersects_ground(atmosphere, r, mu) ? distance_to_bottom_atmosphere_boundary(atmosphere, r, mu)
+                                                          : nearest;
+  float shell = frame.surface_shell_radius;
+  float discriminant = (r * mu) * (r * mu) - (r - shell) * (r + shell);
+  float to_shell = discriminant >= 0.0f ? max(-r * mu - sqrt(discriminant), 0.0f) : nearest;
+  t_0 = entry + min(to_shell, to_end);
+  t_1 = entry + to_end;
+}
+
+INLINE float space_volume_slice_distance(float t_0, float t_1, int slice) {
+  float x = 1.0f - float(slice) / float(SPACE_VOLUME_SLICES - 1);
+  return t_1 - (t_1 - t_0) * x * x;
+}
+
+// The view ray of texel column (x, y) of the space volume.
+INLINE vec3 space_volume_view_ray(IN(PassFrame) frame, int x, int y) {
+  vec2 ndc = vec2((2.0f * float(x) + 1.0f) / float(SPACE_VOLUME_WIDTH) - 1.0f,
+                  (2.0f * float(y) + 1.0f) / float(SPACE_VOLUME_HEIGHT) - 1.0f);
+  return world_view_ray(frame, pixel_ray(frame.inverse_projection, frame.view_to_world, ndc));
+}
+
+// Whether any texel of a column needs the low-sun integration (frame.low_sun
+// without moons): the weight of its whole segment, up to t_1, is above zero
+// (the sun is lowest at an end of a segment, see low_sun_weight, and every
+// texel's segment is a part of this one, from the same start). The others
+// give the same light without it.
+INLINE bool space_volume_column_needs_low_sun(IN(AtmosphereParams) atmosphere, IN(PassFrame) frame, vec3 view_ray) {
+  if (frame.moons.count > 0) return true;
+  float t_0;
+  float t_1;
+  space_volume_span(atmosphere, frame, view_ray, t_0, t_1);
+  AtmosphereSegment segment;
+  if (!atmosphere_segment(atmosphere, frame.camera, view_ray, t_1, frame.sun_direction, segment)) return false;
+  return segment_low_sun_weight(segment, clamp_cosine(dot(view_ray, frame.sun_direction))) > 0.0f;
+}
+
+// The texel of slice `slice` of the column of `view_ray`: the light to its
+// point as light_to_distance evaluates it exactly (`low_sun`: the frame's,
+// or false where the column does not need it). Without `split` (a frame
+// without shadows) single_rayleigh holds the multiple scattering too.
+INLINE PathScattering space_volume_texel(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                         IN(sampler2D) spectral_transmittance_texture,
+                                         IN(sampler3D) scattering_texture, IN(sampler3D) single_aerosol_texture,
+                                         IN(sampler3D) multiple_scattering_texture, IN(PassFrame) frame,
+                                         vec3 view_ray, int slice, bool low_sun, bool split) {
+  float t_0;
+  float t_1;
+  space_volume_span(atmosphere, frame, view_ray, t_0, t_1);
+  float t = space_volume_slice_distance(t_0, t_1, slice);
+  vec3 transmittance;
+  float nu;
+  return eclipsed_scattering_to_point(atmosphere, spectral, spectral_transmittance_texture, scattering_texture,
+                                      single_aerosol_texture, multiple_scattering_texture, frame.camera,
+                                      view_ray * t, frame.sun_direction, low_sun, split, frame.moons, transmittance,
+                                      nu);
+}
+
+// Whether the pixel's surface reads the space volume: its four nearest
+// columns are regular (`regular_columns`: 1 or 0 per column, see above).
+INLINE bool space_volume_covers(IN(PassFrame) frame, IN(sampler2D) regular_columns, IN(PixelRay) ray) {
+  vec4 clip = frame.world_to_clip * vec4(world_view_ray(frame, ray), 0.0f);
+  vec2 uv = 0.5f * vec2(clip.x, clip.y) / clip.w + 0.5f;
+  return texture(regular_columns, uv).x >= 0.9999f;
+}
+
+// The light between the camera and the point at distance t along the view
+// ray, from the space volume's four textures (as aerial_perspective_lookup:
+// single Rayleigh + multiple, single Rayleigh alone, single aerosol,
+// transmittance).
+INLINE PathScattering space_volume_lookup(IN(AtmosphereParams) atmosphere, IN(PassFrame) frame,
+                                          IN(sampler3D) ap_rayleigh, IN(sampler3D) ap_single_rayleigh,
+                                          IN(sampler3D) ap_aerosol, IN(sampler3D) ap_transmittance, vec3 view_ray,
+                                          float t, bool split) {
+  vec4 clip = frame.world_to_clip * vec4(view_ray, 0.0f);
+  vec2 uv = 0.5f * vec2(clip.x, clip.y) / clip.w + 0.5f;
+  float t_0;
+  float t_1;
+  space_volume_span(atmosphere, frame, view_ray, t_0, t_1);
+  float z = float(SPACE_VOLUME_SLICES - 1);
+  if (t_1 > t_0) {
+    float x = clamp((t_1 - t) / (t_1 - t_0), 0.0f, 1.0f);
+    float slice = min(floor((1.0f - sqrt(x)) * float(SPACE_VOLUME_SLICES - 1)), float(SPACE_VOLUME_SLICES - 2));
+    float t_a = space_volume_slice_distance(t_0, t_1, int(slice));
+    float t_b = space_volume_slice_distance(t_0, t_1, int(slice) + 1);
+    z = slice + clamp((t - t_a) / max(t_b - t_a, 1e-30f), 0.0f, 1.0f);
+  }
+  vec3 uvw = vec3(uv.x, uv.y, (z + 0.5f) / float(SPACE_VOLUME_SLICES));
+  PathScattering s;
+  vec3 rayleigh = vec3(texture(ap_rayleigh, uvw));
+  s.single_rayleigh = rayleigh;
+  s.multiple = vec3(0.0f);
+  if (split) {
+    s.single_rayleigh = vec3(texture(ap_single_rayleigh, uvw));
+    s.multiple = max(rayleigh - s.single_rayleigh, vec3(0.0f));
+  }
+  s.aerosol = vec3(texture(ap_aerosol, uvw));
+  s.transmittance = vec3(texture(ap_transmittance, uvw));
+  return s;
+}
+
 // --- Terrain shadows and light shafts ---------------------------------------
 
 // The part [t_in, t_out] of the view ray (from the camera, unit `view_ray`,
@@ -625,6 +785,9 @@ INLINE PathScattering light_to_distance(IN(AtmosphereParams) atmosphere, IN(Spec
                                         IN(sampler3D) ap_single_rayleigh, IN(sampler3D) ap_aerosol,
                                         IN(sampler3D) ap_transmittance, IN(PassFrame) frame, vec3 view_ray, float t,
                                         bool split) {
+  if (frame.space_volume)
+    return space_volume_lookup(atmosphere, frame, ap_rayleigh, ap_single_rayleigh, ap_aerosol, ap_transmittance,
+                               view_ray, t, split);
   PathScattering volume;
   if (frame.volume) {
     volume = aerial_perspective_lookup(frame, ap_rayleigh, ap_single_rayleigh, ap_aerosol, ap_transmittance,
@@ -844,7 +1007,8 @@ INLINE vec3 composite_pixel(IN(AtmosphereParams) atmosphere, IN(SpectralSets) sp
                             IN(sampler2D) irradiance_texture, IN(sampler2D) sky_view_rayleigh_texture,
                             IN(sampler2D) sky_view_aerosol_texture, IN(sampler2D) sky_view_surface_texture,
                             bool use_sky_view, IN(sampler3D) ap_rayleigh, IN(sampler3D) ap_single_rayleigh,
-                            IN(sampler3D) ap_aerosol, IN(sampler3D) ap_transmittance, IN(PassFrame) frame,
+                            IN(sampler3D) ap_aerosol, IN(sampler3D) ap_transmittance,
+                            IN(sampler2D) space_volume_regular_columns, IN(PassFrame) frame,
                             IN(sampler2DShadow) shadow_map, IN(PixelRay) ray, float depth, vec3 colour, vec3 albedo,
                             vec3 normal, float dither) {
   if (depth_is_sky(depth, frame.depth_encoding))
@@ -853,8 +1017,12 @@ INLINE vec3 composite_pixel(IN(AtmosphereParams) atmosphere, IN(SpectralSets) sp
                                sky_view_rayleigh_texture, sky_view_aerosol_texture, sky_view_surface_texture,
                                use_sky_view, ap_rayleigh, ap_single_rayleigh, ap_aerosol, ap_transmittance, frame,
                                shadow_map, ray, dither);
+  // Surfaces the space volume does not cover are evaluated exactly.
+  PassFrame surface_frame = frame;
+  if (frame.space_volume && !space_volume_covers(frame, space_volume_regular_columns, ray))
+    surface_frame.space_volume = false;
   return composite_surface_pixel(atmosphere, spectral, spectral_transmittance_texture, scattering_texture,
                                  single_aerosol_texture, multiple_scattering_texture, irradiance_texture, ap_rayleigh,
-                                 ap_single_rayleigh, ap_aerosol, ap_transmittance, frame, shadow_map, ray, depth,
-                                 colour, albedo, normal, dither);
+                                 ap_single_rayleigh, ap_aerosol, ap_transmittance, surface_frame, shadow_map, ray,
+                                 depth, colour, albedo, normal, dither);
 }

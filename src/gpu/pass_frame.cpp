@@ -190,11 +190,16 @@ physics::PassFrame make_pass_frame(const FrameInput& input, const PlanetFrame& p
   frame.volume_weight = aerial_perspective_volume_weight(params, camera_planet);
   frame.volume = frame.volume_weight > 0.0f;
   aerial_perspective_reach(params, camera_planet, frame.ap_t_min, frame.ap_t_far);
+  // Directions in the world's axes to the engine's clip space: the view's
+  // rotation, then the projection.
+  frame.world_to_clip = glm::mat4(input.projection * glm::dmat4(glm::dmat3(input.view)));
+  frame.surface_shell_radius = float(double(params.bottom_radius) + kMaxSurfaceAltitude);
   // With moons the single scattering is integrated everywhere (as
   // scattering_along_ray does), node by node in their shadows.
   frame.low_sun = eclipse || sun_may_be_low(params, camera_planet, frame.sun_direction);
   frame.shadows = input.shadow_map != 0;
   frame.shadow_steps = input.shadow_steps;
+  frame.space_volume = uses_space_volume(params, frame);
   // Camera-relative metres -> the light's clip space: the engine's world
   // point is camera_world + offset * units_per_metre (composed in double,
   // so the camera's distance from the world origin never meets a float).
@@ -261,6 +266,93 @@ CpuVolume compute_volume_cpu(const physics::AtmosphereParams& params, const phys
   return volume;
 }
 
+// The regular columns of the space volume (composite.glsl:
+// space_volume_covers, see space_volume_columns): the largest air mass at
+// the ground (75.5° from the zenith) and relative step of it between
+// neighbouring columns.
+constexpr float kSpaceVolumeMaxAirMass = 4.0f;
+constexpr float kSpaceVolumeMaxAirMassStep = 0.1f;
+
+bool uses_space_volume(const physics::AtmosphereParams& params, const physics::PassFrame& frame) {
+  return !physics::camera_uses_sky_view(params, frame.camera) && !frame.shadows && frame.moons.count == 0;
+}
+
+SpaceVolumeColumns space_volume_columns(const physics::AtmosphereParams& params, const physics::PassFrame& frame) {
+  SpaceVolumeColumns columns;
+  const size_t count = size_t(SPACE_VOLUME_WIDTH) * SPACE_VOLUME_HEIGHT;
+  columns.regular.assign(count, glm::vec3(0.0f));
+  // Per column: the air mass 1 / mu at the ray's ground point (0 for a ray
+  // that misses the ground sphere), and whether it needs the low sun.
+  std::vector<float> air_mass(count, 0.0f);
+  std::vector<bool> needs(count, false);
+  for (int y = 0; y < SPACE_VOLUME_HEIGHT; ++y)
+    for (int x = 0; x < SPACE_VOLUME_WIDTH; ++x) {
+      const int index = y * SPACE_VOLUME_WIDTH + x;
+      const glm::vec3 view_ray = physics::space_volume_view_ray(frame, x, y);
+      needs[size_t(index)] = frame.low_sun && physics::space_volume_column_needs_low_sun(params, frame, view_ray);
+      glm::vec3 start = frame.camera;
+      if (physics::enter_atmosphere(params, start, view_ray)) {
+        const float r = glm::length(start);
+        const float mu = physics::clamp_cosine(glm::dot(start, view_ray) / r);
+        if (physics::ray_intersects_ground(params, r, mu)) {
+          const float d = physics::distance_to_bottom_atmosphere_boundary(params, r, mu);
+          air_mass[size_t(index)] = 1.0f / std::max(-physics::mu_along_ray(r, mu, d, params.bottom_radius), 1e-6f);
+        }
+      }
+    }
+  // Regular: the ray meets the ground sphere no more than 1 /
+  // kSpaceVolumeMaxAirMass from grazing, needs no low sun, and the air mass
+  // of each neighbouring column differs from its own by less than
+  // kSpaceVolumeMaxAirMassStep of it: towards the limb the air mass changes
+  // faster than the texels follow (seen from afar a texel spans degrees of
+  // the ground's zenith angle there), and linear interpolation over a
+  // relative step s errs by about s² / 8 of the light.
+  for (int y = 0; y < SPACE_VOLUME_HEIGHT; ++y)
+    for (int x = 0; x < SPACE_VOLUME_WIDTH; ++x) {
+      const size_t i = size_t(y) * SPACE_VOLUME_WIDTH + size_t(x);
+      const float m = air_mass[i];
+      bool regular = m > 0.0f && m <= kSpaceVolumeMaxAirMass && !needs[i];
+      for (const glm::ivec2 step : {glm::ivec2(1, 0), glm::ivec2(-1, 0), glm::ivec2(0, 1), glm::ivec2(0, -1)}) {
+        const int nx = x + step.x, ny = y + step.y;
+        if (nx < 0 || ny < 0 || nx >= SPACE_VOLUME_WIDTH || ny >= SPACE_VOLUME_HEIGHT) continue;
+        const float n = air_mass[size_t(ny) * SPACE_VOLUME_WIDTH + size_t(nx)];
+        regular = regular && std::abs(n - m) <= kSpaceVolumeMaxAirMassStep * m;
+      }
+      if (regular) {
+        columns.regular[i] = glm::vec3(1.0f);
+        columns.order.push_back(int(i));
+      }
+    }
+  return columns;
+}
+
+CpuVolume compute_space_volume_cpu(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
+                                   const runtime::TableSamplers& samplers, const physics::PassFrame& frame) {
+  CpuVolume volume;
+  volume.width = SPACE_VOLUME_WIDTH;
+  volume.height = SPACE_VOLUME_HEIGHT;
+  volume.slices = SPACE_VOLUME_SLICES;
+  const size_t size = size_t(SPACE_VOLUME_WIDTH) * SPACE_VOLUME_HEIGHT * SPACE_VOLUME_SLICES;
+  for (auto& t : volume.textures) t.assign(size, glm::vec3(0.0f));
+  const SpaceVolumeColumns columns = space_volume_columns(params, frame);
+  tbb::parallel_for(0, int(columns.order.size()), [&](int k) {
+    const int index = columns.order[size_t(k)];
+    const int x = index % SPACE_VOLUME_WIDTH, y = index / SPACE_VOLUME_WIDTH;
+    const glm::vec3 view_ray = physics::space_volume_view_ray(frame, x, y);
+    for (int z = 0; z < SPACE_VOLUME_SLICES; ++z) {
+      const physics::PathScattering p = physics::space_volume_texel(
+          params, spectral, samplers.spectral_optical_depth, samplers.scattering, samplers.single_aerosol,
+          samplers.multiple_scattering, frame, view_ray, z, false, false);
+      const size_t i = (size_t(z) * SPACE_VOLUME_HEIGHT + size_t(y)) * SPACE_VOLUME_WIDTH + size_t(x);
+      volume.textures[0][i] = p.single_rayleigh + p.multiple;
+      volume.textures[1][i] = p.single_rayleigh;
+      volume.textures[2][i] = p.aerosol;
+      volume.textures[3][i] = p.transmittance;
+    }
+  });
+  return volume;
+}
+
 std::vector<AerialPerspectiveSample> aerial_perspective_cpu(const Atmosphere& atmosphere, const Tables& tables,
                                                             const glm::dvec3& camera, const glm::dvec3& sun,
                                                             const std::vector<glm::dvec3>& offsets, bool use_volume) {
@@ -297,7 +389,7 @@ std::vector<AerialPerspectiveSample> aerial_perspective_cpu(const Atmosphere& at
 
 std::vector<glm::vec3> composite_cpu(const Atmosphere& atmosphere, const Tables& tables, const PlanetFrame& planet,
                                      const FrameInput& input, const CpuEngineBuffers& buffers,
-                                     const std::vector<glm::ivec2>& pixels) {
+                                     const std::vector<glm::ivec2>& pixels, bool space_volume) {
   check_tables_match(atmosphere, tables);
   validate_frame_numbers(input);
   const physics::AtmosphereParams params = physics::make_render_params(atmosphere, tables.sizes);
@@ -311,7 +403,15 @@ std::vector<glm::vec3> composite_cpu(const Atmosphere& atmosphere, const Tables&
   CpuSkyView sky_view;
   if (sky_view_camera)
     sky_view = compute_sky_view_cpu(params, *spectral, samplers, frame.camera, frame.sun_direction, frame.moons);
-  const CpuVolume volume = compute_volume_cpu(params, *spectral, samplers, frame);
+  if (!space_volume) frame.space_volume = false;
+  const CpuVolume volume = frame.space_volume ? compute_space_volume_cpu(params, *spectral, samplers, frame)
+                                              : compute_volume_cpu(params, *spectral, samplers, frame);
+  std::vector<glm::vec3> regular_columns(1, glm::vec3(0.0f));
+  if (frame.space_volume) regular_columns = space_volume_columns(params, frame).regular;
+  const physics::sampler2D regular_sampler = frame.space_volume
+                                                 ? physics::sampler2D{SPACE_VOLUME_WIDTH, SPACE_VOLUME_HEIGHT,
+                                                                      regular_columns.data()}
+                                                 : physics::sampler2D{1, 1, regular_columns.data()};
   const physics::sampler2DShadow shadow_map{buffers.shadow_width, buffers.shadow_height,
                                            buffers.shadow_depth.data()};
   std::vector<glm::vec3> out(pixels.size());
@@ -327,7 +427,7 @@ std::vector<glm::vec3> composite_cpu(const Atmosphere& atmosphere, const Tables&
         params, *spectral, samplers.spectral_optical_depth, samplers.scattering, samplers.single_aerosol,
         samplers.multiple_scattering, samplers.indirect_irradiance, sky_view.sampler(0), sky_view.sampler(1),
         sky_view.sampler(2), sky_view_camera, volume.sampler(0), volume.sampler(1), volume.sampler(2),
-        volume.sampler(3), frame, shadow_map, ray, buffers.depth[i],
+        volume.sampler(3), regular_sampler, frame, shadow_map, ray, buffers.depth[i],
         gbuffer ? glm::vec3(0.0f) : buffers.colour[i], gbuffer ? buffers.albedo[i] : glm::vec3(0.0f),
         gbuffer ? buffers.normal[i] : glm::vec3(0.0f, 0.0f, 1.0f), physics::pixel_dither(centre));
   });

@@ -241,6 +241,7 @@ AssembledSource atmosphere_pass_fragment_shader_source(const physics::Atmosphere
                           "\n#define VARIANT_LOW_SUN " + flag(variant.low_sun) + "\n#define VARIANT_SHADOWS " +
                           flag(variant.shadows) + "\n#define VARIANT_VOLUME " + flag(variant.volume) +
                           "\n#define VARIANT_BLEND " + flag(variant.blend) +
+                          "\n#define VARIANT_SPACE_VOLUME " + flag(variant.space_volume) +
                           "\n#define VARIANT_SURFACE_MODE " + (variant.gbuffer ? "1" : "0") +
                           "\n#define VARIANT_PIXELS " + std::to_string(int(variant.pixels)) +
                           "\n#define VARIANT_STARS " + flag(variant.stars) +
@@ -261,10 +262,11 @@ AssembledSource atmosphere_pass_vertex_shader_source() {
 
 AssembledSource aerial_perspective_compute_shader_source(const physics::AtmosphereParams& params,
                                                         const physics::SpectralSets& spectral, bool low_sun,
-                                                        bool eclipse) {
+                                                        bool eclipse, bool space, bool split) {
   AssembledSource s = physics_shader_source(params, spectral, kCompositePhysics);
   s.append("variant", std::string("#define VARIANT_LOW_SUN ") + (low_sun ? "true" : "false") +
-                          "\n#define VARIANT_ECLIPSE " + (eclipse ? "1" : "0") + "\n");
+                          "\n#define VARIANT_ECLIPSE " + (eclipse ? "1" : "0") + "\n#define VARIANT_SPACE " +
+                          (space ? "1" : "0") + "\n#define VARIANT_SPLIT " + (split ? "true" : "false") + "\n");
   append_composite(s);
   s.append("aerial_perspective.comp.glsl", embedded("src/gpu/aerial_perspective.comp.glsl"));
   return s;

@@ -60,9 +60,18 @@ AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams&
 struct PassVariant {
   // Which pixels the program draws (atmosphere_pass.frag.glsl: PIXELS_*):
   // it marks a class of pixels in the stencil buffer (the sky, those that
-  // need the low-sun integration, the sky beside the atmosphere), or shades
+  // need the low-sun integration, the sky beside the atmosphere, the
+  // surfaces the space volume covers), or shades
   // the sky's, the surfaces' or those of the space beside the atmosphere.
-  enum class Pixels { classify = 0, sky = 1, surface = 2, space = 3, classify_low_sun = 4, classify_space = 5 };
+  enum class Pixels {
+    classify = 0,
+    sky = 1,
+    surface = 2,
+    space = 3,
+    classify_low_sun = 4,
+    classify_space = 5,
+    classify_space_volume = 6
+  };
   Pixels pixels = Pixels::sky;
   bool sky_view_camera = true;  // camera in the atmosphere: reads the sky-view table
   bool low_sun = false;         // integrates single scattering where the sun is low
@@ -72,11 +81,12 @@ struct PassVariant {
   bool blend = false;           // ... mixed with the exact evaluation (cameras in the blend band)
   bool stars = false;           // the star field behind the sky
   bool eclipse = false;         // the frame has moons (needs low_sun): the uniforms of uniform_moons()
-  static constexpr int kCount = 6 * 256;
+  bool space_volume = false;    // surfaces read the volume of cameras above the atmosphere
+  static constexpr int kCount = 7 * 512;
   int index() const {
-    return int(pixels) * 256 + ((sky_view_camera ? 1 : 0) | (low_sun ? 2 : 0) | (shadows ? 4 : 0) |
+    return int(pixels) * 512 + ((sky_view_camera ? 1 : 0) | (low_sun ? 2 : 0) | (shadows ? 4 : 0) |
                                 (gbuffer ? 8 : 0) | (volume ? 16 : 0) | (blend ? 32 : 0) | (stars ? 64 : 0) |
-                                (eclipse ? 128 : 0));
+                                (eclipse ? 128 : 0) | (space_volume ? 256 : 0));
   }
 };
 
@@ -95,10 +105,11 @@ AssembledSource atmosphere_pass_vertex_shader_source();
 // physics, composite.glsl and aerial_perspective.comp.glsl; `low_sun`: the
 // transmittance to the sun over the disc with the planet's shadow;
 // `eclipse`: with the moons' uniforms (table_bindings.glsl), which needs
-// `low_sun`.
+// `low_sun`; `space`: composite.glsl's space volume over a list of columns
+// instead (`split`: single Rayleigh apart from the multiple scattering).
 AssembledSource aerial_perspective_compute_shader_source(const physics::AtmosphereParams& params,
                                                         const physics::SpectralSets& spectral, bool low_sun,
-                                                        bool eclipse);
+                                                        bool eclipse, bool space, bool split);
 
 // The GLSL library for engines' own shaders (AtmospherePass::glsl_library):
 // the definitions and the physics up to view_ray_scattering.glsl and
