@@ -94,7 +94,11 @@ CpuVolume compute_volume_cpu(const physics::AtmosphereParams& params, const phys
 // Whether surfaces read the space volume (composite.glsl: space_volume_lookup):
 // a camera above the atmosphere, in a frame without a shadow map (the
 // shafts' segments need not end in the shell of the surfaces) and without
-// moons (every column would need the low-sun integration: none is regular).
+// moons (every column would need the low-sun integration: none is regular),
+// with at least a tenth of the volume's columns regular (space_volume_columns;
+// fewer cover too few pixels to pay for their classifying draw). Needs
+// frame.camera, sun_direction, low_sun, shadows, moons, inverse_projection,
+// view_to_world, depth_column, depth_encoding and surface_shell_radius.
 bool uses_space_volume(const physics::AtmosphereParams& params, const physics::PassFrame& frame);
 
 // The regular columns of the space volume (composite.glsl:
