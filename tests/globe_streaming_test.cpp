@@ -27,6 +27,7 @@
 #include "atmos/globe.hpp"
 #include "atmos/plugin.hpp"
 #include "globe_rays.hpp"
+#include "globe_target.hpp"
 #include "gpu_fixture.hpp"
 #include "planet/globe_mesh.hpp"
 #include "planet/surface.hpp"
@@ -200,42 +201,7 @@ class GlobeStreaming : public atmos_test::EarthGpuTest {
     EarthGpuTest::TearDownTestSuite();
   }
 
-  // A colour and reversed-Z depth target, bound for drawing by clear().
-  struct Target {
-    GLuint colour = 0, depth = 0, framebuffer = 0;
-    int width = 0, height = 0;
-    Target(int w, int h) : width(w), height(h) {
-      glCreateTextures(GL_TEXTURE_2D, 1, &colour);
-      glTextureStorage2D(colour, 1, GL_RGBA32F, w, h);
-      glCreateTextures(GL_TEXTURE_2D, 1, &depth);
-      glTextureStorage2D(depth, 1, GL_DEPTH_COMPONENT32F, w, h);
-      glCreateFramebuffers(1, &framebuffer);
-      glNamedFramebufferTexture(framebuffer, GL_COLOR_ATTACHMENT0, colour, 0);
-      glNamedFramebufferTexture(framebuffer, GL_DEPTH_ATTACHMENT, depth, 0);
-    }
-    ~Target() {
-      glDeleteFramebuffers(1, &framebuffer);
-      glDeleteTextures(1, &colour);
-      glDeleteTextures(1, &depth);
-    }
-    void clear() const {
-      const float sentinel[4] = {-1.0f, -1.0f, -1.0f, -1.0f};
-      const float far_depth = 0.0f;
-      glClearNamedFramebufferfv(framebuffer, GL_COLOR, 0, sentinel);
-      glClearNamedFramebufferfv(framebuffer, GL_DEPTH, 0, &far_depth);
-      glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
-    }
-    std::vector<float> read_depth() const {
-      std::vector<float> d(size_t(width * height));
-      glGetTextureImage(depth, 0, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(d.size() * sizeof(float)), d.data());
-      return d;
-    }
-    std::vector<float> read_colour() const {
-      std::vector<float> c(size_t(width * height * 4));
-      glGetTextureImage(colour, 0, GL_RGBA, GL_FLOAT, GLsizei(c.size() * sizeof(float)), c.data());
-      return c;
-    }
-  };
+  using Target = atmos_test::GlobeTarget;
 
   // A camera `altitude_m` above the ground at latitude 20°, longitude 30°,
   // looking at the planet's centre from 2.5 radii and 8° below the horizon
