@@ -84,8 +84,8 @@ atmos::Tables* GroundAlbedo::tables_ = nullptr;
 // The blended tables against tables precomputed over the albedo itself.
 // The series is exact at the planet's albedo and at the response's; between
 // and beyond it assumes that every reflection's light has the first one's
-// angular distribution. Measured over Earth (three wavelengths and 15),
-// Mars and Titan at albedos 0-0.8: the sums of every table within 1 %, the
+// angular distribution. Over Earth (three wavelengths and 15) and Mars
+// at albedos 0.05-0.8: the sums of every table within 1 %, the
 // texels above 1e-3 of their table's largest within 1.8 % (Earth) and 3.6 %
 // (Mars at albedo 0.05, where the reddish planet albedo 0.28/0.17/0.09 is
 // extrapolated towards 0). Without the series (the planet's tables as they

@@ -46,8 +46,8 @@ struct PrecomputeOptions {
   bool solve_tail = true;
   double tail_tolerance = 1e-5;
   int tail_iterations = 200;
-  // Also compute the tables over a second, uniform ground albedo
-  // (Tables::ground_response), from which the run time lights the air and
+  // Also compute the tables over a second ground albedo, at each wavelength
+  // 0 or 1, the far end from the planet's (Tables::ground_response), from which the run time lights the air and
   // the ground over the albedo actually below them (a regional average, not
   // the planet file's constant): tables_for_ground_albedo,
   // AtmospherePass::set_ground_albedo. The scattering orders (not the
@@ -94,17 +94,19 @@ struct OrderContribution {
 };
 
 // How the render tables depend on the albedo of the ground below the air:
-// the same tables over a second, uniform albedo (PrecomputeOptions::
-// ground_albedo_response). Light reflected by a Lambertian ground of albedo
+// the same tables over a second albedo, at each wavelength 0 or 1
+// (PrecomputeOptions::ground_albedo_response). Light reflected by a Lambertian ground of albedo
 // a and sent back down by the air, reflected again, and so on, adds up as a
 // geometric series of ratio a S, S the atmosphere's spherical albedo seen
-// from below (Tanré et al. 1979, eq. 8; Vermote et al. 1997): every
+// from below (Tanré et al. 1979; Vermote et al. 1997): every
 // albedo-dependent quantity is L(a) = L(0) + a G / (1 - a S), G its part
 // per unit albedo of the first reflection. Two sets (the planet's albedo
 // and this one) fix S from the sky irradiance on the ground and G per
 // texel; tables_for_ground_albedo applies the series at any albedo.
 struct GroundAlbedoResponse {
-  // The ground albedo of these tables, per channel (uniform over wavelength).
+  // The ground albedo of these tables per channel: 0 or 1 in
+  // three-wavelength mode, the sunlight-weighted mean of the wavelengths'
+  // 0 or 1 per sRGB channel in spectral mode.
   glm::vec3 albedo{0.0f};
   // The ground albedo of Tables::set per channel: the atmosphere's at the
   // three wavelengths, or its sunlight-weighted mean per sRGB channel in
@@ -157,7 +159,7 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
 // GroundAlbedoResponse. Exact at the planet's albedo and at the response's;
 // between and beyond, as exact as the series' premise that every
 // reflection's light has the first one's angular distribution
-// (docs/accuracy.md, Ground albedo). Throws Error when `tables` have no
+// (docs/accuracy.md, The ground's albedo at run time). Throws Error when `tables` have no
 // ground response or the albedo is not in [0, 1].
 TableSet tables_for_ground_albedo(const Tables& tables, const glm::vec3& albedo);
 

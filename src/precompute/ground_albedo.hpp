@@ -11,7 +11,7 @@ namespace atmos::precompute {
 // same tables over two Lambertian grounds of albedos a_p and a_b: the total
 // irradiance of the ground (sun and sky) obeys E(a) = E(0) / (1 - a S)
 // (every reflection sends a E up, of which the air returns S; Tanré et al.
-// 1979, eq. 8), so E_p (1 - a_p S) = E_b (1 - a_b S) and
+// 1979), so E_p (1 - a_p S) = E_b (1 - a_b S) and
 //   S = (E_b - E_p) / (a_b E_b - a_p E_p),
 // with E the irradiance summed over the sun's zenith angles at the bottom of
 // the atmosphere. Clamped to [0, 1) (a physical S; the discretised tables
