@@ -128,9 +128,11 @@ void time_post(atmos::Renderer& renderer, const atmos::Camera& camera, const Fig
 // `globe.10km.shadows.*`): the frame, the terrain (shadow maps included),
 // the CPU time of the cascades' selections, and the triangles and tile
 // draws into the shadow maps. Then a descent of 40
-// frames from 2.5 radii to 2 m with tiles streamed (at most
-// GlobeSettings::max_tiles_per_frame new tiles a frame):
-// `globe.descent.max_over_median`, the longest frame over the median one.
+// frames from 2.5 radii to 2 m with tiles streamed by the globe's
+// background thread (at most GlobeSettings::max_tiles_per_frame uploads a
+// frame): `globe.descent.first` (the new globe's first frame, with the
+// driver's compilation of its programs), then over the other 39
+// `globe.descent.median`, `.max` and `.max_over_median`.
 void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, int width, int height,
                 const FigureSink& sink);
 
