@@ -27,6 +27,7 @@
 #include "atmos/globe.hpp"
 #include "atmos/plugin.hpp"
 #include "globe_rays.hpp"
+#include "fullscreen_program.hpp"
 #include "globe_target.hpp"
 #include "gpu_fixture.hpp"
 #include "physics/eclipse_cpp.hpp"
@@ -1072,30 +1073,7 @@ void main() {
   result = vec4(gl_FragCoord.x < 1.0 ? direct : sky, 1.0);
 }
 )";
-  const auto compile = [](GLenum type, const std::string& source) {
-    const GLuint shader = glCreateShader(type);
-    const char* text = source.c_str();
-    glShaderSource(shader, 1, &text, nullptr);
-    glCompileShader(shader);
-    GLint ok = 0;
-    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-      char log[2048];
-      glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-      ADD_FAILURE() << log;
-    }
-    return shader;
-  };
-  const GLuint vs = compile(GL_VERTEX_SHADER,
-                            "#version 450 core\nvoid main() { vec2 p = vec2(float((gl_VertexID << 1) & 2), "
-                            "float(gl_VertexID & 2)); gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0); }\n");
-  const GLuint fs = compile(GL_FRAGMENT_SHADER, fragment);
-  const GLuint program = glCreateProgram();
-  glAttachShader(program, vs);
-  glAttachShader(program, fs);
-  glLinkProgram(program);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
+  const GLuint program = atmos_test::fullscreen_program(fragment);
   GLuint target = 0, framebuffer = 0, vao = 0;
   glCreateTextures(GL_TEXTURE_2D, 1, &target);
   glTextureStorage2D(target, 1, GL_RGBA32F, 2, 1);

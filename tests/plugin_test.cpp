@@ -35,6 +35,7 @@
 #include "gpu/atmosphere_pass.hpp"
 #include "physics/parameters.hpp"
 #include "figures.hpp"
+#include "fullscreen_program.hpp"
 #include "gpu_fixture.hpp"
 
 namespace {
@@ -1066,29 +1067,7 @@ void main() {
   result = vec4(vec3(300.0) * transmittance + in_scatter, ok ? 1.0 : 0.0);
 }
 )";
-  // Compile and link with a trivial vertex shader.
-  auto compile = [](GLenum type, const std::string& source) {
-    const GLuint shader = glCreateShader(type);
-    const char* text = source.c_str();
-    glShaderSource(shader, 1, &text, nullptr);
-    glCompileShader(shader);
-    GLint ok = 0;
-    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-      char log[2048];
-      glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-      ADD_FAILURE() << log;
-    }
-    return shader;
-  };
-  const GLuint vs = compile(GL_VERTEX_SHADER,
-                            "#version 450 core\nvoid main() { vec2 p = vec2(float((gl_VertexID << 1) & 2), "
-                            "float(gl_VertexID & 2)); gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0); }\n");
-  const GLuint fs = compile(GL_FRAGMENT_SHADER, fragment);
-  const GLuint program = glCreateProgram();
-  glAttachShader(program, vs);
-  glAttachShader(program, fs);
-  glLinkProgram(program);
+  const GLuint program = atmos_test::fullscreen_program(fragment);
   GLint linked = 0;
   glGetProgramiv(program, GL_LINK_STATUS, &linked);
   ASSERT_TRUE(linked);
