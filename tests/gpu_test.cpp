@@ -33,6 +33,7 @@
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
 #include "gpu/camera_cpp.hpp"
+#include "gpu/gl_util.hpp"
 #include "gpu/shader_source.hpp"
 #include "physics/parameters.hpp"
 #include "physics/stars_cpp.hpp"
@@ -111,15 +112,72 @@ std::vector<Scene> scenes() {
 // The tables rounded to half floats as the renderer rounds them for RGB16F
 // textures (the transmittance stays float, as in the renderer).
 atmos::Tables round_to_half(atmos::Tables tables) {
-  auto round = [](std::vector<glm::vec3>& texels) {
-    for (glm::vec3& t : texels)
-      for (int c = 0; c < 3; ++c) t[c] = glm::unpackHalf1x16(glm::packHalf1x16(t[c]));
+  const bool srgb = atmos::physics::srgb_channels(tables.wavelengths_nm);
+  auto round = [srgb](std::vector<glm::vec3>& texels) {
+    for (glm::vec3& t : texels) t = atmos::gpu::half_texel(t, srgb);
   };
   round(tables.set.scattering);
   round(tables.set.single_aerosol);
   round(tables.set.indirect_irradiance);
   round(tables.set.multiple_scattering);
   return tables;
+}
+
+// Half-float texels: the channels of the three-wavelength mode (radiances,
+// never negative) are rounded to the nearest half float; linear sRGB
+// channels of real light, whose CIE XYZ coordinates are never negative, stay
+// so after rounding, each channel within one half-float step of its float.
+// The texels are the colours of monochromatic light (the spectral locus,
+// the farthest beyond the sRGB gamut light goes) and of random mixtures of
+// it, from 1e-3 down to 1e-9, where half floats are subnormal and spaced
+// 2^-24 apart: plain rounding to the nearest puts some of them beyond the
+// locus (counted, so that the test shows the rounding it guards against).
+TEST(HalfTexel, FaintLightStaysLightAfterRounding) {
+  const glm::dvec3 r = atmos::srgb_to_xyz({1, 0, 0}), g = atmos::srgb_to_xyz({0, 1, 0}),
+                   b = atmos::srgb_to_xyz({0, 0, 1});
+  const glm::dmat3 srgb_from_xyz = glm::inverse(glm::dmat3(r, g, b));
+  std::vector<glm::dvec3> spectra;
+  for (double nm = 400.0; nm <= 700.0; nm += 5.0) spectra.push_back(atmos::cie_1931_color_matching(nm));
+  std::uint32_t state = 12345;
+  auto uniform = [&state] {
+    state = state * 1664525u + 1013904223u;
+    return double(state >> 8) / double(1u << 24);
+  };
+  for (int i = 0; i < 2000; ++i) {
+    const size_t a = size_t(uniform() * double(spectra.size())) % spectra.size();
+    const size_t c = size_t(uniform() * double(spectra.size())) % spectra.size();
+    const double w = uniform() < 0.3 ? 1.0 : uniform();
+    spectra.push_back(w * spectra[a] + (1.0 - w) * spectra[c]);
+  }
+  int plain_rounding_beyond_locus = 0;
+  int checked = 0;
+  for (const glm::dvec3& xyz : spectra) {
+    for (double scale = 1e-3; scale > 1e-9; scale *= 0.1) {
+      const glm::vec3 texel(srgb_from_xyz * (scale * xyz / (xyz.x + xyz.y + xyz.z)));
+      const glm::dvec3 exact_xyz = atmos::srgb_to_xyz(glm::dvec3(texel));
+      const glm::dvec3 floor_xyz = glm::min(exact_xyz, glm::dvec3(0.0));
+      const glm::vec3 plain(glm::unpackHalf1x16(glm::packHalf1x16(texel.x)),
+                            glm::unpackHalf1x16(glm::packHalf1x16(texel.y)),
+                            glm::unpackHalf1x16(glm::packHalf1x16(texel.z)));
+      if (!glm::all(glm::greaterThanEqual(atmos::srgb_to_xyz(glm::dvec3(plain)), floor_xyz)))
+        ++plain_rounding_beyond_locus;
+      const glm::vec3 rounded = atmos::gpu::half_texel(texel, true);
+      const glm::dvec3 rounded_xyz = atmos::srgb_to_xyz(glm::dvec3(rounded));
+      ASSERT_TRUE(glm::all(glm::greaterThanEqual(rounded_xyz, floor_xyz)))
+          << "texel (" << texel.x << ", " << texel.y << ", " << texel.z << ")";
+      for (int ch = 0; ch < 3; ++ch) {
+        // One step of a half float at this value: 2^-10 of its binade, or the
+        // subnormal spacing 2^-24.
+        const double step = std::max(std::ldexp(1.0, std::ilogb(std::abs(texel[ch]) + 1e-30) - 10), 0x1.0p-24);
+        EXPECT_LE(std::abs(double(rounded[ch]) - double(texel[ch])), step) << ch;
+      }
+      EXPECT_EQ(atmos::gpu::half_texel(glm::abs(texel), false), glm::abs(plain));
+      ++checked;
+    }
+  }
+  std::printf("[ figure ] half texels: %d checked, %d beyond the spectral locus after plain rounding, 0 after "
+              "half_texel\n", checked, plain_rounding_beyond_locus);
+  EXPECT_GT(plain_rounding_beyond_locus, 0);
 }
 
 struct Difference {

@@ -232,6 +232,28 @@ TEST(Sweep, ThickPlanetOnCoarseTablesIsRefusedWithAClearErrorNotAFailure) {
   EXPECT_TRUE(result.failures.empty());
 }
 
+// Run 8209 of seed 2026 (250 runs per planet): Titan at 25 wavelengths on
+// half-float tables, the camera on the ground with the sun 22° below the
+// horizon and four moons, a fisheye of faint twilight (~1e-6 cd/m²). With
+// each channel of the tables rounded to the nearest half float, 11 pixels
+// were beyond the spectral locus (a negative CIE Z); gpu::half_texel keeps
+// the tables' texels light.
+TEST(Sweep, FaintTwilightOnHalfFloatTablesHasNoNegativeLight) {
+  const std::unique_ptr<atmos::GlContext> context = headless_context();
+  ASSERT_TRUE(context != nullptr);
+  sweep::SweepOptions options;
+  options.seed = 2026;
+  options.runs = 10000;
+  options.runs_per_planet = 250;
+  options.replay = 8209;
+  const sweep::SweepResult result = sweep::run_sweep(options);
+  std::ostringstream failures;
+  for (const sweep::Failure& f : result.failures) failures << sweep::describe(f) << "\n";
+  EXPECT_EQ(result.runs, 1);
+  EXPECT_EQ(result.refused_runs, 0);
+  EXPECT_TRUE(result.failures.empty()) << failures.str();
+}
+
 // A sweep resumed at an index runs the same runs as the whole sweep from
 // there (here the refused planet 2 of seed 2026 from its run 500).
 TEST(Sweep, ResumedSweepStartsAtItsFirstRun) {

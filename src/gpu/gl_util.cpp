@@ -3,11 +3,13 @@
 #include <glm/gtc/packing.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <initializer_list>
 #include <sstream>
 
+#include "atmos/colour.hpp"
 #include "physics/parameters.hpp"
 
 namespace atmos::gpu {
@@ -78,16 +80,16 @@ GLuint compile_shader(GLenum type, const AssembledSource& source, const char* wh
 }
 
 // Texel data for an upload: floats as they are, or rounded to half floats on
-// the CPU (glm::packHalf1x16, round to nearest). Rounding here rather than in
-// the driver makes the GPU's texels the same on every driver, and lets the
-// tests give the CPU twin exactly the same half-rounded tables.
+// the CPU (half_texel_bits). Rounding here rather than in the driver makes
+// the GPU's texels the same on every driver, and lets the tests give the CPU
+// twin exactly the same half-rounded tables (half_texel).
 struct TexelData {
   GLenum type = GL_FLOAT;
   const void* pixels = nullptr;
   std::vector<std::uint16_t> halves;
 };
 
-TexelData texel_data(const std::vector<glm::vec3>& texels, GLenum internal_format) {
+TexelData texel_data(const std::vector<glm::vec3>& texels, GLenum internal_format, bool srgb_channels) {
   TexelData data;
   if (internal_format != GL_RGB16F) {
     data.pixels = texels.data();
@@ -96,19 +98,77 @@ TexelData texel_data(const std::vector<glm::vec3>& texels, GLenum internal_forma
   data.type = GL_HALF_FLOAT;
   data.halves.resize(texels.size() * 3);
   for (size_t i = 0; i < texels.size(); ++i) {
-    for (int c = 0; c < 3; ++c) {
-      const float value = texels[i][c];
-      if (!(std::abs(value) <= 65504.0f))
-        throw Error("table value " + to_string(double(value)) +
-                    " is outside the half-float range; render with full texture precision");
-      data.halves[3 * i + size_t(c)] = glm::packHalf1x16(value);
-    }
+    const std::array<std::uint16_t, 3> bits = half_texel_bits(texels[i], srgb_channels);
+    std::copy(bits.begin(), bits.end(), data.halves.begin() + std::ptrdiff_t(3 * i));
   }
   data.pixels = data.halves.data();
   return data;
 }
 
+// The half float next to `bits` towards +infinity (up) or -infinity (down);
+// finite inputs only, which texel_data guarantees. Half floats of one sign
+// are ordered as their bit patterns; the two zeros step to the smallest
+// subnormal of either sign.
+std::uint16_t next_half(std::uint16_t bits, bool up) {
+  const bool negative = (bits & 0x8000u) != 0;
+  if ((bits & 0x7fffu) == 0) return up ? std::uint16_t(0x0001u) : std::uint16_t(0x8001u);
+  return std::uint16_t(up != negative ? bits + 1u : bits - 1u);
+}
+
 }  // namespace
+
+std::array<std::uint16_t, 3> half_texel_bits(const glm::vec3& texel, bool srgb_channels) {
+  std::array<std::uint16_t, 3> nearest;
+  for (int c = 0; c < 3; ++c) {
+    if (!(std::abs(texel[c]) <= 65504.0f))
+      throw Error("table value " + to_string(double(texel[c])) +
+                  " is outside the half-float range; render with full texture precision");
+    nearest[size_t(c)] = glm::packHalf1x16(texel[c]);
+  }
+  if (!srgb_channels) return nearest;
+  // Light has non-negative CIE 1931 XYZ coordinates (integrals of the
+  // non-negative colour-matching functions), while its linear sRGB channels
+  // may be negative out of the gamut. Rounding each channel on its own can
+  // push a faint texel beyond the spectral locus: among subnormal half
+  // floats the rounding is absolute, up to 2^-25 = 3e-8, against channels
+  // of ~1e-6 at night. Each coordinate must stay at or above min(0, the
+  // float texel's own). All entries of the sRGB-to-XYZ matrix (IEC
+  // 61966-2-1) are positive, so the texel with all three channels rounded
+  // up satisfies this; the nearest such texel among the eight around the
+  // float one is used.
+  const glm::dvec3 exact(texel);
+  const glm::dvec3 floor_xyz = glm::min(srgb_to_xyz(exact), glm::dvec3(0.0));
+  auto value = [](const std::array<std::uint16_t, 3>& h) {
+    return glm::dvec3(glm::unpackHalf1x16(h[0]), glm::unpackHalf1x16(h[1]), glm::unpackHalf1x16(h[2]));
+  };
+  auto allowed = [&](const std::array<std::uint16_t, 3>& h) {
+    return glm::all(glm::greaterThanEqual(srgb_to_xyz(value(h)), floor_xyz));
+  };
+  if (allowed(nearest)) return nearest;
+  std::array<std::uint16_t, 3> below, above;
+  for (size_t c = 0; c < 3; ++c) {
+    const double rounded = glm::unpackHalf1x16(nearest[c]);
+    below[c] = rounded <= exact[int(c)] ? nearest[c] : next_half(nearest[c], false);
+    above[c] = rounded >= exact[int(c)] ? nearest[c] : next_half(nearest[c], true);
+  }
+  std::array<std::uint16_t, 3> best = above;
+  double best_distance = glm::length(value(above) - exact);
+  for (int corner = 0; corner < 8; ++corner) {
+    std::array<std::uint16_t, 3> h;
+    for (size_t c = 0; c < 3; ++c) h[c] = (corner >> c) & 1 ? above[c] : below[c];
+    const double distance = glm::length(value(h) - exact);
+    if (distance < best_distance && allowed(h)) {
+      best = h;
+      best_distance = distance;
+    }
+  }
+  return best;
+}
+
+glm::vec3 half_texel(const glm::vec3& texel, bool srgb_channels) {
+  const std::array<std::uint16_t, 3> bits = half_texel_bits(texel, srgb_channels);
+  return {glm::unpackHalf1x16(bits[0]), glm::unpackHalf1x16(bits[1]), glm::unpackHalf1x16(bits[2])};
+}
 
 namespace {
 
@@ -157,7 +217,8 @@ void set_table_sampling(GLuint texture) {
   glTextureParameteri(texture, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
 }
 
-GLuint make_texture_2d(int width, int height, const std::vector<glm::vec3>& texels, GLenum internal_format) {
+GLuint make_texture_2d(int width, int height, const std::vector<glm::vec3>& texels, GLenum internal_format,
+                       bool srgb_channels) {
   GLint max_size = 0;
   glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
   if (width > max_size || height > max_size)
@@ -168,14 +229,14 @@ GLuint make_texture_2d(int width, int height, const std::vector<glm::vec3>& texe
   // Rows of RGB half floats are 6 bytes per texel: not always 4-byte aligned.
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   glTextureStorage2D(texture, 1, internal_format, width, height);
-  const TexelData data = texel_data(texels, internal_format);
+  const TexelData data = texel_data(texels, internal_format, srgb_channels);
   glTextureSubImage2D(texture, 0, 0, 0, width, height, GL_RGB, data.type, data.pixels);
   set_table_sampling(texture);
   return texture;
 }
 
 GLuint make_texture_3d(int width, int height, int depth, const std::vector<glm::vec3>& texels,
-                       GLenum internal_format) {
+                       GLenum internal_format, bool srgb_channels) {
   GLint max_size = 0;
   glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max_size);
   if (width > max_size || height > max_size || depth > max_size)
@@ -185,7 +246,7 @@ GLuint make_texture_3d(int width, int height, int depth, const std::vector<glm::
   glCreateTextures(GL_TEXTURE_3D, 1, &texture);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   glTextureStorage3D(texture, 1, internal_format, width, height, depth);
-  const TexelData data = texel_data(texels, internal_format);
+  const TexelData data = texel_data(texels, internal_format, srgb_channels);
   glTextureSubImage3D(texture, 0, 0, 0, 0, width, height, depth, GL_RGB, data.type, data.pixels);
   set_table_sampling(texture);
   return texture;
@@ -291,17 +352,19 @@ GpuTables::GpuTables(const Atmosphere& atmosphere, const Tables& tables, Texture
     const GLenum format = precision == TexturePrecision::half ? GL_RGB16F : GL_RGB32F;
     sizes_ = s;
     format_ = format;
+    srgb_channels_ = physics::srgb_channels(tables.wavelengths_nm);
     // The optical depth of every wavelength triple, side by side (32-bit
     // whatever the precision, see TexturePrecision).
     textures_[0] = make_texture_2d(s.transmittance_mu * tables.transmittance_tiles(), s.transmittance_r,
-                                   tables.spectral_optical_depth, GL_RGB32F);
+                                   tables.spectral_optical_depth, GL_RGB32F, false);
     textures_[1] = make_texture_3d(tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
-                                   t.scattering, format);
+                                   t.scattering, format, srgb_channels_);
     textures_[2] = make_texture_3d(tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
-                                   t.single_aerosol, format);
-    textures_[3] = make_texture_2d(s.irradiance_mu_s, s.irradiance_r, t.indirect_irradiance, format);
+                                   t.single_aerosol, format, srgb_channels_);
+    textures_[3] = make_texture_2d(s.irradiance_mu_s, s.irradiance_r, t.indirect_irradiance, format,
+                                   srgb_channels_);
     textures_[4] = make_texture_3d(tables.scattering_width(), tables.scattering_height(), tables.scattering_depth(),
-                                   t.multiple_scattering, format);
+                                   t.multiple_scattering, format, srgb_channels_);
     check_gl("while uploading the tables");
   } catch (...) {
     release();
@@ -315,11 +378,11 @@ void GpuTables::replace_ground_dependent_tables(const TableSet& set) {
   const TableSizes& s = sizes_;
   const int width = s.scattering_nu * s.scattering_mu_s;
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  const TexelData irradiance = texel_data(set.indirect_irradiance, format_);
+  const TexelData irradiance = texel_data(set.indirect_irradiance, format_, srgb_channels_);
   glTextureSubImage2D(textures_[3], 0, 0, 0, s.irradiance_mu_s, s.irradiance_r, GL_RGB, irradiance.type,
                       irradiance.pixels);
   for (const auto& [index, texels] : {std::pair{1, &set.scattering}, std::pair{4, &set.multiple_scattering}}) {
-    const TexelData data = texel_data(*texels, format_);
+    const TexelData data = texel_data(*texels, format_, srgb_channels_);
     glTextureSubImage3D(textures_[index], 0, 0, 0, 0, width, s.scattering_mu, s.scattering_r, GL_RGB, data.type,
                         data.pixels);
   }

@@ -11,6 +11,7 @@
 
 #include <glm/glm.hpp>
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -36,11 +37,21 @@ GLuint link_compute_program(const AssembledSource& compute_source);
 // physics/shader_cpp.hpp reproduces on the CPU.
 void set_table_sampling(GLuint texture);
 
+// A table texel rounded to half floats (IEEE 754 binary16), as GL_RGB16F
+// tables store it: each channel to the nearest half float, except that with
+// `srgb_channels` (the spectral mode's linear sRGB channels) no CIE XYZ
+// coordinate may fall below min(0, the texel's own), so that faint light
+// stays light (see the .cpp). Throws atmos::Error beyond the half-float range.
+std::array<std::uint16_t, 3> half_texel_bits(const glm::vec3& texel, bool srgb_channels);
+glm::vec3 half_texel(const glm::vec3& texel, bool srgb_channels);
+
 // RGB tables as textures: 32-bit floats, or half floats rounded on the CPU
-// (GL_RGB16F). Throws atmos::Error when the size exceeds the driver's limit.
-GLuint make_texture_2d(int width, int height, const std::vector<glm::vec3>& texels, GLenum internal_format);
+// (GL_RGB16F, half_texel_bits). Throws atmos::Error when the size exceeds
+// the driver's limit.
+GLuint make_texture_2d(int width, int height, const std::vector<glm::vec3>& texels, GLenum internal_format,
+                       bool srgb_channels);
 GLuint make_texture_3d(int width, int height, int depth, const std::vector<glm::vec3>& texels,
-                       GLenum internal_format);
+                       GLenum internal_format, bool srgb_channels);
 
 // Whether an OpenGL context is current on the calling thread.
 bool gl_context_is_current();
@@ -153,6 +164,7 @@ class GpuTables {
   glm::mat3 radiance_to_srgb_{1.0f};
   TableSizes sizes_;
   GLenum format_ = 0;  // of the radiance tables 1..4
+  bool srgb_channels_ = false;  // physics::srgb_channels of the tables' wavelengths
   GLuint textures_[5] = {0, 0, 0, 0, 0};
   // Without, with the low-sun integration, and eclipsed (compiled on first use).
   GLuint sky_view_programs_[3] = {0, 0, 0};
