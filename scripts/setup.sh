@@ -13,6 +13,7 @@ packages=(
   libeigen3-dev python3-matplotlib
   libgdal-dev libnetcdf-dev
   xplanet-images gmt-gshhg-low
+  libglfw3-dev libimgui-dev xvfb xauth
 )
 
 for arg in "$@"; do

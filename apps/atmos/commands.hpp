@@ -1,5 +1,5 @@
 // The subcommands of `atmos`, one file each (render.cpp, precompute.cpp,
-// sample.cpp, bench.cpp, plot_data.cpp). Each adds itself to the
+// sample.cpp, bench.cpp, plot_data.cpp, view.cpp). Each adds itself to the
 // application with its options and returns what runs it.
 #pragma once
 
@@ -14,5 +14,6 @@ Command add_precompute_command(CLI::App& app);
 Command add_sample_command(CLI::App& app);
 Command add_bench_command(CLI::App& app);
 Command add_plot_data_command(CLI::App& app);
+Command add_view_command(CLI::App& app);
 
 }  // namespace atmos_cli

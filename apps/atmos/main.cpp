@@ -5,6 +5,7 @@
 //   atmos sample      radiance for directions read as CSV (tables or --reference)
 //   atmos bench       precomputation and render timings, name<TAB>value<TAB>unit
 //   atmos plot-data   CSV files for scripts/plots.py (docs/plots.md)
+//   atmos view        the interactive viewer (docs/viewer.md)
 //
 // One file per command (commands.hpp); the options several commands share
 // are defined once in options.hpp. Exit codes: 0 success, 1 runtime error
@@ -26,7 +27,7 @@ int main(int argc, char** argv) {
   app.set_help_all_flag("--help-all", "Help for all commands");
   const std::vector<Command> commands = {add_render_command(app), add_precompute_command(app),
                                          add_sample_command(app), add_bench_command(app),
-                                         add_plot_data_command(app)};
+                                         add_plot_data_command(app), add_view_command(app)};
 
   if (argc > 1 && argv[1][0] != '-') {
     const std::string command = argv[1];

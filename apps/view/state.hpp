@@ -1,0 +1,83 @@
+// atmos view: what the viewer's panel edits and its recorded flights hold —
+// the planet and its tables (a change means new tables), the look of the
+// image (applied from the next frame), and a frame of a flight.
+#pragma once
+
+#include <glm/vec3.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "atmos/atmosphere.hpp"
+#include "atmos/post.hpp"
+#include "atmos/tables.hpp"
+#include "flight.hpp"
+
+namespace atmos_view {
+
+// The planet and how its tables are computed: any change needs new tables.
+struct PlanetParams {
+  std::string planet = "earth";  // a preset or a planet file
+  int wavelengths = 0;           // 0: the planet file's; else 3..48 (atmos::spectral_wavelengths)
+  int orders = 4;                // scattering orders, 1..100
+  double density_scale = 1.0;    // (0, 10000] (atmos::scale_density)
+  std::string solar;             // "": the planet file's; "table" or "blackbody:T"
+  std::string table_sizes = "default";  // "default" or "small" (the CLI's --tables)
+  // Values replacing the planet file's; none: the file's.
+  std::optional<double> bottom_radius_m;  // the ground's radius, m
+  std::optional<double> thickness_m;      // top radius - bottom radius, m
+  std::optional<double> ground_albedo;    // a constant over wavelength, [0, 1]
+
+  bool operator==(const PlanetParams&) const = default;
+};
+
+// The atmosphere of `params`, validated. Throws atmos::Error with one line
+// naming the first bad value (an unreadable planet file, a density scale or
+// radius out of range, an albedo outside [0, 1], ...).
+atmos::Atmosphere make_atmosphere(const PlanetParams& params);
+// The precomputation options of `params` (fixed orders, the table sizes).
+atmos::PrecomputeOptions make_precompute_options(const PlanetParams& params, bool ground_albedo_response);
+
+// The look of the image: post-processing, sky content, camera lens.
+struct LookSettings {
+  double exposure_ev = 13.0;  // EV100 without auto exposure
+  bool auto_exposure = false;
+  double compensation_ev = 0.0;  // with auto exposure
+  atmos::ToneMapping tone_mapping = atmos::ToneMapping::exp;
+  double bloom = 0.0;  // strength, [0, 1]
+  bool stars = false;  // also by day (always drawn with the sun below the horizon)
+  // A moon of the Moon's apparent size (0.26 degrees) at this angular
+  // separation from the sun's centre, on the side of the local zenith: an
+  // eclipse when the separation is below the sum of the two radii.
+  bool moon = false;
+  double moon_separation_deg = 0.1;
+  double fov_deg = 60.0;  // vertical field of view, (1, 150)
+
+  bool operator==(const LookSettings&) const = default;
+};
+
+// One frame of a recorded flight: what is on screen.
+struct FrameRecord {
+  double time_s = 0.0;  // since the first frame
+  CameraPose pose;
+  glm::dvec3 sun{0, 0, 1};  // towards the sun, planet frame
+  LookSettings look;
+  PlanetParams planet;  // the planet of the tables on screen
+};
+
+struct FlightRecord {
+  bool globe = true;           // the ground: the globe or the analytic sphere
+  bool planet_albedo = false;  // the air over the planet file's albedo, not the globe's regional albedo
+  int width = 0, height = 0;   // pixels
+  std::vector<FrameRecord> frames;
+};
+
+// JSON (docs/viewer.md, Recorded flights). Numbers are written with enough
+// digits to be read back bit for bit, so that a replay renders exactly the
+// recorded views. read_flight throws atmos::Error naming the file and the
+// first missing or bad field.
+void write_flight(const FlightRecord& record, const std::string& path);
+FlightRecord read_flight(const std::string& path);
+
+}  // namespace atmos_view

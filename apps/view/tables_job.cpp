@@ -1,0 +1,135 @@
+#include "tables_job.hpp"
+
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <utility>
+
+#include "atmos/planet_file.hpp"
+
+namespace atmos_view {
+
+namespace {
+
+double now_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+}  // namespace
+
+PlanetTables load_planet_tables(const PlanetParams& params, bool globe, bool ground_albedo_response,
+                                const CacheConfig& cache,
+                                const std::function<void(const std::string&, double)>& progress) {
+  const double start = now_s();
+  PlanetTables out;
+  out.params = params;
+  out.planet = make_atmosphere(params);
+  if (globe) {
+    out.surface = atmos::load_surface(params.planet);
+    out.air = atmos::extend_below_datum(out.planet, out.surface);
+  } else {
+    out.air = out.planet;
+  }
+  atmos::PrecomputeOptions options = make_precompute_options(params, globe && ground_albedo_response);
+  options.progress = progress;
+  if (cache.disabled) {
+    out.tables = atmos::precompute_tables(out.air, options);
+    out.status = "computed (cache disabled)";
+  } else {
+    const std::string dir = cache.directory.empty() ? atmos::default_cache_directory() : cache.directory;
+    atmos::CacheResult r = atmos::load_or_precompute_tables(out.air, options, dir);
+    out.status = r.status == atmos::CacheStatus::hit ? "loaded from the cache" : "computed and cached";
+    out.tables = std::move(r.tables);
+  }
+  out.seconds = now_s() - start;
+  return out;
+}
+
+TableJob::TableJob(CacheConfig cache, bool globe, bool ground_albedo_response, int threads)
+    : cache_(std::move(cache)),
+      globe_(globe),
+      ground_albedo_response_(ground_albedo_response),
+      threads_(threads < 1 ? 1 : threads),
+      worker_([this] { run(); }) {}
+
+TableJob::~TableJob() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+    waiting_.reset();
+  }
+  wake_.notify_all();
+  worker_.join();
+}
+
+void TableJob::request(const PlanetParams& params) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    waiting_ = params;
+  }
+  wake_.notify_all();
+}
+
+std::optional<PlanetTables> TableJob::take_result() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::optional<PlanetTables> out = std::move(result_);
+  result_.reset();
+  return out;
+}
+
+std::optional<std::string> TableJob::take_error() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::optional<std::string> out = std::move(error_);
+  error_.reset();
+  return out;
+}
+
+TableJob::Progress TableJob::progress() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Progress p;
+  p.busy = busy_ || waiting_.has_value();
+  p.step = step_;
+  p.fraction = fraction_;
+  p.elapsed_s = busy_ ? now_s() - started_s_ : 0.0;
+  return p;
+}
+
+void TableJob::run() {
+  tbb::task_arena arena(threads_);
+  for (;;) {
+    PlanetParams params;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      wake_.wait(lock, [this] { return stop_ || waiting_.has_value(); });
+      if (stop_) return;
+      params = std::move(*waiting_);
+      waiting_.reset();
+      busy_ = true;
+      step_.clear();
+      fraction_ = -1.0;
+      started_s_ = now_s();
+    }
+    const auto progress = [this](const std::string& step, double fraction) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      step_ = step;
+      fraction_ = fraction;
+    };
+    std::optional<PlanetTables> tables;
+    std::optional<std::string> error;
+    arena.execute([&] {
+      try {
+        tables = load_planet_tables(params, globe_, ground_albedo_response_, cache_, progress);
+      } catch (const std::exception& e) {
+        error = e.what();
+      }
+    });
+    std::lock_guard<std::mutex> lock(mutex_);
+    busy_ = false;
+    // A newer request supersedes these tables: they are dropped unseen.
+    if (waiting_) continue;
+    if (tables) result_ = std::move(tables);
+    if (error) error_ = std::move(error);
+  }
+}
+
+}  // namespace atmos_view

@@ -1,0 +1,77 @@
+// atmos view: the tables of a planet, loaded from the cache or precomputed
+// on a thread of their own while the viewer keeps drawing the old ones.
+//
+// The precomputation (atmos::precompute_tables) runs on the CPU with TBB;
+// the job runs it in a task arena of `threads` workers so that the
+// viewer's frames (the software rasteriser's threads) keep a core. The
+// newest request wins: a request made while another is computed replaces
+// any request still waiting, and runs when the current one ends.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "scene.hpp"
+#include "state.hpp"
+
+namespace atmos_view {
+
+struct CacheConfig {
+  std::string directory;  // "": atmos::default_cache_directory()
+  bool disabled = false;  // always precompute, neither read nor write
+};
+
+// The planet of `params` and its tables, from the cache or computed (the
+// tables of the pass's air: the planet continued below its datum to the
+// globe's lowest ground). `progress` as PrecomputeOptions::progress.
+// Throws atmos::Error for bad parameters or an unreadable planet file.
+PlanetTables load_planet_tables(const PlanetParams& params, bool globe, bool ground_albedo_response,
+                                const CacheConfig& cache,
+                                const std::function<void(const std::string&, double)>& progress = {});
+
+class TableJob {
+ public:
+  TableJob(CacheConfig cache, bool globe, bool ground_albedo_response, int threads);
+  // Waits for the tables being computed (the precomputation cannot be
+  // interrupted) and drops any waiting request.
+  ~TableJob();
+  TableJob(const TableJob&) = delete;
+  TableJob& operator=(const TableJob&) = delete;
+
+  void request(const PlanetParams& params);
+  // The newest finished tables, once (then empty until the next ones).
+  std::optional<PlanetTables> take_result();
+  // The error of the newest failed request, once.
+  std::optional<std::string> take_error();
+
+  struct Progress {
+    bool busy = false;
+    std::string step;       // the running step ("" while loading or before the first step)
+    double fraction = -1.0;  // of the whole, [0, 1]; < 0: unknown (a cache look-up)
+    double elapsed_s = 0.0;
+  };
+  Progress progress() const;
+
+ private:
+  void run();
+
+  CacheConfig cache_;
+  bool globe_, ground_albedo_response_;
+  int threads_;
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  std::optional<PlanetParams> waiting_;
+  std::optional<PlanetTables> result_;
+  std::optional<std::string> error_;
+  bool busy_ = false, stop_ = false;
+  std::string step_;
+  double fraction_ = -1.0;
+  double started_s_ = 0.0;
+  std::thread worker_;
+};
+
+}  // namespace atmos_view

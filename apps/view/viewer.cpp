@@ -1,0 +1,808 @@
+#include "viewer.hpp"
+
+#include <epoxy/gl.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <glm/geometric.hpp>
+#include <imgui.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "atmos/image.hpp"
+#include "atmos/planet_file.hpp"
+#include "atmos/post.hpp"
+#include "atmos/renderer.hpp"
+#include "scene.hpp"
+#include "script.hpp"
+
+namespace atmos_view {
+
+namespace {
+
+constexpr double kDegree = M_PI / 180.0;
+// The Moon's apparent angular radius from the Earth, rad (1737.4 km at 384 400 km).
+constexpr double kMoonAngularRadius = 0.2590 * kDegree;
+
+double now_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+bool has_extension(const std::string& path, const std::string& ext) {
+  if (path.size() < ext.size()) return false;
+  std::string tail = path.substr(path.size() - ext.size());
+  std::transform(tail.begin(), tail.end(), tail.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return tail == ext;
+}
+
+// The sun's azimuth (from north towards east) and elevation, degrees, in
+// the local frame of the ground point below `position`.
+void sun_angles(const glm::dvec3& position, const glm::dvec3& sun, double& azimuth_deg, double& elevation_deg) {
+  glm::dvec3 east, north, up;
+  local_frame(position, east, north, up);
+  elevation_deg = std::asin(std::clamp(glm::dot(sun, up), -1.0, 1.0)) / kDegree;
+  azimuth_deg = std::atan2(glm::dot(sun, east), glm::dot(sun, north)) / kDegree;
+}
+
+glm::dvec3 sun_from_angles(const glm::dvec3& position, double azimuth_deg, double elevation_deg) {
+  glm::dvec3 east, north, up;
+  local_frame(position, east, north, up);
+  const double az = azimuth_deg * kDegree, el = elevation_deg * kDegree;
+  return glm::normalize((north * std::cos(az) + east * std::sin(az)) * std::cos(el) + up * std::sin(el));
+}
+
+// Local solar time at the camera's longitude, hours in [0, 24): noon where
+// the sun's hour angle is zero (the sun on the camera's meridian), 15
+// degrees of longitude an hour.
+double time_of_day_h(const glm::dvec3& position, const glm::dvec3& sun) {
+  const double camera_longitude = std::atan2(position.y, position.x);
+  const double subsolar_longitude = std::atan2(sun.y, sun.x);
+  const double hours = 12.0 + (camera_longitude - subsolar_longitude) / kDegree / 15.0;
+  return hours - 24.0 * std::floor(hours / 24.0);
+}
+
+// The sun at local solar time `hours` for the camera, with its declination kept.
+glm::dvec3 sun_at_time(const glm::dvec3& position, const glm::dvec3& sun, double hours) {
+  const double declination = std::asin(std::clamp(sun.z, -1.0, 1.0));
+  const double subsolar_longitude = std::atan2(position.y, position.x) - (hours - 12.0) * 15.0 * kDegree;
+  return {std::cos(declination) * std::cos(subsolar_longitude), std::cos(declination) * std::sin(subsolar_longitude),
+          std::sin(declination)};
+}
+
+// The moon of LookSettings: the Moon's apparent size, `separation` from the
+// sun's centre towards the local zenith (or any side for a sun at the zenith).
+std::vector<atmos::Moon> place_moons(const LookSettings& look, const glm::dvec3& position, const glm::dvec3& sun,
+                                     double top_radius_m) {
+  if (!look.moon) return {};
+  glm::dvec3 towards = glm::normalize(position) - sun * glm::dot(glm::normalize(position), sun);
+  if (glm::length(towards) < 1e-6) towards = glm::cross(sun, glm::dvec3(1, 0, 0));
+  if (glm::length(towards) < 1e-6) towards = glm::cross(sun, glm::dvec3(0, 1, 0));
+  towards = glm::normalize(towards);
+  const double s = look.moon_separation_deg * kDegree;
+  const glm::dvec3 direction = glm::normalize(sun * std::cos(s) + towards * std::sin(s));
+  std::vector<atmos::Moon> moons = {atmos::moon_in_sky(position, direction, kMoonAngularRadius)};
+  // From far out (beyond the Moon's distance) the moon may be placed inside
+  // the atmosphere: no moon then, rather than an error every frame.
+  try {
+    atmos::validate_moons(moons, top_radius_m);
+  } catch (const atmos::Error&) {
+    return {};
+  }
+  return moons;
+}
+
+atmos::PostSettings post_settings(const LookSettings& look) {
+  atmos::PostSettings s;
+  s.tone_mapping = look.tone_mapping;
+  s.exposure_ev = look.exposure_ev;
+  s.bloom.strength = std::clamp(look.bloom, 0.0, 1.0);
+  s.auto_exposure.enabled = look.auto_exposure;
+  s.auto_exposure.compensation_ev = look.compensation_ev;
+  return s;
+}
+
+// The scene's HDR texture as an image in cd/m², rows top-down (GL's rows
+// are bottom-up).
+atmos::Image read_hdr(GLuint texture, int width, int height) {
+  const atmos::Image bottom_up = atmos::read_linear_image(texture, width, height);
+  atmos::Image image = bottom_up;
+  const size_t row = size_t(width) * 3;
+  for (size_t y = 0; y < size_t(height); ++y)
+    for (size_t i = 0; i < row; ++i)
+      image.rgb[y * row + i] = float(double(bottom_up.rgb[(size_t(height) - 1 - y) * row + i]) * Scene::kNitsPerUnit);
+  return image;
+}
+
+// An srgb8 texture (PostProcess's output) as a display image, rows top-down.
+atmos::DisplayImage read_display(GLuint texture, int width, int height) {
+  const atmos::DisplayImage bottom_up = atmos::read_display_image(texture, width, height);
+  atmos::DisplayImage image = bottom_up;
+  const size_t row = size_t(width) * 3;
+  for (size_t y = 0; y < size_t(height); ++y)
+    std::copy_n(bottom_up.rgb.begin() + std::ptrdiff_t((size_t(height) - 1 - y) * row), row,
+                image.rgb.begin() + std::ptrdiff_t(y * row));
+  return image;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// ---------------------------------------------------------------------------
+// The window
+
+std::string& glfw_error() {
+  static std::string message;
+  return message;
+}
+
+void on_glfw_error(int code, const char* description) {
+  glfw_error() = std::string(description ? description : "unknown error") + " (GLFW error " + std::to_string(code) + ")";
+}
+
+// GLFW and its window: terminated in the destructor, after everything
+// that used the context.
+struct Window {
+  GLFWwindow* window = nullptr;
+
+  Window(int width, int height, bool visible) {
+    const char* display = std::getenv("DISPLAY");
+    const char* wayland = std::getenv("WAYLAND_DISPLAY");
+    if ((!display || !*display) && (!wayland || !*wayland))
+      throw atmos::Error(
+          "no display: atmos view opens a window (neither DISPLAY nor WAYLAND_DISPLAY is set); run it under "
+          "xvfb-run, or replay a recorded flight headless with --replay");
+    glfwSetErrorCallback(on_glfw_error);
+    if (!glfwInit()) throw atmos::Error("cannot open a window: " + glfw_error());
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
+    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+    glfwWindowHint(GLFW_VISIBLE, visible ? GLFW_TRUE : GLFW_FALSE);
+    glfwWindowHint(GLFW_RESIZABLE, GLFW_TRUE);
+    window = glfwCreateWindow(width, height, "atmos view", nullptr, nullptr);
+    if (!window) {
+      const std::string why = glfw_error();
+      glfwTerminate();
+      throw atmos::Error("cannot open an OpenGL 4.5 core window: " + why);
+    }
+    glfwMakeContextCurrent(window);
+    glfwSwapInterval(0);
+  }
+  ~Window() {
+    glfwDestroyWindow(window);
+    glfwTerminate();
+  }
+  Window(const Window&) = delete;
+  Window& operator=(const Window&) = delete;
+};
+
+// Dear ImGui with the GLFW platform and OpenGL 3 renderer backends that
+// Debian's libimgui-dev ships.
+struct Gui {
+  explicit Gui(GLFWwindow* window) {
+    IMGUI_CHECKVERSION();
+    ImGui::CreateContext();
+    ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini in the working directory
+    ImGui::StyleColorsDark();
+    ImGui_ImplGlfw_InitForOpenGL(window, true);
+    ImGui_ImplOpenGL3_Init("#version 450 core");
+  }
+  ~Gui() {
+    ImGui_ImplOpenGL3_Shutdown();
+    ImGui_ImplGlfw_Shutdown();
+    ImGui::DestroyContext();
+  }
+  Gui(const Gui&) = delete;
+  Gui& operator=(const Gui&) = delete;
+};
+
+// Frame times and what happened in each frame.
+struct FrameLog {
+  std::vector<double> ms;
+  std::vector<bool> dragging;
+  std::vector<bool> swapped;
+
+  void add(double frame_ms, bool drag, bool swap) {
+    ms.push_back(frame_ms);
+    dragging.push_back(drag);
+    swapped.push_back(swap);
+  }
+  // The frames that count for the statistics: all but the first (its
+  // programs are compiled at their first draw) and the table swaps (a new
+  // scene compiles its programs).
+  std::vector<double> steady() const {
+    std::vector<double> out;
+    for (size_t i = 1; i < ms.size(); ++i)
+      if (!swapped[i]) out.push_back(ms[i]);
+    return out;
+  }
+};
+
+class Viewer {
+ public:
+  explicit Viewer(const ViewOptions& o) : o_(o) {}
+
+  int run();
+
+ private:
+  using Clock = std::chrono::steady_clock;
+
+  Flight::GroundHeight ground() const {
+    return [this](const glm::dvec3& p) { return scene_->ground_height_m(p); };
+  }
+  void swap_scene(PlanetTables&& tables, int frame);
+  void set_slider(const std::string& name, double value);
+  double slider_value(const std::string& name) const;
+  void request_tables();
+  FlightInput window_input();
+  void panel();
+  void write_screenshot(GLuint hdr, int width, int height);
+
+  const ViewOptions& o_;
+  std::unique_ptr<Scene> scene_;
+  std::unique_ptr<atmos::PostProcess> post_;
+  std::unique_ptr<TableJob> job_;
+  std::unique_ptr<Flight> flight_;
+  GLFWwindow* window_ = nullptr;
+  glm::dvec3 sun_{0, 0, 1};
+  LookSettings look_;
+  PlanetParams edited_;  // the planet the panel shows (the scene's, or one being computed)
+  std::string planet_file_;
+  std::string message_;  // the last error or status, shown in the panel
+  bool message_is_error_ = false;
+  bool timed_ = true;
+  bool awaiting_tables_ = false;  // requested tables not swapped in yet
+  double last_swap_ms_ = 0.0, last_tables_s_ = 0.0;
+  std::vector<float> plot_;
+  FrameLog log_;
+  FlightRecord record_;
+  double mouse_x_ = 0.0, mouse_y_ = 0.0;
+  bool dragging_view_ = false;
+  std::array<bool, 4> jump_held_{};
+  double start_s_ = 0.0;
+};
+
+void Viewer::swap_scene(PlanetTables&& tables, int frame) {
+  const double start = now_s();
+  const double altitude = flight_ ? flight_->altitude_m(ground()) : 0.0;
+  // The new scene first: if it cannot be built the old one stays.
+  auto scene = std::make_unique<Scene>(tables, o_.globe, !o_.planet_albedo, o_.frames > 0);
+  scene_ = std::move(scene);
+  if (flight_) flight_->set_bottom_radius(scene_->bottom_radius_m(), altitude, ground());
+  // The new scene's programs are compiled at its first draw: time it with
+  // the swap (glFinish), which is what the frame that swaps costs.
+  last_swap_ms_ = (now_s() - start) * 1e3;
+  last_tables_s_ = tables.seconds;
+  std::printf("tables: %s in %.2f s; swapped in at frame %d (%.0f ms to build the scene)\n", tables.status.c_str(),
+              tables.seconds, frame, last_swap_ms_);
+  std::fflush(stdout);
+}
+
+void Viewer::request_tables() {
+  try {
+    (void)make_atmosphere(edited_);  // bad values are reported now, the old tables stay
+    job_->request(edited_);
+    awaiting_tables_ = true;
+    message_.clear();
+  } catch (const std::exception& e) {
+    message_ = e.what();
+    message_is_error_ = true;
+    edited_ = scene_->params();
+  }
+}
+
+double Viewer::slider_value(const std::string& name) const {
+  double az = 0.0, el = 0.0;
+  sun_angles(flight_->position(), sun_, az, el);
+  const atmos::Atmosphere& a = scene_->planet();
+  if (name == "sun_elevation") return el;
+  if (name == "sun_azimuth") return az;
+  if (name == "time_of_day") return time_of_day_h(flight_->position(), sun_);
+  if (name == "exposure_ev") return look_.exposure_ev;
+  if (name == "compensation_ev") return look_.compensation_ev;
+  if (name == "bloom") return look_.bloom;
+  if (name == "fov_deg") return look_.fov_deg;
+  if (name == "moon_separation_deg") return look_.moon_separation_deg;
+  if (name == "density_scale") return edited_.density_scale;
+  if (name == "ground_albedo") return edited_.ground_albedo.value_or(a.ground_albedo.at(550.0));
+  if (name == "wavelengths") return double(edited_.wavelengths ? edited_.wavelengths : int(a.wavelengths_nm.size()));
+  if (name == "orders") return double(edited_.orders);
+  if (name == "bottom_radius_km") return edited_.bottom_radius_m.value_or(a.bottom_radius_m) * 1e-3;
+  if (name == "thickness_km") return edited_.thickness_m.value_or(a.top_radius_m - a.bottom_radius_m) * 1e-3;
+  return 0.0;
+}
+
+void Viewer::set_slider(const std::string& name, double v) {
+  double az = 0.0, el = 0.0;
+  sun_angles(flight_->position(), sun_, az, el);
+  if (name == "sun_elevation") sun_ = sun_from_angles(flight_->position(), az, std::clamp(v, -90.0, 90.0));
+  if (name == "sun_azimuth") sun_ = sun_from_angles(flight_->position(), v, el);
+  if (name == "time_of_day") sun_ = sun_at_time(flight_->position(), sun_, v);
+  if (name == "exposure_ev") look_.exposure_ev = std::clamp(v, -10.0, 25.0);
+  if (name == "compensation_ev") look_.compensation_ev = std::clamp(v, -10.0, 10.0);
+  if (name == "bloom") look_.bloom = std::clamp(v, 0.0, 1.0);
+  if (name == "fov_deg") look_.fov_deg = std::clamp(v, 5.0, 120.0);
+  if (name == "moon_separation_deg") look_.moon_separation_deg = std::clamp(v, 0.0, 10.0);
+  if (name == "density_scale") edited_.density_scale = v;
+  if (name == "ground_albedo") edited_.ground_albedo = v;
+  if (name == "wavelengths") edited_.wavelengths = int(std::lround(v));
+  if (name == "orders") edited_.orders = int(std::lround(v));
+  if (name == "bottom_radius_km") edited_.bottom_radius_m = v * 1e3;
+  if (name == "thickness_km") edited_.thickness_m = v * 1e3;
+}
+
+FlightInput Viewer::window_input() {
+  FlightInput in;
+  const ImGuiIO& io = ImGui::GetIO();
+  if (!io.WantCaptureKeyboard) {
+    const auto down = [this](int key) { return glfwGetKey(window_, key) == GLFW_PRESS; };
+    in.forward = down(GLFW_KEY_W);
+    in.back = down(GLFW_KEY_S);
+    in.left = down(GLFW_KEY_A);
+    in.right = down(GLFW_KEY_D);
+    in.down = down(GLFW_KEY_Q);
+    in.up = down(GLFW_KEY_E);
+    if (down(GLFW_KEY_LEFT_SHIFT) || down(GLFW_KEY_RIGHT_SHIFT)) in.speed_multiplier = 10.0;
+    if (down(GLFW_KEY_LEFT_CONTROL) || down(GLFW_KEY_RIGHT_CONTROL)) in.speed_multiplier = 0.1;
+    // A jump on the press of its key, not on every frame it is held.
+    for (int k = 0; k < 4; ++k) {
+      const bool held = down(GLFW_KEY_1 + k);
+      if (held && !jump_held_[size_t(k)]) in.jump = k + 1;
+      jump_held_[size_t(k)] = held;
+    }
+  }
+  double x = 0.0, y = 0.0;
+  glfwGetCursorPos(window_, &x, &y);
+  const bool pressed = glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS ||
+                       glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS;
+  // A drag that starts outside the panel turns the view.
+  if (pressed && !dragging_view_ && !io.WantCaptureMouse) dragging_view_ = true;
+  if (!pressed) dragging_view_ = false;
+  if (dragging_view_) {
+    in.look_dx = x - mouse_x_;
+    in.look_dy = y - mouse_y_;
+  }
+  mouse_x_ = x;
+  mouse_y_ = y;
+  return in;
+}
+
+void Viewer::panel() {
+  ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(340, 0), ImGuiCond_FirstUseEver);
+  ImGui::Begin("atmos view");
+  const Flight::GroundHeight g = ground();
+
+  // Frame times.
+  const double last = log_.ms.empty() ? 0.0 : log_.ms.back();
+  ImGui::Text("frame %.1f ms (%.1f fps)", last, last > 0.0 ? 1e3 / last : 0.0);
+  if (!plot_.empty())
+    ImGui::PlotLines("##frames", plot_.data(), int(plot_.size()), 0, "frame time, ms", 0.0f,
+                     float(*std::max_element(plot_.begin(), plot_.end()) * 1.2), ImVec2(0, 60));
+  ImGui::Checkbox("GPU times", &timed_);
+  if (timed_) {
+    const atmos::PassTimings& p = scene_->pass_timings();
+    const atmos::PostTimings& q = post_->last_timings();
+    if (scene_->has_globe()) ImGui::Text("terrain    %6.2f ms", scene_->terrain_ms());
+    ImGui::Text("sky-view   %6.2f ms", p.sky_view_ms);
+    ImGui::Text("volume     %6.2f ms", p.volume_ms);
+    ImGui::Text("composite  %6.2f ms", p.composite_ms);
+    ImGui::Text("post       %6.2f ms (bloom %.2f, exposure %.2f, tone map %.2f)", q.total_ms(), q.bloom_ms,
+                q.exposure_ms, q.tone_map_ms);
+  }
+  if (const atmos::GlobeStats* s = scene_->globe_stats())
+    ImGui::Text("tiles %d (%d pending), %lld triangles", s->tiles_drawn, s->tiles_pending, s->triangles);
+
+  // The camera.
+  if (ImGui::CollapsingHeader("Camera", ImGuiTreeNodeFlags_DefaultOpen)) {
+    const double altitude = flight_->altitude_m(g);
+    ImGui::Text("altitude %.6g m  speed %.3g m/s", altitude, flight_->speed_m_per_s(g));
+    ImGui::Text("lat %.4f  lon %.4f  heading %.1f  pitch %.1f", flight_->latitude_deg(), flight_->longitude_deg(),
+                flight_->heading_deg(), flight_->pitch_deg());
+    const char* jumps[] = {"1 ground", "2 10 km", "3 orbit", "4 2.5 radii"};
+    for (int k = 0; k < 4; ++k) {
+      if (k) ImGui::SameLine();
+      if (ImGui::Button(jumps[k])) flight_->jump(k + 1, g);
+    }
+    ImGui::TextDisabled("drag: look; WASD, Q/E: fly; Shift x10, Ctrl x0.1");
+    float fov = float(look_.fov_deg);
+    if (ImGui::SliderFloat("field of view", &fov, 5.0f, 120.0f, "%.1f deg")) set_slider("fov_deg", double(fov));
+  }
+
+  // The sun and the sky.
+  if (ImGui::CollapsingHeader("Sun and sky", ImGuiTreeNodeFlags_DefaultOpen)) {
+    float az = float(slider_value("sun_azimuth")), el = float(slider_value("sun_elevation"));
+    float hours = float(slider_value("time_of_day"));
+    if (ImGui::SliderFloat("sun azimuth", &az, -180.0f, 180.0f, "%.1f deg")) set_slider("sun_azimuth", double(az));
+    if (ImGui::SliderFloat("sun elevation", &el, -90.0f, 90.0f, "%.2f deg")) set_slider("sun_elevation", double(el));
+    if (ImGui::SliderFloat("time of day", &hours, 0.0f, 24.0f, "%.2f h")) set_slider("time_of_day", double(hours));
+    ImGui::Checkbox("stars by day", &look_.stars);
+    ImGui::Checkbox("moon", &look_.moon);
+    if (look_.moon) {
+      float sep = float(look_.moon_separation_deg);
+      if (ImGui::SliderFloat("moon from sun", &sep, 0.0f, 3.0f, "%.3f deg")) set_slider("moon_separation_deg", double(sep));
+    }
+  }
+
+  // The camera-like output.
+  if (ImGui::CollapsingHeader("Exposure and tone mapping", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ImGui::Checkbox("auto exposure", &look_.auto_exposure);
+    if (look_.auto_exposure) {
+      float c = float(look_.compensation_ev);
+      if (ImGui::SliderFloat("compensation", &c, -5.0f, 5.0f, "%.1f EV")) set_slider("compensation_ev", double(c));
+      ImGui::Text("exposure EV100 %.2f", post_->current_exposure_ev());
+    } else {
+      float ev = float(look_.exposure_ev);
+      if (ImGui::SliderFloat("exposure", &ev, -6.0f, 18.0f, "EV100 %.1f")) set_slider("exposure_ev", double(ev));
+    }
+    const atmos::ToneMapping ops[] = {atmos::ToneMapping::exp, atmos::ToneMapping::reinhard, atmos::ToneMapping::filmic,
+                                      atmos::ToneMapping::aces, atmos::ToneMapping::linear};
+    if (ImGui::BeginCombo("tone mapper", atmos::tone_mapping_name(look_.tone_mapping))) {
+      for (atmos::ToneMapping op : ops)
+        if (ImGui::Selectable(atmos::tone_mapping_name(op), op == look_.tone_mapping)) look_.tone_mapping = op;
+      ImGui::EndCombo();
+    }
+    float bloom = float(look_.bloom);
+    if (ImGui::SliderFloat("bloom", &bloom, 0.0f, 0.5f, "%.3f")) set_slider("bloom", double(bloom));
+  }
+
+  // The planet: new tables in the background.
+  if (ImGui::CollapsingHeader("Planet and tables", ImGuiTreeNodeFlags_DefaultOpen)) {
+    const std::vector<std::string> presets = atmos::preset_names();
+    if (ImGui::BeginCombo("preset", edited_.planet.c_str())) {
+      for (const std::string& name : presets)
+        if (ImGui::Selectable(name.c_str(), name == edited_.planet)) {
+          edited_ = PlanetParams{};
+          edited_.planet = name;
+          edited_.table_sizes = scene_->params().table_sizes;
+          request_tables();
+        }
+      ImGui::EndCombo();
+    }
+    char path[512];
+    std::snprintf(path, sizeof path, "%s", planet_file_.c_str());
+    if (ImGui::InputText("file", path, sizeof path)) planet_file_ = path;
+    ImGui::SameLine();
+    if (ImGui::Button("load") && !planet_file_.empty()) {
+      edited_ = PlanetParams{};
+      edited_.planet = planet_file_;
+      edited_.table_sizes = scene_->params().table_sizes;
+      request_tables();
+    }
+    // Each slider asks for new tables when it is released.
+    const auto slider = [this](const char* label, const char* name, float lo, float hi, const char* format,
+                               ImGuiSliderFlags flags) {
+      float v = float(slider_value(name));
+      if (ImGui::SliderFloat(label, &v, lo, hi, format, flags)) set_slider(name, double(v));
+      if (ImGui::IsItemDeactivatedAfterEdit()) request_tables();
+    };
+    int wavelengths = int(slider_value("wavelengths"));
+    if (ImGui::SliderInt("wavelengths", &wavelengths, 3, 48)) set_slider("wavelengths", double(wavelengths));
+    if (ImGui::IsItemDeactivatedAfterEdit()) request_tables();
+    int orders = edited_.orders;
+    if (ImGui::SliderInt("scattering orders", &orders, 1, 12)) set_slider("orders", double(orders));
+    if (ImGui::IsItemDeactivatedAfterEdit()) request_tables();
+    slider("density scale", "density_scale", 0.05f, 20.0f, "%.3f", ImGuiSliderFlags_Logarithmic);
+    slider("ground albedo", "ground_albedo", 0.0f, 1.0f, "%.3f", 0);
+    slider("ground radius", "bottom_radius_km", 1000.0f, 20000.0f, "%.1f km", ImGuiSliderFlags_Logarithmic);
+    slider("atmosphere thickness", "thickness_km", 10.0f, 1000.0f, "%.1f km", ImGuiSliderFlags_Logarithmic);
+    const TableJob::Progress p = job_->progress();
+    if (p.busy) {
+      if (p.fraction >= 0.0) {
+        ImGui::ProgressBar(float(p.fraction), ImVec2(-1, 0), p.step.c_str());
+      } else {
+        // No fraction yet (a cache look-up, or before the first step): a
+        // bar that sweeps while the thread works.
+        const double phase = std::fmod(p.elapsed_s, 1.5) / 1.5;
+        ImGui::ProgressBar(float(phase), ImVec2(-1, 0), "loading tables");
+      }
+      ImGui::Text("new tables: %.1f s (the old ones stay on screen)", p.elapsed_s);
+    } else if (last_swap_ms_ > 0.0) {
+      ImGui::Text("last tables: %.2f s, swapped in %.0f ms", last_tables_s_, last_swap_ms_);
+    }
+  }
+  if (!message_.empty()) {
+    if (message_is_error_)
+      ImGui::TextColored(ImVec4(1.0f, 0.45f, 0.4f, 1.0f), "%s", message_.c_str());
+    else
+      ImGui::TextUnformatted(message_.c_str());
+  }
+  ImGui::End();
+}
+
+void Viewer::write_screenshot(GLuint hdr, int width, int height) {
+  if (has_extension(o_.screenshot, ".exr")) {
+    atmos::write_exr(read_hdr(hdr, width, height), o_.screenshot);
+  } else {
+    // The window as it is shown: the back buffer before the swap.
+    atmos::DisplayImage image;
+    image.width = width;
+    image.height = height;
+    image.rgb.resize(size_t(width) * size_t(height) * 3);
+    std::vector<std::uint8_t> bottom_up(image.rgb.size());
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+    glReadBuffer(GL_BACK);
+    glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glPixelStorei(GL_PACK_ROW_LENGTH, 0);
+    glReadPixels(0, 0, width, height, GL_RGB, GL_UNSIGNED_BYTE, bottom_up.data());
+    const size_t row = size_t(width) * 3;
+    for (size_t y = 0; y < size_t(height); ++y)
+      std::copy_n(bottom_up.begin() + std::ptrdiff_t((size_t(height) - 1 - y) * row), row,
+                  image.rgb.begin() + std::ptrdiff_t(y * row));
+    atmos::write_png(image, o_.screenshot);
+  }
+  std::printf("screenshot: %s\n", o_.screenshot.c_str());
+}
+
+int Viewer::run() {
+  std::optional<Script> script;
+  if (!o_.script.empty()) script = Script::read(o_.script);
+  // Bad parameters and planet files are reported before the window opens.
+  (void)make_atmosphere(o_.planet);
+  if (o_.globe) (void)atmos::load_surface(o_.planet.planet);
+
+  Window window(o_.width, o_.height, true);
+  window_ = window.window;
+  Gui gui(window_);
+  const bool regional = o_.globe && !o_.planet_albedo;
+  // The precomputation keeps one core of two free for the frames.
+  const int threads = std::max(1, int(std::thread::hardware_concurrency()) - 1);
+  job_ = std::make_unique<TableJob>(o_.cache, o_.globe, regional, threads);
+  // Destroyed before the window (the GL objects need its context): the
+  // job's thread has no GL, but the scene and the post-processing do.
+  struct Release {
+    Viewer& v;
+    ~Release() {
+      v.job_.reset();
+      v.scene_.reset();
+      v.post_.reset();
+    }
+  } release{*this};
+
+  // The first tables, on this thread: there is nothing to show before them.
+  PlanetTables first = load_planet_tables(o_.planet, o_.globe, regional, o_.cache);
+  std::printf("tables: %s in %.2f s\n", first.status.c_str(), first.seconds);
+  scene_ = std::make_unique<Scene>(first, o_.globe, regional, o_.frames > 0);
+  post_ = std::make_unique<atmos::PostProcess>();
+  edited_ = o_.planet;
+  look_ = o_.look;
+  flight_ = std::make_unique<Flight>(scene_->bottom_radius_m());
+  flight_->place(o_.latitude_deg, o_.longitude_deg, o_.altitude_m, o_.heading_deg, o_.pitch_deg, ground());
+  sun_ = sun_from_angles(flight_->position(), o_.sun_azimuth_deg, o_.sun_elevation_deg);
+  record_.globe = o_.globe;
+  record_.planet_albedo = o_.planet_albedo;
+
+  GLuint blit = 0;
+  glCreateFramebuffers(1, &blit);
+  struct BlitRelease {
+    GLuint& fb;
+    ~BlitRelease() { glDeleteFramebuffers(1, &fb); }
+  } blit_release{blit};
+
+  start_s_ = now_s();
+  double previous_s = start_s_;
+  // Scripted sessions advance the flight by a fixed step, so that the
+  // same script flies the same path on any machine.
+  constexpr double kScriptStepS = 1.0 / 30.0;
+  // A script runs to its end (and --frames further), then on until the
+  // tables it asked for are swapped in (at most a minute more), so that
+  // the swap is measured.
+  const int frames = std::max(o_.frames, script ? script->length() + 1 : 0);
+  constexpr double kMaxWaitForTablesS = 60.0;
+  double waited_from = -1.0;
+  for (int frame = 0; !glfwWindowShouldClose(window_); ++frame) {
+    if (frames > 0 && frame >= frames) {
+      if (!script || !awaiting_tables_) break;
+      if (waited_from < 0.0) waited_from = now_s();
+      if (now_s() - waited_from > kMaxWaitForTablesS) break;
+    }
+    const double frame_start = now_s();
+    const double dt = frame == 0 ? 0.0 : frame_start - previous_s;
+    previous_s = frame_start;
+    glfwPollEvents();
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+
+    // New tables: swapped in on this thread, the GL context's.
+    bool swapped = false;
+    if (std::optional<PlanetTables> t = job_->take_result()) {
+      try {
+        swap_scene(std::move(*t), frame);
+        message_.clear();
+      } catch (const std::exception& e) {
+        message_ = e.what();
+        message_is_error_ = true;
+        edited_ = scene_->params();
+      }
+      swapped = true;
+      awaiting_tables_ = job_->progress().busy;
+    }
+    if (std::optional<std::string> error = job_->take_error()) {
+      awaiting_tables_ = job_->progress().busy;
+      message_ = *error;
+      message_is_error_ = true;
+      edited_ = scene_->params();
+      std::fprintf(stderr, "atmos: error: %s\n", error->c_str());
+    }
+
+    FlightInput input;
+    bool dragging = false;
+    if (script) {
+      input = script->input(frame);
+      for (const ScriptEvent& e : script->events) {
+        if (frame < e.frame || frame >= e.frame + e.frames) continue;
+        if (e.kind == ScriptEvent::Kind::slider) {
+          const double t = e.frames > 1 ? double(frame - e.frame) / double(e.frames - 1) : 1.0;
+          set_slider(e.slider, e.from + (e.to - e.from) * t);
+          if (is_planet_slider(e.slider) && frame == e.frame + e.frames - 1) request_tables();
+        } else if (e.kind == ScriptEvent::Kind::planet && frame == e.frame) {
+          edited_ = PlanetParams{};
+          edited_.planet = e.planet;
+          edited_.table_sizes = o_.planet.table_sizes;
+          request_tables();
+        }
+      }
+      dragging = script->dragging(frame);
+      flight_->update(input, frame == 0 ? 0.0 : kScriptStepS, ground());
+    } else {
+      input = window_input();
+      flight_->update(input, dt, ground());
+    }
+    if (o_.ui) panel();
+    if (!script) dragging = ImGui::IsAnyItemActive();
+
+    int width = 0, height = 0;
+    glfwGetFramebufferSize(window_, &width, &height);
+    GLuint hdr = 0;
+    if (width > 0 && height > 0) {
+      SceneFrame sf;
+      sf.pose = flight_->pose();
+      sf.fov_deg = look_.fov_deg;
+      sf.width = width;
+      sf.height = height;
+      sf.sun = sun_;
+      sf.stars = look_.stars || glm::dot(sun_, glm::normalize(sf.pose.position)) < 0.0;
+      sf.moons = place_moons(look_, sf.pose.position, sun_, scene_->top_radius_m());
+      sf.timed = timed_;
+      hdr = scene_->render(sf);
+      atmos::PostInput pin;
+      pin.colour = hdr;
+      pin.width = width;
+      pin.height = height;
+      pin.nits_per_unit = Scene::kNitsPerUnit;
+      pin.dt_s = frame == 0 ? 0.0 : (script ? kScriptStepS : dt);
+      pin.timed = timed_;
+      const GLuint ldr = post_->process(pin, post_settings(look_));
+      glNamedFramebufferTexture(blit, GL_COLOR_ATTACHMENT0, ldr, 0);
+      glBindFramebuffer(GL_FRAMEBUFFER, 0);
+      glBlitNamedFramebuffer(blit, 0, 0, 0, width, height, 0, 0, width, height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+      glViewport(0, 0, width, height);
+      ImGui::Render();
+      ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+      const bool last = frames > 0 && frame >= frames - 1 && !(script && awaiting_tables_);
+      if (last && !o_.screenshot.empty()) write_screenshot(hdr, width, height);
+
+      FrameRecord fr;
+      fr.time_s = script ? frame * kScriptStepS : frame_start - start_s_;
+      fr.pose = sf.pose;
+      fr.sun = sun_;
+      fr.look = look_;
+      fr.planet = scene_->params();
+      record_.frames.push_back(fr);
+      record_.width = width;
+      record_.height = height;
+    } else {
+      ImGui::Render();
+    }
+    glfwSwapBuffers(window_);
+    // The frame's time includes the GPU's work: on a software rasteriser
+    // the swap waits for it.
+    glFinish();
+    const double frame_ms = (now_s() - frame_start) * 1e3;
+    log_.add(frame_ms, dragging, swapped);
+    plot_.push_back(float(frame_ms));
+    if (plot_.size() > 240) plot_.erase(plot_.begin());
+  }
+
+  const std::vector<double> steady = log_.steady();
+  const double med = median(steady);
+  std::printf("frames: %zu, median %.1f ms, max %.1f ms (first frame %.1f ms)\n", log_.ms.size(), med,
+              steady.empty() ? 0.0 : *std::max_element(steady.begin(), steady.end()),
+              log_.ms.empty() ? 0.0 : log_.ms.front());
+  double drag_max = 0.0;
+  size_t drag_frames = 0;
+  for (size_t i = 1; i < log_.ms.size(); ++i)
+    if (log_.dragging[i] && !log_.swapped[i]) {
+      drag_max = std::max(drag_max, log_.ms[i]);
+      ++drag_frames;
+    }
+  if (drag_frames > 0)
+    std::printf("drag: %zu frames, max %.1f ms, max/median %.2f\n", drag_frames, drag_max, drag_max / med);
+  const Flight::GroundHeight g = ground();
+  std::printf("camera: altitude %.6g m, latitude %.6f, longitude %.6f, heading %.3f, pitch %.3f\n",
+              flight_->altitude_m(g), flight_->latitude_deg(), flight_->longitude_deg(), flight_->heading_deg(),
+              flight_->pitch_deg());
+  if (!o_.record.empty()) {
+    write_flight(record_, o_.record);
+    std::printf("recorded %zu frames: %s\n", record_.frames.size(), o_.record.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+int run_viewer(const ViewOptions& options) {
+  Viewer viewer(options);
+  return viewer.run();
+}
+
+int run_replay(const ViewOptions& o) {
+  const FlightRecord record = read_flight(o.replay);
+  if (o.frame_format != "png" && o.frame_format != "exr" && o.frame_format != "both")
+    throw atmos::Error("frame format must be png, exr or both, got \"" + o.frame_format + "\"");
+  std::filesystem::create_directories(o.output_dir);
+  auto context = atmos::GlContext::create_headless();
+  const bool regional = record.globe && !record.planet_albedo;
+  std::unique_ptr<Scene> scene;
+  std::unique_ptr<atmos::PostProcess> post = std::make_unique<atmos::PostProcess>();
+  double previous_time = record.frames.front().time_s;
+  for (size_t i = 0; i < record.frames.size(); ++i) {
+    const FrameRecord& f = record.frames[i];
+    if (!scene || !(scene->params() == f.planet)) {
+      // Every tile is built before its frame: the images do not depend on
+      // the machine's speed.
+      scene.reset();
+      const PlanetTables tables = load_planet_tables(f.planet, record.globe, regional, o.cache);
+      scene = std::make_unique<Scene>(tables, record.globe, regional, true);
+    }
+    SceneFrame sf;
+    sf.pose = f.pose;
+    sf.fov_deg = f.look.fov_deg;
+    sf.width = record.width;
+    sf.height = record.height;
+    sf.sun = glm::normalize(f.sun);
+    sf.stars = f.look.stars || glm::dot(sf.sun, glm::normalize(f.pose.position)) < 0.0;
+    sf.moons = place_moons(f.look, f.pose.position, sf.sun, scene->top_radius_m());
+    const GLuint hdr = scene->render(sf);
+    char name[64];
+    std::snprintf(name, sizeof name, "frame-%05zu", i);
+    const std::filesystem::path base = std::filesystem::path(o.output_dir) / name;
+    if (o.frame_format != "png") atmos::write_exr(read_hdr(hdr, record.width, record.height), base.string() + ".exr");
+    if (o.frame_format != "exr") {
+      atmos::PostInput pin;
+      pin.colour = hdr;
+      pin.width = record.width;
+      pin.height = record.height;
+      pin.nits_per_unit = Scene::kNitsPerUnit;
+      pin.dt_s = std::max(0.0, f.time_s - previous_time);
+      const GLuint ldr = post->process(pin, post_settings(f.look));
+      atmos::write_png(read_display(ldr, record.width, record.height), base.string() + ".png");
+    }
+    previous_time = f.time_s;
+  }
+  std::printf("replayed %zu frames into %s\n", record.frames.size(), o.output_dir.c_str());
+  post.reset();
+  scene.reset();
+  return 0;
+}
+
+}  // namespace atmos_view

@@ -1,0 +1,40 @@
+// atmos view: the interactive viewer (a GLFW window with a Dear ImGui
+// panel) and the headless replay of its recorded flights. docs/viewer.md.
+#pragma once
+
+#include <string>
+
+#include "state.hpp"
+#include "tables_job.hpp"
+
+namespace atmos_view {
+
+struct ViewOptions {
+  PlanetParams planet;
+  CacheConfig cache;
+  bool globe = true;           // --surface globe (else the analytic sphere)
+  bool planet_albedo = false;  // --planet-albedo
+  int width = 1280, height = 720;
+  // Where the camera starts: above this ground point, looking along the
+  // heading (degrees from north towards east) and pitch.
+  double latitude_deg = 20.0, longitude_deg = 30.0, altitude_m = 2.0;
+  double heading_deg = 90.0, pitch_deg = 0.0;
+  double sun_elevation_deg = 30.0, sun_azimuth_deg = 180.0;  // at the starting ground point
+  LookSettings look;
+  bool ui = true;          // the panel
+  int frames = 0;          // > 0: draw this many frames, then exit
+  std::string screenshot;  // with frames: the last frame (.png: the window; .exr: the linear image)
+  std::string record;      // the flight, written at exit
+  std::string script;      // scripted input (docs/viewer.md, Scripts)
+  std::string replay;      // a recorded flight to replay headless
+  std::string output_dir;  // the replay's frames
+  std::string frame_format = "png";  // the replay's: png, exr or both
+};
+
+// The viewer's window until it is closed (or `frames` are drawn). Throws
+// atmos::Error for no display, no OpenGL 4.5 window, bad files.
+int run_viewer(const ViewOptions& options);
+// Replays options.replay headless into options.output_dir.
+int run_replay(const ViewOptions& options);
+
+}  // namespace atmos_view
