@@ -58,7 +58,8 @@ done
 # at the terminator, north up; a descent of five frames from 2.5 radii to 2 m
 # onto the Red Sea's Egyptian coast; Mars's southern highlands from orbit
 # and from 2 m; and the canyon of the Mars style (the mars-thesis air, the
-# clearer one) late in the afternoon, looking north at its wall.
+# clearer one) at sunset, from 100 m above its floor 7 km south of its north
+# wall, looking west along it into the blue glow around the sun (2.5° up).
 globe="${ATMOS_BUILD_DIR:-$root/build}/examples/atmos_example_globe"
 mkdir -p "$out/globe/earth" "$out/globe/earth-noon" "$out/globe/earth-terminator" "$out/globe/mars" \
   "$out/globe/mars-canyon"
@@ -70,6 +71,7 @@ mkdir -p "$out/globe/earth" "$out/globe/earth-noon" "$out/globe/earth-terminator
   --out-dir "$out/globe/earth"
 "$globe" --planet mars --latitude -35 --longitude 60 --descent 5 --sun-elevation 12 --exposure 12 \
   --out-dir "$out/globe/mars"
-"$globe" --planet mars-thesis --descent 2 --to 300 --latitude -1.9 --longitude 138.27 --heading 20 \
-  --sun-elevation 12 --sun-azimuth 250 --exposure 12 --out-dir "$out/globe/mars-canyon"
+"$globe" --planet mars-thesis --descent 2 --from-radii 1 --to 100 --latitude -1.38 --longitude 138.27 \
+  --heading 280 --sun-elevation 2.5 --sun-azimuth 250 --exposure 10 --shadow-distance 150000 \
+  --out-dir "$out/globe/mars-canyon"
 echo "gallery: $out"
