@@ -1,0 +1,82 @@
+// atmos — water: from physical inputs (wind, chlorophyll, salinity, ...) to
+// the WaterParams of the shared functions (physics/water.glsl) at three
+// working wavelengths, the spectra behind them, and the validation of the
+// inputs.
+#pragma once
+
+#include <array>
+
+#include "physics/water_cpp.hpp"
+
+namespace atmos::physics {
+
+// The water of a planet's seas and lakes, in SI units (chlorophyll in the
+// oceanographers' mg m^-3).
+struct Water {
+  // Wind speed 12.5 m above the water, m/s (Cox & Munk 1954's anemometer
+  // height), in [0, 50].
+  double wind_speed_m_s = 5.0;
+  // Chlorophyll a concentration, mg m^-3, in [0, 25]: the range of the
+  // bio-optical fits (Bricaud et al. 1998: 0.02-25; below 0.02 their power
+  // laws go to 0 with the chlorophyll).
+  double chlorophyll_mg_m3 = 0.1;
+  // Absorption of coloured dissolved organic matter at 440 nm, m^-1, in [0, 10].
+  double cdom_absorption_440_per_m = 0.0;
+  // Salinity, PSU, in [0, 40] (35 for the open ocean, 0 for fresh water).
+  double salinity_psu = 35.0;
+  // Temperature, °C, in [0, 30] (the range of Quan & Fry 1995's fit).
+  double temperature_c = 20.0;
+};
+
+// Throws atmos::Error with one line naming the first input outside its range
+// (or not finite).
+void validate_water(const Water& water);
+
+// Throws atmos::Error for a seabed depth (m) that is negative or NaN (+inf
+// is deep water) or an albedo outside [0, 1].
+void validate_seabed(double depth_m, const vec3& albedo);
+
+// Pure water's absorption (m^-1): Pope & Fry 1997 over 380-725 nm, Smith &
+// Baker 1981 below, Kou et al. 1993 above (data/spectra/pure_water.csv),
+// linear between the table's 5 nm rows. atmos::Error outside 300-830 nm.
+double pure_water_absorption(double wavelength_nm);
+
+// The scattering coefficient of water of the given salinity (m^-1): pure
+// seawater's (Smith & Baker 1981's table, S = 35-38) scaled as Morel 1974
+// measured, pure water scattering 1/1.30 of seawater, linearly in salinity
+// between them (reference salinity 37). Half of it is backward (Rayleigh-like
+// symmetry of molecular scattering).
+double water_scattering(double wavelength_nm, double salinity_psu);
+
+// Phytoplankton absorption (m^-1), Bricaud et al. 1998:
+// A_ph(λ) Chl^E_ph(λ) (data/spectra/phytoplankton_absorption.csv), held at
+// its 400 and 700 nm values beyond 400-700 nm (where pure water's absorption
+// is 2-100 times larger at all concentrations).
+double phytoplankton_absorption(double wavelength_nm, double chlorophyll_mg_m3);
+
+// Absorption of coloured dissolved organic matter (m^-1),
+// a_g(440) e^{-0.014 (λ - 440)} (Bricaud, Morel & Prieur 1981).
+double cdom_absorption(double wavelength_nm, double absorption_440_per_m);
+
+// Scattering and backscattering of the particles of Case 1 waters (m^-1):
+// b_p(λ) = 0.416 Chl^0.766 (λ / 550)^ν (Loisel & Morel 1998, with the
+// spectral exponent ν = 0.5 (log10 Chl - 0.3) for Chl < 2, 0 above, of
+// Morel & Maritorena 2001), and the backscattering ratio
+// 0.002 + 0.01 (0.5 - 0.25 log10 Chl) (λ / 550)^ν (Morel & Maritorena 2001).
+// The exponent and ratio use max(Chl, 0.02), the fits' lowest concentration.
+double particle_scattering(double wavelength_nm, double chlorophyll_mg_m3);
+double particle_backscattering(double wavelength_nm, double chlorophyll_mg_m3);
+
+// The reflectance of the flat surface under a uniform sky, r_e = 2 ∫ F(μ) μ dμ
+// over μ in [0, 1], with the shared fresnel_reflectance (eta = n from the
+// air's side, 1 / n from the water's: then it is the diffuse internal
+// reflectance r_i). 4096 midpoint nodes in μ².
+double diffuse_fresnel_reflectance(double eta);
+
+// The WaterParams of `water` (validated) at three wavelengths (nm, each in
+// [300, 830]): the refractive index (Quan & Fry 1995), absorption and
+// backscattering (pure water + phytoplankton + CDOM; water + particles),
+// r_e, and the Cox & Munk 1954 up/crosswind slope variances.
+WaterParams make_water_params(const Water& water, const std::array<double, 3>& wavelengths_nm);
+
+}  // namespace atmos::physics
