@@ -163,6 +163,29 @@ TEST(WaterEnergy, FlatSurfaceReflectsTheIntegratedFresnel) {
   EXPECT_NEAR(internal, 1.0 - (1.0 - textbook) / (n * n), 1e-3);
 }
 
+// Cox & Munk 1954's clean-surface fits: σ_u² = 3.16e-3 U, σ_c² = 0.003 +
+// 1.92e-3 U, and the isotropic σ² = 0.003 + 5.12e-3 U; the slope density
+// integrates to 1.
+TEST(WaterGlint, SlopesFollowCoxAndMunk) {
+  const glm::vec2 v = ph::cox_munk_slope_variance(10.0f);
+  EXPECT_NEAR(v.x, 0.0316f, 1e-6f);
+  EXPECT_NEAR(v.y, 0.0222f, 1e-6f);
+  const glm::vec2 iso = ph::cox_munk_isotropic_slope_variance(10.0f);
+  EXPECT_NEAR(iso.x + iso.y, 0.0542f, 1e-6f);
+  EXPECT_EQ(iso.x, iso.y);
+  // Calm water keeps a finite upwind variance.
+  EXPECT_GT(ph::cox_munk_slope_variance(0.0f).x, 0.0f);
+  double total = 0.0;
+  constexpr int kGrid = 400;
+  const double hx = 16.0 * std::sqrt(double(v.x)) / kGrid, hy = 16.0 * std::sqrt(double(v.y)) / kGrid;
+  for (int i = 0; i < kGrid; ++i)
+    for (int j = 0; j < kGrid; ++j)
+      total += ph::water_slope_pdf(glm::vec2(float((i + 0.5) * hx - 8.0 * std::sqrt(double(v.x))),
+                                             float((j + 0.5) * hy - 8.0 * std::sqrt(double(v.y)))),
+                                   v);
+  EXPECT_NEAR(total * hx * hy, 1.0, 1e-4);
+}
+
 TEST(WaterGlint, BrdfIsReciprocalAndPositive) {
   std::mt19937 rng(34);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
