@@ -35,8 +35,9 @@ struct WaterParams {
 
 // The refractive index of seawater, Quan & Fry 1995 (their empirical fit to
 // the measurements of Austin & Halikas 1976; valid 400-700 nm, 0-30 °C,
-// salinity 0-35 per mil, used slightly beyond): wavelength in nm (in vacuum),
-// salinity in PSU, temperature in °C.
+// salinity 0-35 per mil; extrapolated to 300-830 nm, over which its series
+// in 1/λ keeps decreasing): wavelength in nm, salinity in PSU, temperature
+// in °C.
 INLINE float water_refractive_index(float wavelength_nm, float salinity, float temperature) {
   float l = wavelength_nm;
   float t = temperature;
@@ -150,8 +151,10 @@ INLINE float water_masking_shadowing(vec3 normal, vec3 upwind, vec2 variance, ve
 // density p per unit slope² becomes the density of normals per unit solid
 // angle and unit area of the mean surface by dω_h = μ_h³ d²s and the facets'
 // area 1 / μ_h per unit mean area). The sun's radiance reflected to `view` is
-// f E_sun μ_s; the disc's 0.27° is narrower than the slopes of any wind
-// (σ > 3°), which leaves the glint unblurred.
+// f E_sun μ_s: the solar disc (0.27° in radius) is narrower than the spread
+// of the mirrored directions (twice the facets' tilt: 1.1° for calm water
+// with the upwind floor of cox_munk_slope_variance, 14° at 5 m/s), so the
+// glint is not convolved with it.
 INLINE vec3 water_glint_brdf(IN(WaterParams) water, vec3 normal, vec3 upwind, vec3 view, vec3 light) {
   float mu_v = dot(view, normal);
   float mu_l = dot(light, normal);
@@ -181,7 +184,7 @@ INLINE vec3 water_glint_brdf(IN(WaterParams) water, vec3 normal, vec3 upwind, ve
 // with two standard normal variables, s_a = √v_a z_a and
 // s_b = (c_ab / √v_a) z_a + √(v_b - c_ab² / v_a) z_b (Cholesky). A facet
 // tilted away from the viewer by more than (90° - θ_v) / 2, that is
-// s_a > s* = tan(45° - θ_v / 2) = (1 - sin θ_v) / μ_v, mirrors the view below
+// s_a > s* = tan(45° - θ_v / 2) = μ_v / (1 + sin θ_v), mirrors the view below
 // the horizon: the integrand drops to 0 there (G₂ -> 0 on the way), a kink
 // that a Gauss-Hermite rule over all slopes misses by 3-20 % from 60° on. The
 // z_a axis is therefore integrated by an 8-point Gauss-Legendre rule over
@@ -253,7 +256,7 @@ INLINE WaterSkyQuadrature water_sky_quadrature(IN(WaterParams) water, vec3 norma
   q.coupling = c_ab / q.sigma_along;
   q.sigma_across = sqrt(max(v_b - c_ab * c_ab / v_a, 0.0f));
   float mu = clamp(q.mu_v, 1e-6f, 1.0f);
-  float s_max = (1.0f - sqrt(1.0f - mu * mu)) / mu;
+  float s_max = mu / (1.0f + sqrt(1.0f - mu * mu));
   float upper = min(s_max / q.sigma_along, WATER_SKY_Z_LIMIT);
   q.z_mid = 0.5f * (upper - WATER_SKY_Z_LIMIT);
   q.z_half = 0.5f * (upper + WATER_SKY_Z_LIMIT);
