@@ -7,6 +7,7 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "options.hpp"
@@ -31,7 +32,8 @@ struct ViewCommandOptions {
   bool auto_exposure = false, stars = false, no_ui = false;
   std::string tonemap = "exp";
   int frames = 0;
-  std::string screenshot, record, script, replay, output_dir, frame_format = "png";
+  std::vector<std::string> screenshots;
+  std::string record, script, replay, output_dir, frame_format = "png";
 };
 
 bool ends_with(const std::string& s, const std::string& tail) {
@@ -50,7 +52,8 @@ void check_options(const ViewCommandOptions& o) {
     throw UsageError("--width and --height must be in [16, 8192], got " + std::to_string(o.width) + "x" +
                      std::to_string(o.height));
   finite(o.altitude, "--altitude");
-  if (o.altitude < 0.0 || o.altitude > 1e9) throw UsageError("--altitude must be in [0, 1e9] metres, got " + quote(o.altitude));
+  if (o.altitude < 0.0 || o.altitude > 1e12)
+    throw UsageError("--altitude must be in [0, 1e12] metres, got " + quote(o.altitude));
   if (!(std::abs(finite(o.latitude, "--latitude")) <= 90.0))
     throw UsageError("--latitude must be in [-90, 90] degrees, got " + quote(o.latitude));
   finite(o.longitude, "--longitude");
@@ -61,9 +64,11 @@ void check_options(const ViewCommandOptions& o) {
   if (!(finite(o.bloom, "--bloom") >= 0.0 && o.bloom <= 1.0)) throw UsageError("--bloom must be in [0, 1], got " + quote(o.bloom));
   if (!(finite(o.fov, "--fov") >= 5.0 && o.fov <= 120.0)) throw UsageError("--fov must be in [5, 120] degrees, got " + quote(o.fov));
   if (o.frames < 0) throw UsageError("--frames must be >= 0, got " + std::to_string(o.frames));
-  if (!o.screenshot.empty() && !ends_with(o.screenshot, ".png") && !ends_with(o.screenshot, ".exr"))
-    throw UsageError("--screenshot must name a .png or .exr file, got \"" + o.screenshot + "\"");
-  if (!o.screenshot.empty() && o.frames == 0) throw UsageError("--screenshot needs --frames N (the frame saved is the last)");
+  for (const std::string& path : o.screenshots)
+    if (!ends_with(path, ".png") && !ends_with(path, ".exr"))
+      throw UsageError("--screenshot must name a .png or .exr file, got \"" + path + "\"");
+  if (!o.screenshots.empty() && o.frames == 0)
+    throw UsageError("--screenshot needs --frames N (the frame saved is the last)");
   if (!o.replay.empty() && o.output_dir.empty()) throw UsageError("--replay needs --output-dir");
   if (o.replay.empty() && !o.output_dir.empty()) throw UsageError("--output-dir applies to --replay");
   if (o.frame_format != "png" && o.frame_format != "exr" && o.frame_format != "both")
@@ -101,7 +106,7 @@ int run_view(const ViewCommandOptions& o) {
   v.look.fov_deg = o.fov;
   v.ui = !o.no_ui;
   v.frames = o.frames;
-  v.screenshot = o.screenshot;
+  v.screenshots = o.screenshots;
   v.record = o.record;
   v.script = o.script;
   v.replay = o.replay;
@@ -131,8 +136,8 @@ Command add_view_command(CLI::App& app) {
   cmd->add_option("--width", o->width, "Window width, pixels, in [16, 8192]")->capture_default_str();
   cmd->add_option("--height", o->height, "Window height, pixels, in [16, 8192]")->capture_default_str();
   cmd->add_option("--altitude", o->altitude,
-                  "Starting altitude above the ground (the terrain or the sea with the globe), metres, in [0, 1e9]; "
-                  "at least 0.5 m")
+                  "Starting altitude above the ground (the terrain or the sea with the globe), metres, in [0, 1e12]; "
+                  "the camera stays 0.5 m above the ground and within 100 planet radii of its centre")
       ->type_name("M")
       ->capture_default_str();
   cmd->add_option("--latitude", o->latitude, "Latitude of the starting ground point, degrees")->capture_default_str();
@@ -151,8 +156,9 @@ Command add_view_command(CLI::App& app) {
   cmd->add_option("--frames", o->frames, "Draw N frames, then exit (0: until the window is closed)")
       ->type_name("N")
       ->capture_default_str();
-  cmd->add_option("--screenshot", o->screenshot,
-                  "With --frames: save the last frame, .png (the window as shown) or .exr (the linear image, cd/m²)")
+  cmd->add_option("--screenshot", o->screenshots,
+                  "With --frames: save the last frame, .png (the window as shown) or .exr (the linear image, cd/m²); "
+                  "repeatable")
       ->type_name("FILE");
   cmd->add_option("--record", o->record, "Write the flight (camera, sun, settings per frame) to FILE.json at exit")
       ->type_name("FILE");

@@ -146,7 +146,8 @@ void write_flight(const FlightRecord& record, const std::string& path) {
                       {"up", vec(f.pose.up)},
                       {"sun", vec(f.sun)},
                       {"look", look_json(f.look)},
-                      {"planet", planet_json(f.planet)}});
+                      {"planet", planet_json(f.planet)},
+                      {"frame_ms", f.frame_ms}});
   const json j = {{"format", "atmos-flight"},
                   {"version", 1},
                   {"surface", record.globe ? "globe" : "sphere"},

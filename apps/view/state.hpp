@@ -64,6 +64,7 @@ struct FrameRecord {
   glm::dvec3 sun{0, 0, 1};  // towards the sun, planet frame
   LookSettings look;
   PlanetParams planet;  // the planet of the tables on screen
+  double frame_ms = 0.0;  // how long the viewer took to draw it (informative; a replay ignores it)
 };
 
 struct FlightRecord {

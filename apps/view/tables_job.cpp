@@ -7,6 +7,10 @@
 
 #include "atmos/planet_file.hpp"
 
+#ifdef ATMOS_VIEW_HDF5
+#include <hdf5.h>
+#endif
+
 namespace atmos_view {
 
 namespace {
@@ -45,11 +49,12 @@ PlanetTables load_planet_tables(const PlanetParams& params, bool globe, bool gro
   return out;
 }
 
-TableJob::TableJob(CacheConfig cache, bool globe, bool ground_albedo_response, int threads)
+TableJob::TableJob(CacheConfig cache, bool globe, bool ground_albedo_response, int threads, WarmUp warm_up)
     : cache_(std::move(cache)),
       globe_(globe),
       ground_albedo_response_(ground_albedo_response),
       threads_(threads < 1 ? 1 : threads),
+      warm_up_(std::move(warm_up)),
       worker_([this] { run(); }) {}
 
 TableJob::~TableJob() {
@@ -95,6 +100,15 @@ TableJob::Progress TableJob::progress() const {
 }
 
 void TableJob::run() {
+#ifdef ATMOS_VIEW_HDF5
+  // The pass's air reaches down to the globe's lowest ground
+  // (extend_below_datum), which reads the surface's rasters and coastline
+  // bins with GDAL on this thread. Its netCDF driver probes optional HDF5
+  // attributes, and HDF5 prints each failed probe as an error stack unless
+  // printing is off; that setting is per thread, and netCDF turns it off
+  // only in the thread that initialised it.
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+#endif
   tbb::task_arena arena(threads_);
   for (;;) {
     PlanetParams params;
@@ -123,6 +137,13 @@ void TableJob::run() {
         error = e.what();
       }
     });
+    if (tables && warm_up_) {
+      progress("compiling the shaders", -1.0);
+      try {
+        warm_up_(*tables);
+      } catch (const std::exception&) {
+      }
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     busy_ = false;
     // A newer request supersedes these tables: they are dropped unseen.

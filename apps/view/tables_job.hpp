@@ -10,6 +10,7 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -35,7 +36,15 @@ PlanetTables load_planet_tables(const PlanetParams& params, bool globe, bool gro
 
 class TableJob {
  public:
-  TableJob(CacheConfig cache, bool globe, bool ground_albedo_response, int threads);
+  // Run on the job's thread after each set of tables is ready, before it is
+  // handed over: the viewer compiles the new scene's programs there in a
+  // context of its own (they differ with the atmosphere, and compiling them
+  // takes seconds on a software rasteriser), which fills the driver's
+  // shader cache so that the swap on the viewer's thread finds them
+  // compiled. Its exceptions are ignored (the swap then compiles them).
+  using WarmUp = std::function<void(const PlanetTables&)>;
+
+  TableJob(CacheConfig cache, bool globe, bool ground_albedo_response, int threads, WarmUp warm_up = {});
   // Waits for the tables being computed (the precomputation cannot be
   // interrupted) and drops any waiting request.
   ~TableJob();
@@ -62,6 +71,7 @@ class TableJob {
   CacheConfig cache_;
   bool globe_, ground_albedo_response_;
   int threads_;
+  WarmUp warm_up_;
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   std::optional<PlanetParams> waiting_;

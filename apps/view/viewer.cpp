@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
@@ -253,7 +254,7 @@ class Viewer {
   void request_tables();
   FlightInput window_input();
   void panel();
-  void write_screenshot(GLuint hdr, int width, int height);
+  void write_screenshot(const std::string& path, GLuint hdr, int width, int height);
 
   const ViewOptions& o_;
   std::unique_ptr<Scene> scene_;
@@ -277,6 +278,14 @@ class Viewer {
   bool dragging_view_ = false;
   std::array<bool, 4> jump_held_{};
   double start_s_ = 0.0;
+  // The latest frame's camera, sun and look, for the job's warm-up.
+  std::mutex warm_mutex_;
+  SceneFrame warm_frame_;
+  LookSettings warm_look_;
+  LookSettings look_of_warm_frame() {
+    std::lock_guard<std::mutex> lock(warm_mutex_);
+    return warm_look_;
+  }
 };
 
 void Viewer::swap_scene(PlanetTables&& tables, int frame) {
@@ -305,6 +314,7 @@ void Viewer::request_tables() {
     message_ = e.what();
     message_is_error_ = true;
     edited_ = scene_->params();
+    std::fprintf(stderr, "atmos: error: %s (the tables on screen are kept)\n", e.what());
   }
 }
 
@@ -386,7 +396,8 @@ FlightInput Viewer::window_input() {
 
 void Viewer::panel() {
   ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
-  ImGui::SetNextWindowSize(ImVec2(340, 0), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(420, 0), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSizeConstraints(ImVec2(200, 100), ImVec2(10000, ImGui::GetIO().DisplaySize.y - 16.0f));
   ImGui::Begin("atmos view");
   const Flight::GroundHeight g = ground();
 
@@ -400,7 +411,12 @@ void Viewer::panel() {
   if (timed_) {
     const atmos::PassTimings& p = scene_->pass_timings();
     const atmos::PostTimings& q = post_->last_timings();
-    if (scene_->has_globe()) ImGui::Text("terrain    %6.2f ms", scene_->terrain_ms());
+    if (scene_->has_globe()) {
+      if (std::isnan(scene_->terrain_ms()))
+        ImGui::TextUnformatted("terrain       ... ms");
+      else
+        ImGui::Text("terrain    %6.2f ms", scene_->terrain_ms());
+    }
     ImGui::Text("sky-view   %6.2f ms", p.sky_view_ms);
     ImGui::Text("volume     %6.2f ms", p.volume_ms);
     ImGui::Text("composite  %6.2f ms", p.composite_ms);
@@ -511,7 +527,7 @@ void Viewer::panel() {
         // No fraction yet (a cache look-up, or before the first step): a
         // bar that sweeps while the thread works.
         const double phase = std::fmod(p.elapsed_s, 1.5) / 1.5;
-        ImGui::ProgressBar(float(phase), ImVec2(-1, 0), "loading tables");
+        ImGui::ProgressBar(float(phase), ImVec2(-1, 0), p.step.empty() ? "loading the tables" : p.step.c_str());
       }
       ImGui::Text("new tables: %.1f s (the old ones stay on screen)", p.elapsed_s);
     } else if (last_swap_ms_ > 0.0) {
@@ -527,9 +543,9 @@ void Viewer::panel() {
   ImGui::End();
 }
 
-void Viewer::write_screenshot(GLuint hdr, int width, int height) {
-  if (has_extension(o_.screenshot, ".exr")) {
-    atmos::write_exr(read_hdr(hdr, width, height), o_.screenshot);
+void Viewer::write_screenshot(const std::string& path, GLuint hdr, int width, int height) {
+  if (has_extension(path, ".exr")) {
+    atmos::write_exr(read_hdr(hdr, width, height), path);
   } else {
     // The window as it is shown: the back buffer before the swap.
     atmos::DisplayImage image;
@@ -547,9 +563,9 @@ void Viewer::write_screenshot(GLuint hdr, int width, int height) {
     for (size_t y = 0; y < size_t(height); ++y)
       std::copy_n(bottom_up.begin() + std::ptrdiff_t((size_t(height) - 1 - y) * row), row,
                   image.rgb.begin() + std::ptrdiff_t(y * row));
-    atmos::write_png(image, o_.screenshot);
+    atmos::write_png(image, path);
   }
-  std::printf("screenshot: %s\n", o_.screenshot.c_str());
+  std::printf("screenshot: %s\n", path.c_str());
 }
 
 int Viewer::run() {
@@ -565,7 +581,31 @@ int Viewer::run() {
   const bool regional = o_.globe && !o_.planet_albedo;
   // The precomputation keeps one core of two free for the frames.
   const int threads = std::max(1, int(std::thread::hardware_concurrency()) - 1);
-  job_ = std::make_unique<TableJob>(o_.cache, o_.globe, regional, threads);
+  // The warm-up draws the new scene once, small, from the camera of the
+  // latest frame, in a headless context on the job's thread (TableJob::WarmUp).
+  const auto warm_up = [this, regional](const PlanetTables& tables) {
+    SceneFrame sf;
+    {
+      std::lock_guard<std::mutex> lock(warm_mutex_);
+      sf = warm_frame_;
+    }
+    sf.width = 64;
+    sf.height = 36;
+    sf.timed = false;
+    const double start = now_s();
+    const auto context = atmos::GlContext::create_headless();
+    // The globe's programs do not depend on its relief: a flat one opens no
+    // raster (GDAL and netCDF stay on the viewer's thread).
+    PlanetTables flat = tables;
+    flat.surface = atmos::PlanetSurface{};
+    Scene scene(flat, o_.globe, regional, true);
+    sf.moons = place_moons(look_of_warm_frame(), sf.pose.position, sf.sun, scene.top_radius_m());
+    (void)scene.render(sf);
+    glFinish();
+    std::printf("shaders of the new tables compiled in %.2f s\n", now_s() - start);
+    std::fflush(stdout);
+  };
+  job_ = std::make_unique<TableJob>(o_.cache, o_.globe, regional, threads, warm_up);
   // Destroyed before the window (the GL objects need its context): the
   // job's thread has no GL, but the scene and the post-processing do.
   struct Release {
@@ -606,7 +646,7 @@ int Viewer::run() {
   // tables it asked for are swapped in (at most a minute more), so that
   // the swap is measured.
   const int frames = std::max(o_.frames, script ? script->length() + 1 : 0);
-  constexpr double kMaxWaitForTablesS = 60.0;
+  constexpr double kMaxWaitForTablesS = 180.0;
   double waited_from = -1.0;
   for (int frame = 0; !glfwWindowShouldClose(window_); ++frame) {
     if (frames > 0 && frame >= frames) {
@@ -673,6 +713,7 @@ int Viewer::run() {
     int width = 0, height = 0;
     glfwGetFramebufferSize(window_, &width, &height);
     GLuint hdr = 0;
+    bool recorded = false;
     if (width > 0 && height > 0) {
       SceneFrame sf;
       sf.pose = flight_->pose();
@@ -684,6 +725,11 @@ int Viewer::run() {
       sf.moons = place_moons(look_, sf.pose.position, sun_, scene_->top_radius_m());
       sf.timed = timed_;
       hdr = scene_->render(sf);
+      {
+        std::lock_guard<std::mutex> lock(warm_mutex_);
+        warm_frame_ = sf;
+        warm_look_ = look_;
+      }
       atmos::PostInput pin;
       pin.colour = hdr;
       pin.width = width;
@@ -699,7 +745,8 @@ int Viewer::run() {
       ImGui::Render();
       ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
       const bool last = frames > 0 && frame >= frames - 1 && !(script && awaiting_tables_);
-      if (last && !o_.screenshot.empty()) write_screenshot(hdr, width, height);
+      if (last)
+        for (const std::string& path : o_.screenshots) write_screenshot(path, hdr, width, height);
 
       FrameRecord fr;
       fr.time_s = script ? frame * kScriptStepS : frame_start - start_s_;
@@ -708,6 +755,7 @@ int Viewer::run() {
       fr.look = look_;
       fr.planet = scene_->params();
       record_.frames.push_back(fr);
+      recorded = true;
       record_.width = width;
       record_.height = height;
     } else {
@@ -719,6 +767,7 @@ int Viewer::run() {
     glFinish();
     const double frame_ms = (now_s() - frame_start) * 1e3;
     log_.add(frame_ms, dragging, swapped);
+    if (recorded) record_.frames.back().frame_ms = frame_ms;
     plot_.push_back(float(frame_ms));
     if (plot_.size() > 240) plot_.erase(plot_.begin());
   }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "state.hpp"
 #include "tables_job.hpp"
@@ -23,7 +24,8 @@ struct ViewOptions {
   LookSettings look;
   bool ui = true;          // the panel
   int frames = 0;          // > 0: draw this many frames, then exit
-  std::string screenshot;  // with frames: the last frame (.png: the window; .exr: the linear image)
+  // With frames: the last frame (.png: the window as shown; .exr: the linear image).
+  std::vector<std::string> screenshots;
   std::string record;      // the flight, written at exit
   std::string script;      // scripted input (docs/viewer.md, Scripts)
   std::string replay;      // a recorded flight to replay headless

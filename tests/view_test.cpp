@@ -1,0 +1,389 @@
+// atmos view: the flight model, the recorded flights and scripts (unit
+// tests of apps/view/), and the viewer end to end under Xvfb: a screenshot
+// of sky over ground, scripted flying and slider drags, deterministic
+// replays, and one-line errors for bad input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cli_support.hpp"
+#include "png_decoder.hpp"
+#include "atmos/image.hpp"
+#include <nlohmann/json.hpp>
+#include <algorithm>
+
+#ifdef ATMOS_VIEWER
+#include <glm/geometric.hpp>
+
+#include "view/flight.hpp"
+#include "view/script.hpp"
+#include "view/state.hpp"
+#endif
+
+namespace {
+
+namespace fs = std::filesystem;
+
+using atmos_test::CliRun;
+
+#ifdef ATMOS_VIEWER
+
+using atmos_view::Flight;
+using atmos_view::FlightInput;
+
+constexpr double kRadius = 6360e3;
+
+// A bumpy ground: 0 to 2 km depending on the direction.
+double bumpy(const glm::dvec3& p) { return 1000.0 + 1000.0 * std::sin(5.0 * glm::normalize(p).x); }
+
+TEST(ViewFlight, SpeedIsProportionalToAltitude) {
+  Flight flight(kRadius);
+  const Flight::GroundHeight flat = [](const glm::dvec3&) { return 0.0; };
+  flight.place(20.0, 30.0, 2.0, 90.0, 0.0, flat);
+  EXPECT_NEAR(flight.altitude_m(flat), 2.0, 1e-6);
+  EXPECT_NEAR(flight.speed_m_per_s(flat), 2.0, 1e-6);
+  flight.place(20.0, 30.0, 400e3, 90.0, 0.0, flat);
+  EXPECT_NEAR(flight.speed_m_per_s(flat), 400e3, 1e-3);
+  // Climbing at full speed for one second multiplies the altitude by
+  // about e (a step of k dt of the altitude per frame).
+  FlightInput up;
+  up.up = true;
+  flight.place(20.0, 30.0, 100.0, 90.0, 0.0, flat);
+  for (int i = 0; i < 100; ++i) flight.update(up, 0.01, flat);
+  EXPECT_NEAR(flight.altitude_m(flat), 100.0 * std::pow(1.01, 100), 1e-6);
+  // Below 1 m the speed stays at 1 m/s.
+  flight.place(20.0, 30.0, 0.5, 90.0, 0.0, flat);
+  EXPECT_NEAR(flight.speed_m_per_s(flat), 1.0, 1e-9);
+}
+
+TEST(ViewFlight, StaysAboveTheTerrainAndWithinReach) {
+  Flight flight(kRadius);
+  const Flight::GroundHeight ground = bumpy;
+  flight.place(10.0, 40.0, 5.0, 0.0, -80.0, ground);
+  FlightInput dive;
+  dive.forward = true;
+  dive.down = true;
+  dive.speed_multiplier = 100.0;
+  for (int i = 0; i < 200; ++i) {
+    flight.update(dive, 0.25, ground);
+    ASSERT_GE(flight.altitude_m(ground), Flight::kMinClearanceM - 1e-6) << "frame " << i;
+  }
+  FlightInput climb;
+  climb.up = true;
+  climb.speed_multiplier = 100.0;
+  for (int i = 0; i < 200; ++i) flight.update(climb, 0.25, ground);
+  EXPECT_NEAR(glm::length(flight.position()), Flight::kMaxDistanceRadii * kRadius, 1.0);
+  // Absurd input changes nothing it should not.
+  FlightInput absurd;
+  absurd.look_dx = std::nan("");
+  absurd.look_dy = INFINITY;
+  absurd.forward = true;
+  absurd.speed_multiplier = std::nan("");
+  flight.update(absurd, INFINITY, ground);
+  EXPECT_TRUE(std::isfinite(glm::length(flight.position())));
+  EXPECT_TRUE(std::isfinite(flight.pitch_deg()));
+  // The pitch stops short of the vertical.
+  FlightInput look_down;
+  look_down.look_dy = 1e6;
+  flight.update(look_down, 0.0, ground);
+  EXPECT_EQ(flight.pitch_deg(), -Flight::kPitchLimitDeg);
+  const atmos_view::CameraPose pose = flight.pose();
+  EXPECT_NEAR(glm::length(pose.forward), 1.0, 1e-12);
+  EXPECT_NEAR(glm::dot(pose.forward, pose.up), 0.0, 1e-12);
+}
+
+TEST(ViewFlight, JumpsGoToTheirAltitudes) {
+  Flight flight(kRadius);
+  const Flight::GroundHeight ground = bumpy;
+  flight.place(-30.0, 100.0, 50.0, 45.0, 10.0, ground);
+  const glm::dvec3 direction = glm::normalize(flight.position());
+  const double expected[] = {2.0, 10e3, 400e3, 2.5 * kRadius};
+  for (int k = 1; k <= 4; ++k) {
+    FlightInput jump;
+    jump.jump = k;
+    flight.update(jump, 0.0, ground);
+    EXPECT_NEAR(flight.altitude_m(ground), expected[k - 1], 1e-6 * expected[k - 1]) << "key " << k;
+    EXPECT_NEAR(glm::dot(glm::normalize(flight.position()), direction), 1.0, 1e-12) << "key " << k;
+  }
+  EXPECT_EQ(flight.pitch_deg(), -Flight::kPitchLimitDeg);  // from 2.5 radii: straight down
+}
+
+TEST(ViewFlight, RecordsRoundTripBitForBit) {
+  atmos_view::FlightRecord record;
+  record.globe = false;
+  record.width = 33;
+  record.height = 17;
+  atmos_view::FrameRecord f;
+  f.time_s = 1.0 / 3.0;
+  f.pose.position = {6371e3 / 7.0, -1e-7 / 3.0, 6.4e6 * M_PI};
+  f.pose.forward = glm::normalize(glm::dvec3(0.1, 0.7, -0.3));
+  f.pose.up = glm::normalize(glm::dvec3(1.0, -0.1, 0.1 / 3.0));
+  f.sun = glm::normalize(glm::dvec3(M_E, 1.0, 0.5));
+  f.look.tone_mapping = atmos::ToneMapping::aces;
+  f.look.bloom = 0.1 / 7.0;
+  f.planet.density_scale = 1.0 / 3.0;
+  f.planet.ground_albedo = 0.3;
+  record.frames = {f, f};
+  const fs::path path = atmos_test::scratch_directory("view") / "record.json";
+  atmos_view::write_flight(record, path.string());
+  const atmos_view::FlightRecord back = atmos_view::read_flight(path.string());
+  ASSERT_EQ(back.frames.size(), 2u);
+  EXPECT_FALSE(back.globe);
+  EXPECT_EQ(back.width, 33);
+  const atmos_view::FrameRecord& g = back.frames[1];
+  EXPECT_EQ(g.time_s, f.time_s);
+  EXPECT_EQ(g.pose.position, f.pose.position);
+  EXPECT_EQ(g.pose.forward, f.pose.forward);
+  EXPECT_EQ(g.pose.up, f.pose.up);
+  EXPECT_EQ(g.sun, f.sun);
+  EXPECT_TRUE(g.look == f.look);
+  EXPECT_TRUE(g.planet == f.planet);
+}
+
+TEST(ViewFlight, BadRecordsAndScriptsAreOneLineErrors) {
+  const fs::path dir = atmos_test::scratch_directory("view");
+  const auto expect_error = [&](const std::string& text, const std::string& message, bool script) {
+    const fs::path path = dir / "bad.json";
+    std::ofstream(path) << text;
+    try {
+      if (script)
+        (void)atmos_view::Script::read(path.string());
+      else
+        (void)atmos_view::read_flight(path.string());
+      ADD_FAILURE() << "no error for " << text;
+    } catch (const atmos::Error& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(message), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+  };
+  expect_error("{", "not valid JSON", false);
+  expect_error(R"({"format": "x", "version": 1})", "format must be", false);
+  expect_error(R"({"format": "atmos-flight", "version": 1, "surface": "globe", "planet_albedo": false,
+                   "width": 8, "height": 8, "frames": []})",
+               "frames must be a non-empty array", false);
+  expect_error(R"({"events": [{"frame": 0, "key": "X"}]})", "\"key\" must be one of", true);
+  expect_error(R"({"events": [{"frame": 0, "slider": "warp", "from": 0, "to": 1}]})", "unknown slider", true);
+  expect_error(R"({"events": [{"frame": -1, "key": "W"}]})", "\"frame\" must be an integer >= 0", true);
+  EXPECT_THROW((void)atmos_view::read_flight((dir / "missing.json").string()), atmos::Error);
+
+  atmos_view::PlanetParams p;
+  p.ground_albedo = 1.5;
+  EXPECT_THROW((void)atmos_view::make_atmosphere(p), atmos::Error);
+  p = {};
+  p.planet = (dir / "no-such-planet.json").string();
+  EXPECT_THROW((void)atmos_view::make_atmosphere(p), atmos::Error);
+}
+
+TEST(ViewFlight, ScriptsGiveTheInputOfEachFrame) {
+  const fs::path path = atmos_test::scratch_directory("view") / "script.json";
+  std::ofstream(path) << R"({"events": [
+      {"frame": 2, "frames": 3, "key": "W"},
+      {"frame": 3, "frames": 2, "mouse": [4, -2]},
+      {"frame": 6, "key": "3"},
+      {"frame": 7, "frames": 4, "slider": "sun_elevation", "from": 30, "to": 0}]})";
+  const atmos_view::Script script = atmos_view::Script::read(path.string());
+  EXPECT_FALSE(script.input(1).forward);
+  EXPECT_TRUE(script.input(2).forward);
+  EXPECT_TRUE(script.input(4).forward);
+  EXPECT_FALSE(script.input(5).forward);
+  EXPECT_EQ(script.input(3).look_dx, 4.0);
+  EXPECT_EQ(script.input(5).look_dx, 0.0);
+  EXPECT_EQ(script.input(6).jump, 3);
+  EXPECT_FALSE(script.dragging(6));
+  EXPECT_TRUE(script.dragging(10));
+  EXPECT_EQ(script.length(), 11);
+}
+
+#endif  // ATMOS_VIEWER
+
+// ---------------------------------------------------------------------------
+// The viewer end to end. Its window needs an X server: each run goes
+// through xvfb-run (Debian's xvfb), and the tests skip when it is missing.
+
+fs::path scratch() {
+  static const fs::path dir = atmos_test::scratch_directory("view-cli");
+  return dir;
+}
+
+bool have_xvfb() { return std::system("command -v xvfb-run > /dev/null 2>&1") == 0; }
+
+const std::string kXvfb = "xvfb-run -a -s '-screen 0 640x480x24'";
+const std::string kSmall = " --tables small --width 320 --height 180";
+
+CliRun view(const std::string& args, bool window = true) {
+  return atmos_test::run_cli(scratch(), "view" + kSmall + " " + args, "", window ? kXvfb : "");
+}
+
+bool built_with_viewer() {
+  static const bool built =
+      atmos_test::run_cli(scratch(), "view --frames 1 --tables small --planet " + (scratch() / "none.json").string())
+          .err.find("was not built") == std::string::npos;
+  return built;
+}
+
+#define SKIP_WITHOUT_VIEWER()                                                    \
+  if (!built_with_viewer()) GTEST_SKIP() << "atmos was built without the viewer"; \
+  if (!have_xvfb()) GTEST_SKIP() << "xvfb-run is not installed (Debian's xvfb)"
+
+// The number after `key` in the viewer's output (NaN if absent).
+double figure(const std::string& out, const std::string& key) {
+  const size_t at = out.find(key);
+  if (at == std::string::npos) return std::nan("");
+  return std::strtod(out.c_str() + at + key.size(), nullptr);
+}
+
+struct Rgb {
+  double r = 0, g = 0, b = 0;
+};
+
+// Mean sRGB-encoded colour of rows [y0, y1) of a PNG.
+Rgb mean_rows(const fs::path& png, double y0_fraction, double y1_fraction) {
+  int w = 0, h = 0, n = 0;
+  unsigned char* pixels = stbi_load(png.string().c_str(), &w, &h, &n, 3);
+  Rgb m;
+  if (!pixels) return m;
+  const int y0 = int(y0_fraction * h), y1 = int(y1_fraction * h);
+  for (int y = y0; y < y1; ++y)
+    for (int x = 0; x < w; ++x) {
+      const unsigned char* p = pixels + (size_t(y) * size_t(w) + size_t(x)) * 3;
+      m.r += p[0];
+      m.g += p[1];
+      m.b += p[2];
+    }
+  const double count = double(w) * double(y1 - y0);
+  m.r /= count;
+  m.g /= count;
+  m.b /= count;
+  stbi_image_free(pixels);
+  return m;
+}
+
+TEST(ViewCli, ScreenshotShowsSkyOverGround) {
+  SKIP_WITHOUT_VIEWER();
+  const fs::path png = scratch() / "ground.png", exr = scratch() / "ground.exr";
+  const CliRun r = view("--frames 3 --no-ui --screenshot " + png.string() + " --screenshot " + exr.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_TRUE(fs::exists(png)) << r.out;
+  // 2 m above the Sahara (20 N, 30 E), looking east at the horizon: a blue
+  // sky over yellow-brown ground.
+  const Rgb sky = mean_rows(png, 0.0, 0.3), ground = mean_rows(png, 0.7, 1.0);
+  EXPECT_GT(sky.b, sky.r + 10.0) << sky.r << " " << sky.g << " " << sky.b;
+  EXPECT_GT(ground.r, ground.b + 10.0) << ground.r << " " << ground.g << " " << ground.b;
+  EXPECT_GT(ground.r + ground.g + ground.b, 60.0);
+  // The EXR is the linear image of the same view, in cd/m²: a sky of
+  // thousands of cd/m² by day.
+  const atmos::Image image = atmos::read_exr(exr.string());
+  ASSERT_EQ(image.width, 320);
+  const float* top = &image.rgb[(5 * 320 + 160) * 3];
+  EXPECT_GT(top[2], top[0]);
+  EXPECT_GT(top[2], 1000.0f);
+}
+
+TEST(ViewCli, ScriptFliesTheCameraAndDragsASlider) {
+  SKIP_WITHOUT_VIEWER();
+  const fs::path script = scratch() / "fly.json", record = scratch() / "fly-record.json";
+  std::ofstream(script) << R"({"events": [
+      {"frame": 1, "frames": 8, "key": "W"},
+      {"frame": 9, "frames": 4, "mouse": [30, -10]},
+      {"frame": 13, "key": "2"},
+      {"frame": 20, "frames": 12, "slider": "sun_elevation", "from": 30, "to": 12},
+      {"frame": 33, "frames": 2, "slider": "ground_albedo", "from": 0.5, "to": 1.5}]})";
+  const CliRun r = view("--surface sphere --script " + script.string() + " --record " + record.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  // W for 8 frames of 1/30 s at 2 m/s, then the jump to 10 km.
+  EXPECT_NEAR(figure(r.out, "camera: altitude "), 10e3, 1.0) << r.out;
+  EXPECT_NEAR(figure(r.out, "heading "), 90.0 + 4 * 30 * 0.15, 1e-6) << r.out;
+  // An impossible albedo typed into the panel: a one-line error, the old
+  // tables stay and the session goes on.
+  EXPECT_NE(r.err.find("ground albedo must be in [0, 1], got 1.5"), std::string::npos) << r.err;
+  // The frame times during the drag, against the median: printed, not
+  // asserted (a shared machine's frames vary).
+  const double ratio = figure(r.out, "max/median ");
+  EXPECT_TRUE(std::isfinite(ratio)) << r.out;
+  std::printf("slider drag: max/median frame time %.2f\n", ratio);
+  // The record holds every frame drawn, the camera's path in it.
+  std::ifstream in(record);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  ASSERT_GE(j["frames"].size(), 35u);
+  const auto& first = j["frames"].front()["position_m"];
+  const auto& last = j["frames"].back()["position_m"];
+  double moved = 0.0;
+  for (size_t i = 0; i < 3; ++i) moved += std::pow(last[i].get<double>() - first[i].get<double>(), 2);
+  EXPECT_GT(std::sqrt(moved), 9e3);
+}
+
+// A flight replayed twice, headless, gives the same files byte for byte.
+TEST(ViewCli, ReplaysAreDeterministic) {
+  if (!built_with_viewer()) GTEST_SKIP() << "atmos was built without the viewer";
+  const fs::path record = scratch() / "replay.json";
+  // Two frames over the globe, 2 m above the ground looking at the
+  // horizon: the sun high, then low with the stars, another tone mapper
+  // and the eye adapting.
+  std::ofstream(record) << R"({"format": "atmos-flight", "version": 1, "surface": "globe", "planet_albedo": false,
+    "width": 96, "height": 54, "frames": [
+    {"time_s": 0, "position_m": [5200000.0, 3002000.0, 2175300.0], "forward": [-0.5, 0.866025403784, 0.0],
+     "up": [0.8137976813, 0.4698463104, 0.3420201433], "sun": [0.2, 0.9, 0.38],
+     "look": {"exposure_ev": 12, "auto_exposure": true, "compensation_ev": 0, "tone_mapping": "filmic",
+              "bloom": 0.05, "stars": false, "moon": false, "moon_separation_deg": 0.1, "fov_deg": 60},
+     "planet": {"planet": "earth", "wavelengths": 0, "orders": 4, "density_scale": 1, "solar": "",
+                "table_sizes": "small", "bottom_radius_m": null, "thickness_m": null, "ground_albedo": null}},
+    {"time_s": 0.5, "position_m": [5200000.0, 3002000.0, 2175300.0], "forward": [-0.5, 0.866025403784, 0.0],
+     "up": [0.8137976813, 0.4698463104, 0.3420201433], "sun": [0.5, 0.8, 0.1],
+     "look": {"exposure_ev": 11, "auto_exposure": true, "compensation_ev": 0.5, "tone_mapping": "aces",
+              "bloom": 0.1, "stars": true, "moon": false, "moon_separation_deg": 0.2, "fov_deg": 60},
+     "planet": {"planet": "earth", "wavelengths": 0, "orders": 4, "density_scale": 1, "solar": "",
+                "table_sizes": "small", "bottom_radius_m": null, "thickness_m": null, "ground_albedo": null}}]})";
+  for (const char* dir : {"replay-a", "replay-b"}) {
+    const CliRun r = atmos_test::run_cli(scratch(), "view --replay " + record.string() + " --frame-format both --output-dir " +
+                                                        (scratch() / dir).string());
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  for (const char* name : {"frame-00000.png", "frame-00000.exr", "frame-00001.png", "frame-00001.exr"}) {
+    const fs::path a = scratch() / "replay-a" / name, b = scratch() / "replay-b" / name;
+    ASSERT_TRUE(fs::exists(a)) << a;
+    EXPECT_EQ(atmos_test::slurp(a), atmos_test::slurp(b)) << name;
+  }
+  // The frames differ (the sun moved).
+  EXPECT_NE(atmos_test::slurp(scratch() / "replay-a" / "frame-00000.exr"),
+            atmos_test::slurp(scratch() / "replay-a" / "frame-00001.exr"));
+}
+
+TEST(ViewCli, BadInputIsAOneLineError) {
+  if (!built_with_viewer()) GTEST_SKIP() << "atmos was built without the viewer";
+  // No display: neither DISPLAY nor WAYLAND_DISPLAY.
+  CliRun r = atmos_test::run_cli(scratch(), "view --frames 1" + kSmall, "", "env -u DISPLAY -u WAYLAND_DISPLAY");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("no display"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  // An unreadable planet file, before any window opens.
+  r = view("--frames 1 --planet " + (scratch() / "no-such-planet.json").string(), false);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("no-such-planet.json"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  // A missing record, a bad script.
+  r = atmos_test::run_cli(scratch(), "view --replay " + (scratch() / "none.json").string() + " --output-dir out");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("cannot read the flight record"), std::string::npos) << r.err;
+  std::ofstream(scratch() / "bad-script.json") << R"({"events": [{"frame": 0, "slider": "warp", "from": 0, "to": 1}]})";
+  r = view("--script " + (scratch() / "bad-script.json").string(), false);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("unknown slider \"warp\""), std::string::npos) << r.err;
+  // Usage errors: exit code 2, before any work.
+  r = view("--screenshot shot.png", false);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--screenshot needs --frames"), std::string::npos) << r.err;
+  r = view("--frames 1 --orders auto", false);
+  EXPECT_EQ(r.code, 2);
+  r = view("--frames 1 --altitude -5", false);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--altitude must be in [0, 1e12] metres, got -5"), std::string::npos) << r.err;
+}
+
+}  // namespace
