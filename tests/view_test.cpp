@@ -293,7 +293,7 @@ TEST(ViewCli, ScriptFliesTheCameraAndDragsASlider) {
       {"frame": 1, "frames": 8, "key": "W"},
       {"frame": 9, "frames": 4, "mouse": [30, -10]},
       {"frame": 13, "key": "2"},
-      {"frame": 20, "frames": 12, "slider": "sun_elevation", "from": 30, "to": 12},
+      {"frame": 20, "frames": 12, "slider": "sun_azimuth", "from": 180, "to": 200},
       {"frame": 33, "frames": 2, "slider": "ground_albedo", "from": 0.5, "to": 1.5}]})";
   const CliRun r = view("--surface sphere --script " + script.string() + " --record " + record.string());
   ASSERT_EQ(r.code, 0) << r.err;

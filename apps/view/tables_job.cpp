@@ -67,10 +67,11 @@ TableJob::~TableJob() {
   worker_.join();
 }
 
-void TableJob::request(const PlanetParams& params) {
+void TableJob::request(const PlanetParams& params, bool warm_up) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     waiting_ = params;
+    waiting_warm_up_ = warm_up;
   }
   wake_.notify_all();
 }
@@ -112,11 +113,13 @@ void TableJob::run() {
   tbb::task_arena arena(threads_);
   for (;;) {
     PlanetParams params;
+    bool warm_up = true;
     {
       std::unique_lock<std::mutex> lock(mutex_);
       wake_.wait(lock, [this] { return stop_ || waiting_.has_value(); });
       if (stop_) return;
       params = std::move(*waiting_);
+      warm_up = waiting_warm_up_;
       waiting_.reset();
       busy_ = true;
       step_.clear();
@@ -137,7 +140,7 @@ void TableJob::run() {
         error = e.what();
       }
     });
-    if (tables && warm_up_) {
+    if (tables && warm_up && warm_up_) {
       progress("compiling the shaders", -1.0);
       try {
         warm_up_(*tables);

@@ -51,7 +51,9 @@ class TableJob {
   TableJob(const TableJob&) = delete;
   TableJob& operator=(const TableJob&) = delete;
 
-  void request(const PlanetParams& params);
+  // `warm_up`: run the WarmUp once the tables are ready (the first tables,
+  // with nothing on screen yet, need not).
+  void request(const PlanetParams& params, bool warm_up = true);
   // The newest finished tables, once (then empty until the next ones).
   std::optional<PlanetTables> take_result();
   // The error of the newest failed request, once.
@@ -75,6 +77,7 @@ class TableJob {
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   std::optional<PlanetParams> waiting_;
+  bool waiting_warm_up_ = true;
   std::optional<PlanetTables> result_;
   std::optional<std::string> error_;
   bool busy_ = false, stop_ = false;

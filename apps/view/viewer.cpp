@@ -254,6 +254,8 @@ class Viewer {
   void request_tables();
   FlightInput window_input();
   void panel();
+  void loading_panel();
+  void progress_bar();
   void write_screenshot(const std::string& path, GLuint hdr, int width, int height);
 
   const ViewOptions& o_;
@@ -420,8 +422,8 @@ void Viewer::panel() {
     ImGui::Text("sky-view   %6.2f ms", p.sky_view_ms);
     ImGui::Text("volume     %6.2f ms", p.volume_ms);
     ImGui::Text("composite  %6.2f ms", p.composite_ms);
-    ImGui::Text("post       %6.2f ms (bloom %.2f, exposure %.2f, tone map %.2f)", q.total_ms(), q.bloom_ms,
-                q.exposure_ms, q.tone_map_ms);
+    ImGui::Text("post       %6.2f ms", q.total_ms());
+    ImGui::Text("  bloom %.2f, exposure %.2f, tone map %.2f ms", q.bloom_ms, q.exposure_ms, q.tone_map_ms);
   }
   if (const atmos::GlobeStats* s = scene_->globe_stats())
     ImGui::Text("tiles %d (%d pending), %lld triangles", s->tiles_drawn, s->tiles_pending, s->triangles);
@@ -519,17 +521,9 @@ void Viewer::panel() {
     slider("ground albedo", "ground_albedo", 0.0f, 1.0f, "%.3f", 0);
     slider("ground radius", "bottom_radius_km", 1000.0f, 20000.0f, "%.1f km", ImGuiSliderFlags_Logarithmic);
     slider("atmosphere thickness", "thickness_km", 10.0f, 1000.0f, "%.1f km", ImGuiSliderFlags_Logarithmic);
-    const TableJob::Progress p = job_->progress();
-    if (p.busy) {
-      if (p.fraction >= 0.0) {
-        ImGui::ProgressBar(float(p.fraction), ImVec2(-1, 0), p.step.c_str());
-      } else {
-        // No fraction yet (a cache look-up, or before the first step): a
-        // bar that sweeps while the thread works.
-        const double phase = std::fmod(p.elapsed_s, 1.5) / 1.5;
-        ImGui::ProgressBar(float(phase), ImVec2(-1, 0), p.step.empty() ? "loading the tables" : p.step.c_str());
-      }
-      ImGui::Text("new tables: %.1f s (the old ones stay on screen)", p.elapsed_s);
+    if (job_->progress().busy) {
+      progress_bar();
+      ImGui::TextUnformatted("(the old tables stay on screen)");
     } else if (last_swap_ms_ > 0.0) {
       ImGui::Text("last tables: %.2f s, swapped in %.0f ms", last_tables_s_, last_swap_ms_);
     }
@@ -540,6 +534,32 @@ void Viewer::panel() {
     else
       ImGui::TextUnformatted(message_.c_str());
   }
+  ImGui::End();
+}
+
+void Viewer::progress_bar() {
+  const TableJob::Progress p = job_->progress();
+  if (p.fraction >= 0.0) {
+    ImGui::ProgressBar(float(p.fraction), ImVec2(-1, 0), p.step.c_str());
+  } else {
+    // No fraction (a cache look-up, the shaders' compilation): a bar that
+    // sweeps while the thread works.
+    const double phase = std::fmod(p.elapsed_s, 1.5) / 1.5;
+    ImGui::ProgressBar(float(phase), ImVec2(-1, 0), p.step.empty() ? "loading the tables" : p.step.c_str());
+  }
+  ImGui::Text("new tables: %.1f s", p.elapsed_s);
+}
+
+void Viewer::loading_panel() {
+  const ImVec2 size = ImGui::GetIO().DisplaySize;
+  ImGui::SetNextWindowPos(ImVec2(size.x * 0.5f, size.y * 0.5f), ImGuiCond_Always, ImVec2(0.5f, 0.5f));
+  ImGui::SetNextWindowSize(ImVec2(std::min(420.0f, size.x - 16.0f), 0), ImGuiCond_Always);
+  ImGui::Begin("atmos view", nullptr, ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove);
+  ImGui::Text("%s: its tables and shaders", o_.planet.planet.c_str());
+  if (job_->progress().busy)
+    progress_bar();
+  else
+    ImGui::TextUnformatted("compiling the shaders");
   ImGui::End();
 }
 
@@ -617,10 +637,36 @@ int Viewer::run() {
     }
   } release{*this};
 
-  // The first tables, on this thread: there is nothing to show before them.
-  PlanetTables first = load_planet_tables(o_.planet, o_.globe, regional, o_.cache);
-  std::printf("tables: %s in %.2f s\n", first.status.c_str(), first.seconds);
-  scene_ = std::make_unique<Scene>(first, o_.globe, regional, o_.frames > 0);
+  // The first tables come from the job too, so that the window shows their
+  // progress from its first frame; their programs are compiled here (the
+  // warm-up would only compile them twice: nothing is on screen yet).
+  job_->request(o_.planet, false);
+  std::optional<PlanetTables> first;
+  for (int shown = 0; !first || shown < 2; ++shown) {
+    if (glfwWindowShouldClose(window_)) return 0;
+    if (std::optional<std::string> error = job_->take_error()) throw atmos::Error(*error);
+    // Once the tables are there, one more frame says what the wait is for.
+    if (!first) {
+      first = job_->take_result();
+      shown = 0;
+    }
+    glfwWaitEventsTimeout(0.05);
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    loading_panel();
+    ImGui::Render();
+    int width = 0, height = 0;
+    glfwGetFramebufferSize(window_, &width, &height);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glViewport(0, 0, width, height);
+    glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
+    glClear(GL_COLOR_BUFFER_BIT);
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+    glfwSwapBuffers(window_);
+  }
+  std::printf("tables: %s in %.2f s\n", first->status.c_str(), first->seconds);
+  scene_ = std::make_unique<Scene>(*first, o_.globe, regional, o_.frames > 0);
   post_ = std::make_unique<atmos::PostProcess>();
   edited_ = o_.planet;
   look_ = o_.look;
