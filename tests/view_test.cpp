@@ -129,6 +129,9 @@ TEST(ViewFlight, RecordsRoundTripBitForBit) {
   f.look.bloom = 0.1 / 7.0;
   f.planet.density_scale = 1.0 / 3.0;
   f.planet.ground_albedo = 0.3;
+  f.planet.constituents.resize(2);
+  f.planet.constituents[1].phase_g = 0.7 / 3.0;
+  f.planet.constituents[1].scale_height_m = 1234.5;
   record.frames = {f, f};
   const fs::path path = atmos_test::scratch_directory("view") / "record.json";
   atmos_view::write_flight(record, path.string());
@@ -179,6 +182,55 @@ TEST(ViewFlight, BadRecordsAndScriptsAreOneLineErrors) {
   p = {};
   p.planet = (dir / "no-such-planet.json").string();
   EXPECT_THROW((void)atmos_view::make_atmosphere(p), atmos::Error);
+}
+
+// The panel's edits of the planet: each changes what it names, and
+// impossible ones are one-line errors.
+TEST(ViewFlight, PlanetEditsChangeTheAtmosphere) {
+  const atmos::Atmosphere earth = atmos_view::make_atmosphere({});
+  atmos_view::PlanetParams p;
+  p.bottom_radius_m = 3000e3;
+  p.thickness_m = 100e3;
+  p.ground_albedo = 0.25;
+  p.constituents.resize(2);
+  p.constituents[0].scattering_scale = 2.0;
+  p.constituents[1].scale_height_m = 2500.0;
+  p.constituents[1].phase_g = 0.5;
+  const atmos::Atmosphere a = atmos_view::make_atmosphere(p);
+  EXPECT_EQ(a.bottom_radius_m, 3000e3);
+  EXPECT_EQ(a.top_radius_m, 3100e3);
+  EXPECT_EQ(a.ground_albedo.at(500.0), 0.25);
+  EXPECT_DOUBLE_EQ(a.constituents[0].scattering.at(550.0), 2.0 * earth.constituents[0].scattering.at(550.0));
+  EXPECT_EQ(a.constituents[0].absorption.at(550.0), earth.constituents[0].absorption.at(550.0));
+  EXPECT_EQ(a.constituents[1].density.scale_height_m, 2500.0);
+  EXPECT_EQ(a.constituents[1].phase.g.at(440.0), 0.5);
+  EXPECT_EQ(a.constituents[2].density.kind, earth.constituents[2].density.kind);
+
+  const auto expect_error = [](const atmos_view::PlanetParams& bad, const std::string& message) {
+    try {
+      (void)atmos_view::make_atmosphere(bad);
+      ADD_FAILURE() << "no error for " << message;
+    } catch (const atmos::Error& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  };
+  atmos_view::PlanetParams bad;
+  bad.constituents.resize(1);
+  bad.constituents[0].phase_g = 0.5;  // the air: Rayleigh
+  expect_error(bad, "a Rayleigh phase function has no asymmetry parameter");
+  bad = {};
+  bad.constituents.resize(3);
+  bad.constituents[2].scale_height_m = 8000.0;  // ozone: a piecewise linear layer
+  expect_error(bad, "its density profile is not exponential");
+  bad = {};
+  bad.constituents.resize(7);
+  expect_error(bad, "the planet has 3 constituents, 7 edited");
+  bad = {};
+  bad.thickness_m = 10.0;
+  expect_error(bad, "atmosphere thickness must be in [1 km, 10000 km]");
+  bad = {};
+  bad.density_scale = -1.0;
+  expect_error(bad, "density scale must be in (0, 10000]");
 }
 
 TEST(ViewFlight, ScriptsGiveTheInputOfEachFrame) {

@@ -48,6 +48,38 @@ atmos::Atmosphere make_atmosphere(const PlanetParams& p) {
       throw atmos::Error("ground albedo must be in [0, 1], got " + number(*p.ground_albedo));
     a.ground_albedo = atmos::Spectrum::constant(*p.ground_albedo);
   }
+  if (p.constituents.size() > a.constituents.size())
+    throw atmos::Error("the planet has " + std::to_string(a.constituents.size()) + " constituents, " +
+                       std::to_string(p.constituents.size()) + " edited");
+  for (size_t i = 0; i < p.constituents.size(); ++i) {
+    const ConstituentEdit& e = p.constituents[i];
+    atmos::Constituent& c = a.constituents[i];
+    const std::string name = "constituent \"" + c.name + "\": ";
+    if (e.scattering_scale) {
+      if (!(*e.scattering_scale >= 0.0 && *e.scattering_scale <= 100.0))
+        throw atmos::Error(name + "scattering scale must be in [0, 100], got " + number(*e.scattering_scale));
+      c.scattering = c.scattering.scaled(*e.scattering_scale);
+    }
+    if (e.absorption_scale) {
+      if (!(*e.absorption_scale >= 0.0 && *e.absorption_scale <= 100.0))
+        throw atmos::Error(name + "absorption scale must be in [0, 100], got " + number(*e.absorption_scale));
+      c.absorption = c.absorption.scaled(*e.absorption_scale);
+    }
+    if (e.scale_height_m) {
+      if (c.density.kind != atmos::DensityProfile::Kind::exponential)
+        throw atmos::Error(name + "its density profile is not exponential: it has no scale height");
+      if (!(*e.scale_height_m >= 10.0 && *e.scale_height_m <= 1e6))
+        throw atmos::Error(name + "scale height must be in [10 m, 1000 km], got " + number(*e.scale_height_m) + " m");
+      c.density.scale_height_m = *e.scale_height_m;
+    }
+    if (e.phase_g) {
+      if (c.phase.kind == atmos::PhaseFunction::Kind::rayleigh)
+        throw atmos::Error(name + "a Rayleigh phase function has no asymmetry parameter");
+      if (!(std::abs(*e.phase_g) < 0.999))
+        throw atmos::Error(name + "phase g must be in (-0.999, 0.999), got " + number(*e.phase_g));
+      c.phase.g = atmos::Spectrum::constant(*e.phase_g);
+    }
+  }
   a.validate();
   return a;
 }
@@ -120,6 +152,14 @@ json planet_json(const PlanetParams& p) {
   j["bottom_radius_m"] = p.bottom_radius_m ? json(*p.bottom_radius_m) : json(nullptr);
   j["thickness_m"] = p.thickness_m ? json(*p.thickness_m) : json(nullptr);
   j["ground_albedo"] = p.ground_albedo ? json(*p.ground_albedo) : json(nullptr);
+  const auto optional = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
+  json constituents = json::array();
+  for (const ConstituentEdit& e : p.constituents)
+    constituents.push_back({{"scattering_scale", optional(e.scattering_scale)},
+                            {"absorption_scale", optional(e.absorption_scale)},
+                            {"scale_height_m", optional(e.scale_height_m)},
+                            {"phase_g", optional(e.phase_g)}});
+  j["constituents"] = constituents;
   return j;
 }
 
@@ -220,6 +260,20 @@ FlightRecord read_flight(const std::string& path) {
     out.planet.bottom_radius_m = r.optional_real(planet, "bottom_radius_m", pw);
     out.planet.thickness_m = r.optional_real(planet, "thickness_m", pw);
     out.planet.ground_albedo = r.optional_real(planet, "ground_albedo", pw);
+    if (planet.contains("constituents")) {
+      const json& list = planet.at("constituents");
+      if (!list.is_array()) r.fail(pw + ".constituents must be an array");
+      for (size_t k = 0; k < list.size(); ++k) {
+        const std::string cw = pw + ".constituents[" + std::to_string(k) + "]";
+        if (!list[k].is_object()) r.fail(cw + " must be an object");
+        ConstituentEdit e;
+        e.scattering_scale = r.optional_real(list[k], "scattering_scale", cw);
+        e.absorption_scale = r.optional_real(list[k], "absorption_scale", cw);
+        e.scale_height_m = r.optional_real(list[k], "scale_height_m", cw);
+        e.phase_g = r.optional_real(list[k], "phase_g", cw);
+        out.planet.constituents.push_back(e);
+      }
+    }
     record.frames.push_back(out);
   }
   return record;

@@ -16,6 +16,20 @@
 
 namespace atmos_view {
 
+// Changes to one constituent of the planet file (by its place in the
+// file's list); none: the file's values.
+struct ConstituentEdit {
+  std::optional<double> scattering_scale;  // multiplies its scattering coefficients, [0, 100]
+  std::optional<double> absorption_scale;  // multiplies its absorption coefficients, [0, 100]
+  std::optional<double> scale_height_m;    // of an exponential density profile, [10 m, 1000 km]
+  // The asymmetry parameter of its phase function (Henyey-Greenstein,
+  // Cornette-Shanks, or the forward lobe of a double Henyey-Greenstein),
+  // constant over wavelength, |g| < 0.999.
+  std::optional<double> phase_g;
+
+  bool operator==(const ConstituentEdit&) const = default;
+};
+
 // The planet and how its tables are computed: any change needs new tables.
 struct PlanetParams {
   std::string planet = "earth";  // a preset or a planet file
@@ -28,6 +42,7 @@ struct PlanetParams {
   std::optional<double> bottom_radius_m;  // the ground's radius, m
   std::optional<double> thickness_m;      // top radius - bottom radius, m
   std::optional<double> ground_albedo;    // a constant over wavelength, [0, 1]
+  std::vector<ConstituentEdit> constituents;  // by the file's order; fewer than it has: the rest unchanged
 
   bool operator==(const PlanetParams&) const = default;
 };

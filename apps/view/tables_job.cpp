@@ -140,12 +140,21 @@ void TableJob::run() {
         error = e.what();
       }
     });
-    if (tables && warm_up && warm_up_) {
+    // No warm-up for tables that will not be shown (the viewer is closing,
+    // or a newer request supersedes them).
+    bool shown = true;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      shown = !stop_ && !waiting_;
+    }
+    if (tables && warm_up && warm_up_ && shown) {
       progress("compiling the shaders", -1.0);
-      try {
-        warm_up_(*tables);
-      } catch (const std::exception&) {
-      }
+      arena.execute([&] {
+        try {
+          warm_up_(*tables);
+        } catch (const std::exception&) {
+        }
+      });
     }
     std::lock_guard<std::mutex> lock(mutex_);
     busy_ = false;

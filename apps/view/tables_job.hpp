@@ -46,7 +46,7 @@ class TableJob {
 
   TableJob(CacheConfig cache, bool globe, bool ground_albedo_response, int threads, WarmUp warm_up = {});
   // Waits for the tables being computed (the precomputation cannot be
-  // interrupted) and drops any waiting request.
+  // interrupted; their warm-up is skipped) and drops any waiting request.
   ~TableJob();
   TableJob(const TableJob&) = delete;
   TableJob& operator=(const TableJob&) = delete;

@@ -115,26 +115,28 @@ atmos::PostSettings post_settings(const LookSettings& look) {
   return s;
 }
 
-// The scene's HDR texture as an image in cd/m², rows top-down (GL's rows
-// are bottom-up).
-atmos::Image read_hdr(GLuint texture, int width, int height) {
-  const atmos::Image bottom_up = atmos::read_linear_image(texture, width, height);
-  atmos::Image image = bottom_up;
+// Reverses the order of the rows of an RGB image (GL's rows are
+// bottom-up, atmos::Image's and DisplayImage's top-down).
+template <typename T>
+void flip_rows(std::vector<T>& rgb, int width, int height) {
   const size_t row = size_t(width) * 3;
-  for (size_t y = 0; y < size_t(height); ++y)
-    for (size_t i = 0; i < row; ++i)
-      image.rgb[y * row + i] = float(double(bottom_up.rgb[(size_t(height) - 1 - y) * row + i]) * Scene::kNitsPerUnit);
+  for (size_t y = 0; y < size_t(height) / 2; ++y)
+    std::swap_ranges(rgb.begin() + std::ptrdiff_t(y * row), rgb.begin() + std::ptrdiff_t((y + 1) * row),
+                     rgb.begin() + std::ptrdiff_t((size_t(height) - 1 - y) * row));
+}
+
+// The scene's HDR texture as an image in cd/m², rows top-down.
+atmos::Image read_hdr(GLuint texture, int width, int height) {
+  atmos::Image image = atmos::read_linear_image(texture, width, height);
+  flip_rows(image.rgb, width, height);
+  for (float& v : image.rgb) v = float(double(v) * Scene::kNitsPerUnit);
   return image;
 }
 
 // An srgb8 texture (PostProcess's output) as a display image, rows top-down.
 atmos::DisplayImage read_display(GLuint texture, int width, int height) {
-  const atmos::DisplayImage bottom_up = atmos::read_display_image(texture, width, height);
-  atmos::DisplayImage image = bottom_up;
-  const size_t row = size_t(width) * 3;
-  for (size_t y = 0; y < size_t(height); ++y)
-    std::copy_n(bottom_up.rgb.begin() + std::ptrdiff_t((size_t(height) - 1 - y) * row), row,
-                image.rgb.begin() + std::ptrdiff_t(y * row));
+  atmos::DisplayImage image = atmos::read_display_image(texture, width, height);
+  flip_rows(image.rgb, width, height);
   return image;
 }
 
@@ -255,6 +257,7 @@ class Viewer {
   FlightInput window_input();
   void panel();
   void loading_panel();
+  void constituents_panel();
   void progress_bar();
   void write_screenshot(const std::string& path, GLuint hdr, int width, int height);
 
@@ -521,6 +524,7 @@ void Viewer::panel() {
     slider("ground albedo", "ground_albedo", 0.0f, 1.0f, "%.3f", 0);
     slider("ground radius", "bottom_radius_km", 1000.0f, 20000.0f, "%.1f km", ImGuiSliderFlags_Logarithmic);
     slider("atmosphere thickness", "thickness_km", 10.0f, 1000.0f, "%.1f km", ImGuiSliderFlags_Logarithmic);
+    constituents_panel();
     if (job_->progress().busy) {
       progress_bar();
       ImGui::TextUnformatted("(the old tables stay on screen)");
@@ -535,6 +539,51 @@ void Viewer::panel() {
       ImGui::TextUnformatted(message_.c_str());
   }
   ImGui::End();
+}
+
+// One tree node per constituent of the planet on screen: its scattering
+// and absorption (factors on the file's coefficients), the scale height of
+// an exponential profile and the asymmetry parameter of a non-Rayleigh
+// phase function. Each asks for new tables when released.
+void Viewer::constituents_panel() {
+  const atmos::Atmosphere& a = scene_->planet();
+  const auto edit = [this](size_t i) -> ConstituentEdit& {
+    if (edited_.constituents.size() <= i) edited_.constituents.resize(i + 1);
+    return edited_.constituents[i];
+  };
+  const auto current = [this](size_t i) {
+    return i < edited_.constituents.size() ? edited_.constituents[i] : ConstituentEdit{};
+  };
+  for (size_t i = 0; i < a.constituents.size(); ++i) {
+    const atmos::Constituent& c = a.constituents[i];
+    ImGui::PushID(int(i));
+    if (ImGui::TreeNode("constituent", "constituent: %s", c.name.c_str())) {
+      const ConstituentEdit now = current(i);
+      float scattering = float(now.scattering_scale.value_or(1.0));
+      if (ImGui::SliderFloat("scattering x", &scattering, 0.01f, 100.0f, "%.3f", ImGuiSliderFlags_Logarithmic))
+        edit(i).scattering_scale = double(scattering);
+      if (ImGui::IsItemDeactivatedAfterEdit()) request_tables();
+      float absorption = float(now.absorption_scale.value_or(1.0));
+      if (ImGui::SliderFloat("absorption x", &absorption, 0.01f, 100.0f, "%.3f", ImGuiSliderFlags_Logarithmic))
+        edit(i).absorption_scale = double(absorption);
+      if (ImGui::IsItemDeactivatedAfterEdit()) request_tables();
+      if (c.density.kind == atmos::DensityProfile::Kind::exponential) {
+        float height_km = float(now.scale_height_m.value_or(c.density.scale_height_m) * 1e-3);
+        if (ImGui::SliderFloat("scale height", &height_km, 0.1f, 100.0f, "%.2f km", ImGuiSliderFlags_Logarithmic))
+          edit(i).scale_height_m = double(height_km) * 1e3;
+        if (ImGui::IsItemDeactivatedAfterEdit()) request_tables();
+      } else {
+        ImGui::TextDisabled("density: piecewise linear profile");
+      }
+      if (c.phase.kind != atmos::PhaseFunction::Kind::rayleigh) {
+        float g = float(now.phase_g.value_or(c.phase.g.at(550.0)));
+        if (ImGui::SliderFloat("phase g", &g, -0.95f, 0.95f, "%.3f")) edit(i).phase_g = double(g);
+        if (ImGui::IsItemDeactivatedAfterEdit()) request_tables();
+      }
+      ImGui::TreePop();
+    }
+    ImGui::PopID();
+  }
 }
 
 void Viewer::progress_bar() {
@@ -572,17 +621,13 @@ void Viewer::write_screenshot(const std::string& path, GLuint hdr, int width, in
     image.width = width;
     image.height = height;
     image.rgb.resize(size_t(width) * size_t(height) * 3);
-    std::vector<std::uint8_t> bottom_up(image.rgb.size());
     glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
     glReadBuffer(GL_BACK);
     glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     glPixelStorei(GL_PACK_ROW_LENGTH, 0);
-    glReadPixels(0, 0, width, height, GL_RGB, GL_UNSIGNED_BYTE, bottom_up.data());
-    const size_t row = size_t(width) * 3;
-    for (size_t y = 0; y < size_t(height); ++y)
-      std::copy_n(bottom_up.begin() + std::ptrdiff_t((size_t(height) - 1 - y) * row), row,
-                  image.rgb.begin() + std::ptrdiff_t(y * row));
+    glReadPixels(0, 0, width, height, GL_RGB, GL_UNSIGNED_BYTE, image.rgb.data());
+    flip_rows(image.rgb, width, height);
     atmos::write_png(image, path);
   }
   std::printf("screenshot: %s\n", path.c_str());
