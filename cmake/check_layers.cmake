@@ -1,6 +1,7 @@
 # Checks that every #include "..." in the library follows the layer order:
 #
 #   data -> physics -> io, tables -> gpu -> post          reference -> physics
+#   astronomy -> physics
 #   planet -> the public headers of post and below, and data (its GLSL text)
 #
 # (an arrow points from a layer to one that may use it; see docs/architecture.md).
@@ -17,6 +18,8 @@ function(layer_of path out)
     set(layer data)
   elseif(path MATCHES "^src/physics/" OR path MATCHES "^include/atmos/(atmosphere|colour|eclipse|table_sizes)\\.hpp$")
     set(layer physics)
+  elseif(path MATCHES "^src/astronomy/" OR path MATCHES "^include/atmos/(ephemeris|star_catalogue)\\.hpp$")
+    set(layer astronomy)
   elseif(path MATCHES "^src/io/" OR path MATCHES "^include/atmos/(image|planet_file)\\.hpp$")
     set(layer io)
   elseif(path MATCHES "^src/(precompute|runtime)/" OR path MATCHES "^include/atmos/(tables|sky)\\.hpp$")
@@ -41,6 +44,7 @@ set(uses_tables physics data)
 set(uses_gpu tables io physics data)
 set(uses_post gpu tables io physics data)
 set(uses_reference physics)
+set(uses_astronomy physics data)
 # The globe uses the library as an engine does: public headers only (checked
 # below), and the data layer's embedded GLSL text.
 set(uses_planet post gpu tables io physics data)

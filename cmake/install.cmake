@@ -5,7 +5,7 @@
 #   target_link_libraries(engine PRIVATE atmos::atmos)
 include(CMakePackageConfigHelpers)
 
-install(TARGETS atmos_data atmos_physics atmos_io atmos_tables atmos_gpu atmos_post atmos_planet atmos
+install(TARGETS atmos_data atmos_physics atmos_astronomy atmos_io atmos_tables atmos_gpu atmos_post atmos_planet atmos
         EXPORT atmosTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
