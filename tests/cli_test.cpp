@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "atmos/colour.hpp"
+#include "atmos/ephemeris.hpp"
 #include "atmos/image.hpp"
 #include "cli_support.hpp"
 
@@ -158,6 +159,10 @@ const std::vector<SharedOption>& shared_options() {
       {"--sun-elevation", kViewCommands, "--sun-elevation 95", 2, "--sun-elevation must be in [-90, 90] degrees"},
       {"--sun-azimuth", kViewCommands, "--sun-azimuth inf", 2, "--sun-azimuth must be a finite number"},
       {"--moon", kViewCommands, "--moon 10,95,0.3", 2, "--moon elevation must be in [-90, 90] degrees, got 95"},
+      {"--latitude", kViewCommands, "--latitude 91 --longitude 0", 2, "--latitude must be in [-90, 90] degrees, got 91"},
+      {"--longitude", kViewCommands, "--longitude inf --latitude 0", 2, "--longitude must be a finite number"},
+      {"--date", kViewCommands, "--date 2023-02-29T12:00:00Z --latitude 0 --longitude 0", 2,
+       "--date: date 2023-02-29T12:00:00Z: day 29 is not in that month"},
       {"--size", {"render", "bench"}, "--size banana", 2, "--size expects WxH"},
   };
   return options;
@@ -545,6 +550,59 @@ TEST(Cli, SampleRejectsBadMoons) {
   // From 384 400 km up, a moon straight down at the Moon's distance sits at
   // the planet's centre.
   expect_usage_error("sample --altitude 384400000 --moon 0,-90,0.3" + kSmall, "reaches into the atmosphere");
+}
+
+// --date, --latitude and --longitude: the sun and the Moon of a date and
+// place (atmos/ephemeris.hpp). The total eclipse of 2024-04-08 seen from
+// Dallas: at 18:42:30 UTC the Moon covers the Sun and the sky is dark; an
+// hour earlier the eclipse is partial and the sky bright. The sun's place is
+// the trailing comment, as the library computes it.
+TEST(Cli, DateAndPlaceSetTheSunAndTheMoon) {
+  const std::string dallas = " --latitude 32.7767 --longitude -96.7970";
+  expect_usage_error("sample --date 2024-04-08T18:42:30Z" + kSmall, "--date requires --latitude");
+  expect_usage_error("sample --date 2024-04-08T18:42:30Z --sun-elevation 10" + dallas + kSmall,
+                     "--sun-elevation excludes --date");
+  expect_usage_error("render --date 2024-04-08T18:42:30Z --sun-azimuth 10" + dallas + kSmall,
+                     "--sun-azimuth excludes --date");
+  expect_usage_error("render --date 2024-04-08 18:42:30" + dallas + kSmall, "");
+  expect_usage_error("render --date 2024-04-08T18:42:30" + dallas + kSmall, "is not YYYY-MM-DDTHH:MM:SSZ");
+  expect_usage_error("sample --date 2024-13-08T18:42:30Z" + dallas + kSmall, "no month 13");
+  expect_usage_error("sample --date 2024-04-08T18:42:30Z --latitude -95 --longitude 0" + kSmall,
+                     "--latitude must be in [-90, 90] degrees, got -95");
+  expect_usage_error("sample --latitude 10" + kSmall, "--latitude requires --longitude");
+  expect_usage_error("render --latitude 10 --longitude 0 --position 7e6,0,0" + kSmall, "--position excludes --latitude");
+
+  const std::string directions = "azimuth_deg,elevation_deg\n0,90\n";
+  const CliRun total = atmos_cli("sample --date 2024-04-08T18:42:30Z" + dallas + kSmall, directions);
+  const CliRun partial = atmos_cli("sample --date 2024-04-08T17:40:00Z" + dallas + kSmall, directions);
+  ASSERT_EQ(total.code, 0) << total.err;
+  ASSERT_EQ(partial.code, 0) << partial.err;
+  std::string header, trailer;
+  const auto rows = parse_csv(total.out, header, trailer);
+  ASSERT_EQ(rows.size(), 1u);
+  double azimuth = 0.0, elevation = 0.0;
+  ASSERT_EQ(std::sscanf(trailer.c_str(), "# sun_azimuth_deg=%lf sun_elevation_deg=%lf", &azimuth, &elevation), 2)
+      << trailer;
+  const atmos::SkyOfDate sky = atmos::sky_of_date(atmos::parse_utc_time("2024-04-08T18:42:30Z"), {32.7767, -96.7970, 0.0});
+  EXPECT_NEAR(azimuth, sky.sun.azimuth_deg, 1e-5);
+  EXPECT_NEAR(elevation, sky.sun.elevation_deg, 1e-5);
+  // Totality: the zenith sky is orders of magnitude darker than in the
+  // partial phase, and the tables give no horizontal irradiance.
+  const std::vector<double> dark = sample_luminances(total), bright = sample_luminances(partial);
+  ASSERT_EQ(bright.size(), 1u);
+  std::printf("Dallas zenith: %.4g cd/m2 at 17:40 UTC (partial), %.4g cd/m2 at 18:42:30 (total)\n", bright[0], dark[0]);
+  EXPECT_LT(dark[0], 1e-2 * bright[0]);
+  EXPECT_GT(dark[0], 0.0);
+  EXPECT_NE(total.out.find("# horizontal irradiance: not computed"), std::string::npos) << total.out;
+  // Without a moon near the sun, the irradiance is there again (the Moon is
+  // placed, far from the sun, but eclipses nothing).
+  const CliRun night = atmos_cli("sample --date 2024-04-08T06:00:00Z" + dallas + kSmall, directions);
+  ASSERT_EQ(night.code, 0) << night.err;
+  EXPECT_NE(night.out.find("# horizontal_illuminance_lux="), std::string::npos) << night.out;
+  // render takes them too.
+  const CliRun r = atmos_cli("render --cpu --surface sphere --size 8x8 --date 2024-04-08T18:42:30Z" + dallas +
+                             " -o " + (scratch() / "dallas.exr").string() + kSmall);
+  EXPECT_EQ(r.code, 0) << r.err;
 }
 
 TEST(Cli, RenderProjectionsAndCpuPath) {

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <sstream>
 
+#include "atmos/ephemeris.hpp"
 #include "atmos/planet_file.hpp"
 #include "atmos/sky.hpp"
 
@@ -210,9 +211,25 @@ void ViewpointOptions::add(CLI::App& app) {
                  "ground point below it")
       ->type_name("X,Y,Z")
       ->excludes(a);
+  latitude_option = app.add_option("--latitude", latitude,
+                                   "Latitude of the viewpoint, degrees north, in [-90, 90]: it stands --altitude "
+                                   "above that point of the planet (the globe's geographic coordinates), azimuths "
+                                   "and elevations in its local frame (east, north, up); with --longitude")
+                        ->type_name("DEG");
+  auto* lon = app.add_option("--longitude", longitude,
+                             "Longitude of the viewpoint, degrees east (west negative); with --latitude")
+                  ->type_name("DEG");
+  latitude_option->needs(lon)->excludes("--position");
+  lon->needs(latitude_option)->excludes("--position");
 }
 
 void ViewpointOptions::validate() const {
+  if (at_place()) {
+    finite(latitude, "--latitude");
+    finite(longitude, "--longitude");
+    if (latitude < -90.0 || latitude > 90.0)
+      throw UsageError("--latitude must be in [-90, 90] degrees, got " + quote(latitude));
+  }
   if (!position.empty()) {
     (void)parse_numbers(position, 3, "--position", "X,Y,Z");
   } else {
@@ -225,6 +242,15 @@ void ViewpointOptions::validate() const {
 Viewpoint ViewpointOptions::viewpoint(const atmos::Atmosphere& atmosphere) const {
   validate();
   Viewpoint v;
+  if (at_place()) {
+    // The local frame of the point at (latitude, longitude) of the sphere:
+    // up along its radius, east along the parallel, north along the meridian.
+    const atmos::LocalFrame frame = atmos::local_frame({latitude, longitude, 0.0});
+    v.position = frame.up * (atmosphere.bottom_radius_m + altitude);
+    v.local = glm::dmat3(frame.east, frame.north, frame.up);
+    v.from_position = true;
+    return v;
+  }
   if (position.empty()) {
     v.position = atmos::observer_position(atmosphere, altitude);
     return v;
@@ -294,9 +320,10 @@ void MoonOptions::add(CLI::App& app) {
 }
 
 void MoonOptions::validate() const {
-  if (moons.size() > size_t(atmos::kMaxMoons))
-    throw UsageError("--moon: at most " + std::to_string(atmos::kMaxMoons) + " moons, got " +
-                     std::to_string(moons.size()));
+  if (moons.size() + (moon_of_date_m ? 1 : 0) > size_t(atmos::kMaxMoons))
+    throw UsageError("--moon: at most " + std::to_string(atmos::kMaxMoons) + " moons" +
+                     (moon_of_date_m ? std::string(" with the Moon of --date") : std::string()) + ", got " +
+                     std::to_string(moons.size()) + " --moon");
   for (const std::string& text : moons) (void)parse_moon(text);
 }
 
@@ -314,7 +341,42 @@ std::vector<atmos::Moon> MoonOptions::place(const Viewpoint& viewpoint, const at
       throw UsageError("--moon " + text + ": " + e.what());
     }
   }
+  if (moon_of_date_m) {
+    // The ephemeris' topocentric vector from the ground point below the
+    // viewpoint: the Moon stands where an observer there sees it (the
+    // parallax of the real Earth's ellipsoid, not of the planet's sphere).
+    const glm::dvec3 ground = glm::normalize(viewpoint.position) * atmosphere.bottom_radius_m;
+    out.push_back({ground + *moon_of_date_m, atmos::kMoonRadiusM});
+    atmos::validate_moons({out.back()}, atmosphere.top_radius_m);
+  }
   return out;
+}
+
+void DateOptions::add(CLI::App& app) {
+  app.add_option("--date", date,
+                 "UTC date and time YYYY-MM-DDTHH:MM:SSZ (years 1800-2199): the sun and the Moon (an eclipsing "
+                 "sphere of its real size and distance) of that instant seen from --latitude, --longitude "
+                 "(solar position: VSOP87 as Meeus 1998 ch. 25; Moon: Meeus 1998 ch. 47), instead of "
+                 "--sun-elevation and --sun-azimuth")
+      ->type_name("YYYY-MM-DDTHH:MM:SSZ")
+      ->needs("--latitude")
+      ->needs("--longitude")
+      ->excludes("--sun-elevation")
+      ->excludes("--sun-azimuth");
+}
+
+void DateOptions::apply(const ViewpointOptions& viewpoint, SunOptions& sun, MoonOptions& moons) const {
+  if (!given()) return;
+  viewpoint.validate();
+  atmos::SkyOfDate sky;
+  try {
+    sky = atmos::sky_of_date(atmos::parse_utc_time(date), {viewpoint.latitude, viewpoint.longitude, 0.0});
+  } catch (const atmos::Error& e) {
+    throw UsageError(std::string("--date: ") + e.what());
+  }
+  sun.azimuth = sky.sun.azimuth_deg;
+  sun.elevation = sky.sun.elevation_deg;
+  moons.moon_of_date_m = sky.moon.topocentric_m;
 }
 
 // ---------------------------------------------------------------------------

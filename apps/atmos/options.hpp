@@ -11,6 +11,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -106,12 +107,19 @@ struct Viewpoint {
   bool from_position = false;  // --position given (else --altitude, above the north pole)
 };
 
-// --altitude, --position (render, sample).
+// --altitude, --position, --latitude, --longitude (render, sample).
 struct ViewpointOptions {
   double altitude = 2.0;
   std::string position;
+  double latitude = 0.0;   // --latitude, degrees north
+  double longitude = 0.0;  // --longitude, degrees east
+  CLI::Option* latitude_option = nullptr;
 
   void add(CLI::App& app);
+  // --latitude and --longitude given: the viewpoint stands above that point
+  // of the planet (planet-centred frame: z towards the north pole, x towards
+  // longitude 0, as atmos::Globe's), not above the north pole.
+  bool at_place() const { return latitude_option != nullptr && latitude_option->count() > 0; }
   void validate() const;
   // Throws UsageError if --position is inside the planet.
   Viewpoint viewpoint(const atmos::Atmosphere& atmosphere) const;
@@ -131,6 +139,10 @@ struct SunOptions {
 // --moon AZ,EL,ANGULAR_RADIUS_DEG, repeatable (render, sample).
 struct MoonOptions {
   std::vector<std::string> moons;
+  // The Moon of --date (DateOptions::apply): the Earth-fixed vector from the
+  // viewpoint's ground point to the Moon's centre, metres; placed after the
+  // --moon moons.
+  std::optional<glm::dvec3> moon_of_date_m;
 
   void add(CLI::App& app);
   // Checks the numbers and their count, without placing the moons.
@@ -138,6 +150,21 @@ struct MoonOptions {
   // The moons in the sky of `viewpoint`, at the Moon's mean distance
   // (atmos::moon_in_sky); UsageError if one reaches into the atmosphere.
   std::vector<atmos::Moon> place(const Viewpoint& viewpoint, const atmos::Atmosphere& atmosphere) const;
+};
+
+// --date YYYY-MM-DDTHH:MM:SSZ (render, sample): the sun and the Moon of that
+// UTC instant seen from the viewpoint's --latitude and --longitude
+// (atmos/ephemeris.hpp), instead of --sun-elevation and --sun-azimuth.
+struct DateOptions {
+  std::string date;
+
+  // After ViewpointOptions::add and SunOptions::add: --date needs
+  // --latitude and --longitude and excludes the sun's options.
+  void add(CLI::App& app);
+  bool given() const { return !date.empty(); }
+  // With --date: the sun's geometric azimuth and elevation of the date in
+  // `sun`, the Moon in `moons`. UsageError for a bad date or place.
+  void apply(const ViewpointOptions& viewpoint, SunOptions& sun, MoonOptions& moons) const;
 };
 
 // --surface globe|sphere (render): what the ground under the atmosphere is.

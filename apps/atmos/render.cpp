@@ -29,6 +29,7 @@ struct RenderOptions {
   CacheOptions cache;
   ViewpointOptions viewpoint;
   SunOptions sun;
+  DateOptions date;
   MoonOptions moons;
   SurfaceOption surface;
   SizeOption size{"640x360"};
@@ -269,6 +270,7 @@ Command add_render_command(CLI::App& app) {
   o->cache.add(*cmd);
   o->viewpoint.add(*cmd);
   o->sun.add(*cmd);
+  o->date.add(*cmd);
   o->moons.add(*cmd);
   o->surface.add(*cmd);
   cmd->add_option("--look", o->look,
@@ -332,6 +334,7 @@ Command add_render_command(CLI::App& app) {
             o->gallery = true;
             for (const auto* opt : cmd->get_options())
               if (opt->count() > 0 && gallery_options.count(opt->get_name()) == 0) o->gallery = false;
+            o->date.apply(o->viewpoint, o->sun, o->moons);
             return run_render(*o);
           }};
 }

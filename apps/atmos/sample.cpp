@@ -26,6 +26,7 @@ struct SampleOptions {
   CacheOptions cache;
   ViewpointOptions viewpoint;
   SunOptions sun;
+  DateOptions date;
   MoonOptions moons;
   std::string directions;
   bool reference = false;
@@ -133,11 +134,18 @@ int run_sample(const SampleOptions& o) {
     if (three) std::printf(",%.6g,%.6g,%.6g", spectral.x, spectral.y, spectral.z);
     std::printf("\n");
   }
+  // With --date, the sun's place of the date closes the output.
+  auto print_sun_of_date = [&] {
+    if (o.date.given())
+      std::printf("# sun_azimuth_deg=%.6f sun_elevation_deg=%.6f\n", o.sun.azimuth, o.sun.elevation);
+  };
   // Irradiance on a horizontal surface at the observer, as a trailing comment.
-  if (!o.reference && !moons.empty()) {
+  if (!o.reference && !moons.empty() &&
+      atmos::moons_may_eclipse(moons, sun, atmosphere.top_radius_m, atmosphere.sun_angular_radius_rad)) {
     // SkyModel::horizontal_irradiance has no eclipse: rather than the light
     // of the uneclipsed sun, no figure.
     std::printf("# horizontal irradiance: not computed from the tables with --moon (use --reference)\n");
+    print_sun_of_date();
     return 0;
   }
   glm::dvec3 sun_rgb, sky_rgb, sun_e(0.0), sky_e(0.0);
@@ -164,6 +172,7 @@ int run_sample(const SampleOptions& o) {
   if (three)
     std::printf(" irradiance_W_m2_nm=%.6g;%.6g;%.6g", sun_e.x + sky_e.x, sun_e.y + sky_e.y, sun_e.z + sky_e.z);
   std::printf("\n");
+  print_sun_of_date();
   return 0;
 }
 
@@ -183,6 +192,7 @@ Command add_sample_command(CLI::App& app) {
   o->cache.add(*cmd);
   o->viewpoint.add(*cmd);
   o->sun.add(*cmd);
+  o->date.add(*cmd);
   o->moons.add(*cmd);
   cmd->add_option("--directions", o->directions, "CSV file of directions (default: stdin)")->type_name("FILE");
   auto* reference = cmd->add_flag("--reference", o->reference,
@@ -196,7 +206,10 @@ Command add_sample_command(CLI::App& app) {
                 "Add the sun disc (limb-darkened, attenuated, hidden where a moon covers it) to the radiance of "
                 "the directions that see it; the tables only (the reference never includes it)")
       ->excludes(reference);
-  return {cmd, [o] { return run_sample(*o); }};
+  return {cmd, [o] {
+            o->date.apply(o->viewpoint, o->sun, o->moons);
+            return run_sample(*o);
+          }};
 }
 
 }  // namespace atmos_cli
