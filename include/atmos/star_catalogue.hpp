@@ -9,9 +9,9 @@
 // ascension), the V magnitude, a quoted name, and the Bright Star, Henry
 // Draper and SAO numbers; "#" starts a comment. That file has no colour
 // index and no proper motions: a star read from it has no B−V, and its
-// place is that of J2000 (the largest proper motions of its stars, a few
-// arcseconds a year, move them by up to a couple of arcminutes in a
-// quarter century).
+// place is that of J2000 (the largest proper motion among its stars,
+// Groombridge 1830's 7″ a year, moves it by 3′ in a quarter century; the
+// bright stars' are mostly under 0.5″ a year).
 //
 // Placing a star: its J2000 place is precessed to the date (IAU 1976,
 // Meeus 1998 eqs. 21.2-21.4), corrected for nutation and the annual
