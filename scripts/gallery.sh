@@ -35,6 +35,13 @@ done
 (cd "$out/earth" && "$atmos" render --planet earth --wavelengths 15 --orders auto --altitude 4000000 \
   --sun-elevation 50 --sun-azimuth 180 --moon 180,49.4698,0.28 --look 180,-82 --fov 88 --size 960x600 \
   --tonemap filmic --exposure 12.5 -o eclipse-orbit.png)
+# The total eclipse of 2024-04-08 from Dallas at 18:42:30 UTC, by date and
+# place (the sun and the Moon from the ephemeris, docs/ephemeris.md), looking
+# at the eclipsed sun 64° up over the orange ring of the horizon beyond the
+# umbra.
+(cd "$out/earth" && "$atmos" render --planet earth --wavelengths 15 --orders auto --date 2024-04-08T18:42:30Z \
+  --latitude 32.78 --longitude -96.80 --look 170,40 --fov 90 --size 960x540 --stars --exposure 2 \
+  -o eclipse-dallas.png)
 # Mars's blue sunset: the glow around the sun, at EV 13 (the default
 # sunset's exposure saturates it).
 (cd "$out/mars" && "$atmos" render --planet mars --wavelengths 15 --orders auto --altitude 2 --look 270,6 --fov 60 \
