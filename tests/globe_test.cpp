@@ -168,6 +168,39 @@ TEST_F(GlobeMesh, SkirtsHangBelowTheEdges) {
       EXPECT_TRUE(j >= (q >> 1) * kTileQuads / 2 && j <= ((q >> 1) + 1) * kTileQuads / 2) << "quadrant " << q;
     }
   }
+  // Winding (the globe culls back faces): on every face, the grid's
+  // triangles are counter-clockwise seen from outside the planet, and each
+  // skirt faces away from the area its run draws (a quadrant, or the
+  // tile), where a crack's wall is seen from. Faces 1 and 5 have axes that
+  // point against x and z.
+  for (const TileKey& face_key : {key, TileKey{1, 9, 100, 300}, TileKey{5, 9, 300, 100}}) {
+    const TileMesh mesh = builder_.build(face_key);
+    const auto point = [&](std::uint32_t index) {
+      const auto& v = mesh.vertices[index];
+      return mesh.origin + glm::dvec3(v.position[0], v.position[1], v.position[2]);
+    };
+    for (int run = 0; run < 5; ++run) {
+      const size_t first = size_t(run) * builder_.quadrant_index_count();
+      const size_t count = run < 4 ? builder_.quadrant_index_count() : builder_.tile_index_count();
+      glm::dvec3 centroid(0.0);
+      int grid = 0;
+      for (size_t n = first; n < first + count; ++n)
+        if (builder_.indices()[n] < std::uint32_t(kGridVertices)) centroid += point(builder_.indices()[n]), ++grid;
+      centroid /= double(grid);
+      int skirts = 0;
+      for (size_t n = first; n < first + count; n += 3) {
+        const std::uint32_t a = builder_.indices()[n], b = builder_.indices()[n + 1], c = builder_.indices()[n + 2];
+        const glm::dvec3 normal = glm::cross(point(b) - point(a), point(c) - point(a));
+        if (std::max({a, b, c}) < std::uint32_t(kGridVertices)) {
+          ASSERT_GT(glm::dot(normal, glm::normalize(point(a))), 0.0) << "grid, run " << run;
+        } else {
+          ++skirts;
+          ASSERT_GT(glm::dot(normal, (point(a) + point(b) + point(c)) / 3.0 - centroid), 0.0) << "skirt, run " << run;
+        }
+      }
+      EXPECT_EQ(skirts, 2 * 4 * (run < 4 ? kTileQuads / 2 : kTileQuads)) << run;
+    }
+  }
 }
 
 // Vertex jitter at a metre above the ground (Cozzi & Ring 2011, ch. 5): the

@@ -841,7 +841,22 @@ void Globe::draw(const GlobeView& view) {
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_GREATER);
   glDepthMask(GL_TRUE);
-  glDisable(GL_CULL_FACE);
+  // Back faces culled: the terrain is a height field seen from above it,
+  // where a triangle facing away lies behind one facing the camera (the
+  // hidden slopes of the relief, and the skirts' inner sides: globe_mesh.cpp
+  // winds them). Grid triangles are counter-clockwise seen from outside the
+  // planet; a clip transform whose x, y and w rows have a positive
+  // determinant mirrors the image (the usual perspective's is negative:
+  // -P00 P11 times the rotation's 1), and the front face is then clockwise.
+  const glm::dmat3 clip_xyw(glm::dvec3(clip_from_offset[0][0], clip_from_offset[0][1], clip_from_offset[0][3]),
+                            glm::dvec3(clip_from_offset[1][0], clip_from_offset[1][1], clip_from_offset[1][3]),
+                            glm::dvec3(clip_from_offset[2][0], clip_from_offset[2][1], clip_from_offset[2][3]));
+  GLint engine_front_face = GL_CCW, engine_cull_face = GL_BACK;
+  glGetIntegerv(GL_FRONT_FACE, &engine_front_face);
+  glGetIntegerv(GL_CULL_FACE_MODE, &engine_cull_face);
+  glFrontFace(glm::determinant(clip_xyw) < 0.0 ? GL_CCW : GL_CW);
+  glCullFace(GL_BACK);
+  glEnable(GL_CULL_FACE);
   glDisable(GL_BLEND);
   glViewport(0, 0, view.width, view.height);
   TileProgram* lit = shadowed ? &p.shadows->lit : &p.program;
@@ -894,6 +909,9 @@ void Globe::draw(const GlobeView& view) {
   }
 
   stats.triangles = p.draw_tiles(draws, program, camera);
+  glDisable(GL_CULL_FACE);
+  glFrontFace(GLenum(engine_front_face));
+  glCullFace(GLenum(engine_cull_face));
   stats.tiles_drawn = int(draws.size());
   stats.resident_bytes = p.resident_bytes;
   p.stats = stats;

@@ -71,32 +71,50 @@ MeshBuilder::MeshBuilder(const Surface& surface, double radius_m) : surface_(sur
   // t = 0, 3 at t = 1) and two on its midlines, which close the gap rounding
   // leaves between the quadrant and a finer tile drawn in the neighbouring
   // one; the whole tile's along its four edges.
+  //
+  // Winding (the globe culls back faces): every face's axes satisfy
+  // U x V = N (cube_sphere.cpp), so a grid triangle (i, j), (i + 1, j),
+  // (i + 1, j + 1), whose normal is U x (U + V) = N, is counter-clockwise
+  // seen from outside the planet. A skirt's triangle a, b, b_low (b after a
+  // along the line, b_low below b) has the normal (b - a) x (b_low - a),
+  // -U for a line along t and +V for a line along s; each skirt is wound to
+  // face away from the area it bounds. A crack's wall is seen from the
+  // lower side of the step, through the other tile's surface: there the
+  // neighbour's skirt, facing this way, closes it.
   const auto quad = [&](int i, int j) {
     const std::uint32_t a = std::uint32_t(grid_index(i, j)), b = std::uint32_t(grid_index(i + 1, j)),
                         c = std::uint32_t(grid_index(i + 1, j + 1)), d = std::uint32_t(grid_index(i, j + 1));
     indices_.insert(indices_.end(), {a, b, c, a, c, d});
   };
-  const auto skirt = [&](int e, int first, int count) {
+  // Skirt line e from vertex `first` on; `area_above`: the area it bounds
+  // lies at larger s (lines along t: 0, 1, 4) or larger t (lines along s).
+  const auto skirt = [&](int e, int first, int count, bool area_above) {
+    const bool along_t = e == 0 || e == 1 || e == 4;
+    const bool as_wound = along_t == area_above;  // -U faces away from s above; +V from t below
     for (int k = first; k < first + count; ++k) {
       const std::uint32_t a = std::uint32_t(edge_grid_index(e, k)), b = std::uint32_t(edge_grid_index(e, k + 1));
       const std::uint32_t a_low = std::uint32_t(kGridVertices + e * kTileSide + k), b_low = a_low + 1;
-      indices_.insert(indices_.end(), {a, b, b_low, a, b_low, a_low});
+      if (as_wound)
+        indices_.insert(indices_.end(), {a, b, b_low, a, b_low, a_low});
+      else
+        indices_.insert(indices_.end(), {a, b_low, b, a, a_low, b_low});
     }
   };
   constexpr int half = kTileQuads / 2;
   for (int q = 0; q < 4; ++q) {
     const int qi = (q & 1) * half, qj = (q >> 1) * half;
+    const bool upper_s = (q & 1) != 0, upper_t = (q >> 1) != 0;
     for (int j = qj; j < qj + half; ++j)
       for (int i = qi; i < qi + half; ++i) quad(i, j);
-    skirt((q & 1) == 0 ? 0 : 1, qj, half);  // the tile edge along t
-    skirt(4, qj, half);                     // the midline s = 1/2
-    skirt((q >> 1) == 0 ? 2 : 3, qi, half);  // the tile edge along s
-    skirt(5, qi, half);                     // the midline t = 1/2
+    skirt(upper_s ? 1 : 0, qj, half, !upper_s);  // the tile edge along t
+    skirt(4, qj, half, upper_s);                 // the midline s = 1/2
+    skirt(upper_t ? 3 : 2, qi, half, !upper_t);  // the tile edge along s
+    skirt(5, qi, half, upper_t);                 // the midline t = 1/2
   }
   quadrant_run_ = indices_.size() / 4;
   for (int j = 0; j < kTileQuads; ++j)
     for (int i = 0; i < kTileQuads; ++i) quad(i, j);
-  for (int e = 0; e < 4; ++e) skirt(e, 0, kTileQuads);
+  for (int e = 0; e < 4; ++e) skirt(e, 0, kTileQuads, e == 0 || e == 2);
 }
 
 void MeshBuilder::measure_level_errors() {
