@@ -475,6 +475,85 @@ TEST_F(Plugin, ClassifiedPixelsMatchTheCpuTwinFromOrbit) {
   EXPECT_LE(rms, kRmsRelative);
 }
 
+// Where the driver exports a fragment's stencil value (llvmpipe does), the
+// pass sorts the pixels with one classifying draw that writes all their
+// bits, and draws the low-sun surfaces in the planet's shadow without the
+// integration, which gives them no single scattering (VARIANT_NIGHT);
+// drivers without it classify with a draw per class and integrate them.
+// The two give the same image: from 400 km with the low-sun band and the
+// space beside the planet in view (ClassifiedPixelsMatchTheCpuTwinFromOrbit's
+// view), and from 2.5 planet radii with the terminator and the night side
+// across the disc (the space volume's view), relative to the pixel's
+// luminance; measured 0 for every pixel but the night surfaces, whose light
+// a different program evaluates (the same functions on the same floats).
+constexpr double kClassifyingDrawsMaxRelative = 1e-5;
+
+TEST_F(Plugin, OneClassifyingDrawGivesTheImageOfADrawPerClass) {
+  if (!epoxy_has_gl_extension("GL_ARB_shader_stencil_export"))
+    GTEST_SKIP() << "the driver does not export the stencil: the pass draws per class only";
+  const glm::dvec3 site = glm::normalize(glm::dvec3(0.3, 0.2, 0.93));
+  const LocalFrame l = local_frame(site);
+  Shot orbit;
+  orbit.camera = site * (kEarthRadius + 400e3);
+  orbit.forward = direction(l, 0.0, -17.0);
+  orbit.up_hint = l.up;
+  orbit.fov_deg = 40.0;
+  orbit.width = 160;
+  orbit.height = 120;
+  orbit.encoding = DepthEncoding::reversed_z;
+  orbit.sun = direction(l, -60.0, 6.0);
+  Shot disc = orbit;
+  disc.camera = site * (kEarthRadius * 3.5);
+  disc.forward = -site;
+  disc.up_hint = l.north;
+  disc.sun = direction(l, 0.0, 25.0);
+  disc.fov_deg = 34.0;
+  disc.width = 192;
+  disc.height = 108;
+  for (const auto& [name, shot] : {std::pair<std::string, Shot>{"400 km", orbit}, {"2.5 radii", disc}}) {
+    EngineFrame e = make_engine_frame(shot);
+    const std::vector<glm::vec3> one = run(e);
+    atmos::gpu::set_stencil_export(false);
+    const std::vector<glm::vec3> per_class = run(e);
+    atmos::gpu::set_stencil_export(true);
+    ASSERT_TRUE(all_finite(one)) << name;
+    // The night surfaces, from the pass's own test on the CPU.
+    const atmos::physics::AtmosphereParams params = atmos::physics::make_render_params(*earth_, tables_->sizes);
+    const glm::mat3 matrix = atmos::physics::channels_to_srgb_matrix(tables_->wavelengths_nm);
+    const atmos::physics::PassFrame frame = atmos::gpu::make_pass_frame(
+        e.input, engine_frame(), params, matrix, atmos::gpu::own_sun_illuminance(params, matrix));
+    int night = 0, low_sun = 0;
+    double max_relative = 0.0;
+    for (int y = 0; y < shot.height; ++y)
+      for (int x = 0; x < shot.width; ++x) {
+        const size_t i = size_t(y) * size_t(shot.width) + size_t(x);
+        const glm::vec2 ndc = (glm::vec2(float(x), float(y)) + 0.5f) /
+                                  glm::vec2(float(shot.width), float(shot.height)) * 2.0f -
+                              1.0f;
+        bool in_shadow = false;
+        const bool needs = atmos::physics::pixel_low_sun_classes(
+            params, frame, atmos::physics::pixel_ray(frame.inverse_projection, frame.view_to_world, ndc),
+            e.buffers.depth[i], in_shadow);
+        const bool surface = !atmos::physics::depth_is_sky(e.buffers.depth[i], frame.depth_encoding);
+        low_sun += needs && surface ? 1 : 0;
+        night += needs && surface && in_shadow ? 1 : 0;
+        const double reference = std::max(luminance(per_class[i]), 1e-3);
+        max_relative =
+            std::max(max_relative, double(glm::length(glm::dvec3(one[i]) - glm::dvec3(per_class[i]))) / reference);
+      }
+    std::printf("%s: %d low-sun surface pixels, %d of them in the planet's shadow; one classifying draw against "
+                "one per class: max %.3e\n",
+                name.c_str(), low_sun, night, max_relative);
+    atmos_test::record_figure("classifying draws, " + name + ": max relative difference", max_relative, "",
+                              "<= 1e-5");
+    EXPECT_GT(low_sun, 0) << name;
+    EXPECT_LE(max_relative, kClassifyingDrawsMaxRelative) << name;
+    if (name == "2.5 radii") {
+      EXPECT_GT(night, 0);
+    }
+  }
+}
+
 // From above the atmosphere the surfaces the space volume covers
 // (composite.glsl: space_volume_covers; 72 % and 50 % of them here) read
 // it, whose texels are the exact per-pixel evaluation at their directions

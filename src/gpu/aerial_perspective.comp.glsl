@@ -53,6 +53,7 @@ void main() {
   frame.depth_encoding = depth_encoding;
   frame.surface_shell_radius = surface_shell_radius;
   frame.low_sun = VARIANT_LOW_SUN;
+  frame.night = false;
 #if VARIANT_ECLIPSE
   frame.moons = uniform_moons();
 #else
@@ -83,6 +84,7 @@ void main() {
   frame.ap_t_min = ap_t_min;
   frame.sky_view = uniform_sky_view_frame();
   frame.low_sun = VARIANT_LOW_SUN;
+  frame.night = false;
 #if VARIANT_ECLIPSE
   frame.moons = uniform_moons();
 #else

@@ -8,6 +8,7 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -36,6 +37,9 @@ constexpr GLuint kNormalUnit = 10;
 constexpr GLuint kShadowUnit = 11;
 constexpr GLuint kVolumeUnit = 12;  // 12..15: the aerial-perspective volume
 constexpr GLuint kSpaceRegularColumnsUnit = 16;  // the space volume's regular columns
+
+// gpu::set_stencil_export (gpu/atmosphere_pass.hpp).
+std::atomic<bool> stencil_export_enabled{true};
 
 bool is_finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
@@ -106,6 +110,10 @@ bool is_float_colour_format(GLint format) {
 
 }  // namespace
 
+namespace gpu {
+void set_stencil_export(bool enabled) { stencil_export_enabled.store(enabled, std::memory_order_relaxed); }
+}  // namespace gpu
+
 struct AtmospherePass::Impl {
   PlanetFrame frame;
   double bottom_radius_m = 0.0;
@@ -139,6 +147,7 @@ struct AtmospherePass::Impl {
   GLuint depth_sampler = 0;   // nearest, no comparison: the engine's depth as a value
   GLuint shadow_sampler = 0;  // linear, clamped, with depth comparison (PCF)
   double own_sun_lux = 0.0;   // the atmosphere's sun illuminance
+  bool stencil_export = false;  // GL_ARB_shader_stencil_export: one classifying draw
   PassTimings timings;
 
   void release() {
@@ -193,6 +202,7 @@ AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const Tables& table
       p.ground_albedo = glm::dvec3(tables.ground_response.planet_albedo);
     }
     p.timer = std::make_unique<gpu::GpuTimer>();
+    p.stencil_export = epoxy_has_gl_extension("GL_ARB_shader_stencil_export");
     p.own_sun_lux = gpu::own_sun_illuminance(p.tables->params(), p.tables->radiance_to_srgb());
     glCreateVertexArrays(1, &p.vertex_array);
     glCreateFramebuffers(1, &p.framebuffer);
@@ -494,6 +504,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   constexpr GLint kLowSunBit = 2;
   constexpr GLint kSpaceBit = 4;
   constexpr GLint kSpaceVolumeBit = 8;
+  constexpr GLint kNightBit = 16;  // set by the exporting classifying draw only
   // Which pixels need the low-sun integration, when some may and the
   // composite evaluates it: not with moons (every pixel integrates), nor for
   // cameras whose surfaces read the volume alone and whose sky reads the
@@ -521,24 +532,44 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   // The draws: the classifying ones set their bit where they keep the
   // pixel (with `sky_only`, among the sky pixels alone); the shading ones
   // draw where the mask's bits under `compare` equal `bits`.
+  // With `export_stencil`, the one classifying draw of every class
+  // (PIXELS_CLASSIFY_ALL), which writes its bits through the stencil
+  // reference it exports.
   struct Draw {
     GLuint program;
     bool classify;
     GLint bits;
     bool sky_only = false;
     GLint compare = 0xFF;
+    bool export_stencil = false;
   };
   std::vector<Draw> draws;
-  draws.push_back({program_of(gpu::PassVariant::Pixels::classify, false), true, kSkyBit});
-  if (classify_low_sun)
-    draws.push_back({program_of(gpu::PassVariant::Pixels::classify_low_sun, false), true, kLowSunBit});
-  if (classify_space)
-    draws.push_back({program_of(gpu::PassVariant::Pixels::classify_space, false), true, kSpaceBit, true});
+  const bool export_stencil = p.stencil_export && stencil_export_enabled.load(std::memory_order_relaxed);
+  if (export_stencil) {
+    gpu::PassVariant v;
+    v.pixels = gpu::PassVariant::Pixels::classify_all;
+    v.low_sun = classify_low_sun;
+    v.sky_view_camera = !classify_space;
+    v.space_volume = frame.space_volume;
+    GLuint& program = p.programs[v.index()];
+    if (program == 0)
+      program = gpu::link_program(gpu::atmosphere_pass_vertex_shader_source(),
+                                  gpu::atmosphere_pass_fragment_shader_source(p.tables->params(),
+                                                                              p.tables->spectral(), v));
+    draws.push_back({program, true, 0, false, 0xFF, true});
+  } else {
+    draws.push_back({program_of(gpu::PassVariant::Pixels::classify, false), true, kSkyBit});
+    if (classify_low_sun)
+      draws.push_back({program_of(gpu::PassVariant::Pixels::classify_low_sun, false), true, kLowSunBit});
+    if (classify_space)
+      draws.push_back({program_of(gpu::PassVariant::Pixels::classify_space, false), true, kSpaceBit, true});
+    if (frame.space_volume)
+      draws.push_back({program_of(gpu::PassVariant::Pixels::classify_space_volume, false), true, kSpaceVolumeBit});
+  }
   // The surfaces the space volume covers (with or without the low-sun
   // bit), by the one program that reads it; the others never do.
   variant.space_volume = false;
   if (frame.space_volume) {
-    draws.push_back({program_of(gpu::PassVariant::Pixels::classify_space_volume, false), true, kSpaceVolumeBit});
     gpu::PassVariant v = variant;
     v.pixels = gpu::PassVariant::Pixels::surface;
     v.low_sun = false;
@@ -556,6 +587,19 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     draws.push_back({program_of(gpu::PassVariant::Pixels::sky, true), false, kSkyBit | kLowSunBit});
     draws.push_back({program_of(gpu::PassVariant::Pixels::surface, false), false, 0});
     draws.push_back({program_of(gpu::PassVariant::Pixels::surface, true), false, kLowSunBit});
+    if (export_stencil) {
+      // The low-sun surfaces in the planet's shadow, without the integration.
+      gpu::PassVariant v = variant;
+      v.pixels = gpu::PassVariant::Pixels::surface;
+      v.low_sun = false;
+      v.night = true;
+      GLuint& program = p.programs[v.index()];
+      if (program == 0)
+        program = gpu::link_program(gpu::atmosphere_pass_vertex_shader_source(),
+                                    gpu::atmosphere_pass_fragment_shader_source(p.tables->params(),
+                                                                                p.tables->spectral(), v));
+      draws.push_back({program, false, kLowSunBit | kNightBit});
+    }
   } else {
     draws.push_back({program_of(gpu::PassVariant::Pixels::sky, low_sun), false, kSkyBit});
     draws.push_back({program_of(gpu::PassVariant::Pixels::surface, low_sun), false, 0});
@@ -618,7 +662,13 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   const GLint clear_stencil = 0;
   glClearNamedFramebufferiv(p.framebuffer, GL_STENCIL, 0, &clear_stencil);
   for (const Draw& draw : draws) {
-    if (draw.classify) {
+    if (draw.export_stencil) {
+      // Every pixel's bits, as the program exports them.
+      glStencilMask(0xFF);
+      glStencilFunc(GL_ALWAYS, 0, 0xFF);
+      glStencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
+      glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    } else if (draw.classify) {
       // Set this draw's bit where the classifying program keeps the pixel.
       glStencilMask(GLuint(draw.bits));
       if (draw.sky_only)

@@ -4,8 +4,8 @@
 // draws one full-screen triangle over the engine's image; the program
 // variant (gpu/shader_source.cpp) defines VARIANT_PIXELS and the constants
 // SKY_VIEW_CAMERA, VARIANT_SURFACE_MODE, VARIANT_LOW_SUN, VARIANT_SHADOWS,
-// VARIANT_VOLUME, VARIANT_BLEND, VARIANT_SPACE_VOLUME, VARIANT_STARS and
-// VARIANT_ECLIPSE (1: the frame's moons from the uniforms of
+// VARIANT_VOLUME, VARIANT_BLEND, VARIANT_SPACE_VOLUME, VARIANT_NIGHT,
+// VARIANT_STARS and VARIANT_ECLIPSE (1: the frame's moons from the uniforms of
 // table_bindings.glsl, uniform_moons; 0: no_moons(), whose code folds
 // away).
 //
@@ -28,8 +28,17 @@
 //    surface that the space volume covers (composite.glsl:
 //    space_volume_covers), drawn by the program with VARIANT_SPACE_VOLUME;
 //    the exact programs draw the other surfaces.
+//  - bit 4 (with PIXELS_CLASSIFY_ALL only): a low-sun surface whose segment
+//    lies in the planet's shadow, where the integration gives zero single
+//    scattering: drawn by the program without it, with VARIANT_NIGHT.
 // The draw of bit 2 runs on the sky pixels only (the stencil test on bit
 // 0).
+// Where the driver can export a fragment's stencil value
+// (GL_ARB_shader_stencil_export), one draw instead, PIXELS_CLASSIFY_ALL,
+// answers every question of the frame at each pixel and writes the bits:
+// a classifying draw discards, so the rasteriser cannot test the stencil
+// before shading and runs it over every pixel of the image; one pass
+// instead of up to four pays that, and the depth read and the ray, once.
 // Then each class is drawn by its own program where the stencil holds its
 // bits: the sky (PIXELS_SKY) and the surfaces (PIXELS_SURFACE), each with
 // and without the low-sun integration (VARIANT_LOW_SUN), and the space
@@ -42,6 +51,7 @@
 #define PIXELS_CLASSIFY_LOW_SUN 4
 #define PIXELS_CLASSIFY_SPACE 5
 #define PIXELS_CLASSIFY_SPACE_VOLUME 6
+#define PIXELS_CLASSIFY_ALL 7
 
 // The engine's textures (texelFetch: one texel per pixel). Colour and albedo
 // share a unit: a surface mode reads one of them.
@@ -120,6 +130,7 @@ PassFrame pass_frame_from_uniforms() {
   frame.world_to_clip = world_to_clip;
   frame.surface_shell_radius = surface_shell_radius;
   frame.low_sun = VARIANT_LOW_SUN;
+  frame.night = VARIANT_NIGHT;
   frame.shadows = VARIANT_SHADOWS;
   frame.shadow_steps = shadow_steps;
   frame.shadow_matrix = shadow_matrix;
@@ -160,6 +171,32 @@ void main() {
 #else
   if (!depth_is_sky(depth, depth_encoding) || !sky_ray_misses_atmosphere(ATMOSPHERE, frame, ray)) discard;
 #endif
+  frag_color = vec4(0.0);
+}
+
+#elif VARIANT_PIXELS == PIXELS_CLASSIFY_ALL
+
+// The stencil bits of every class of the frame: the low-sun class with
+// VARIANT_LOW_SUN (and among its surfaces, bit 4, those in the planet's
+// shadow), the space beside the atmosphere for cameras above it
+// (!SKY_VIEW_CAMERA), the space volume's surfaces with VARIANT_SPACE_VOLUME;
+// each as its own classifying program decides.
+void main() {
+  PassFrame frame = pass_frame_from_uniforms();
+  PixelRay ray;
+  ray.world = ray_world;
+  ray.view_z = ray_view_z;
+  float depth = texelFetch(engine_depth, ivec2(gl_FragCoord.xy), 0).r;
+  bool sky = depth_is_sky(depth, depth_encoding);
+  int bits = sky ? 1 : 0;
+  bool night;
+  if (VARIANT_LOW_SUN && pixel_low_sun_classes(ATMOSPHERE, frame, ray, depth, night)) {
+    bits |= 2;
+    if (night && !sky) bits |= 16;
+  }
+  if (!SKY_VIEW_CAMERA && sky && sky_ray_misses_atmosphere(ATMOSPHERE, frame, ray)) bits |= 4;
+  if (VARIANT_SPACE_VOLUME && !sky && space_volume_covers(frame, space_volume_regular_columns, ray)) bits |= 8;
+  gl_FragStencilRefARB = bits;
   frag_color = vec4(0.0);
 }
 

@@ -101,6 +101,13 @@ CpuVolume compute_volume_cpu(const physics::AtmosphereParams& params, const phys
 // view_to_world, depth_column, depth_encoding and surface_shell_radius.
 bool uses_space_volume(const physics::AtmosphereParams& params, const physics::PassFrame& frame);
 
+// Whether the pass sorts its pixels into their classes with one draw that
+// exports each pixel's stencil bits, where the driver offers
+// GL_ARB_shader_stencil_export (true, the default), or with a classifying
+// draw per class (false; what drivers without the extension do). A test
+// hook: both give the same image.
+void set_stencil_export(bool enabled);
+
 // The regular columns of the space volume (composite.glsl:
 // space_volume_covers): `regular`, per column, 1 where its ray meets the
 // ground sphere steeply enough, needs no low-sun integration

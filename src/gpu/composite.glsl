@@ -52,6 +52,8 @@ struct PassFrame {
   float surface_shell_radius;  // m, planet-centred: no surface is higher (see aerial_perspective_reach)
   bool low_sun;             // the sun may be low (< 10°) somewhere in view: integrate single scattering there
                             // (surfaces, and from above the atmosphere the sky's rays through it)
+  bool night;               // surfaces whose segment lies in the planet's shadow (pixel_low_sun_classes):
+                            // no single scattering, without integrating it (a constant of the variant)
   bool shadows;             // a shadow map is given
   int shadow_steps;
   mat4 shadow_matrix;       // camera-relative metres (world axes) -> the light's clip space
@@ -798,8 +800,16 @@ INLINE PathScattering light_to_distance(IN(AtmosphereParams) atmosphere, IN(Spec
   float nu;
   PathScattering exact = eclipsed_scattering_to_point(
       atmosphere, spectral, spectral_transmittance_texture, scattering_texture, single_aerosol_texture,
-      multiple_scattering_texture, frame.camera, view_ray * t, frame.sun_direction, frame.low_sun, split, frame.moons,
-      transmittance, nu);
+      multiple_scattering_texture, frame.camera, view_ray * t, frame.sun_direction, frame.low_sun,
+      split || frame.night, frame.moons, transmittance, nu);
+  if (frame.night) {
+    // What the low-sun path gives a segment in the planet's shadow: the
+    // tables' multiple scattering, split from their single scattering, and
+    // the integrated single scattering, which is zero there
+    // (spectral_single_scattering: ray_in_planet_shadow), at full weight.
+    exact.single_rayleigh = vec3(0.0f);
+    exact.aerosol = vec3(0.0f);
+  }
   if (!frame.volume) return exact;
   float w = frame.volume_weight;
   exact.single_rayleigh = mix(exact.single_rayleigh, volume.single_rayleigh, w);
@@ -973,9 +983,13 @@ INLINE vec3 composite_space_pixel(IN(AtmosphereParams) atmosphere, IN(PassFrame)
 // end of a ray, so a part of a ray whose weight is zero has a zero weight
 // too). Pixels where it is false give the same light with frame.low_sun
 // false, without the integration: the pass draws the two kinds with
-// different programs (atmosphere_pass.frag.glsl).
-INLINE bool pixel_needs_low_sun_path(IN(AtmosphereParams) atmosphere, IN(PassFrame) frame, IN(PixelRay) ray,
-                                     float depth) {
+// different programs (atmosphere_pass.frag.glsl). `night`: besides, the
+// segment lies in the planet's shadow cylinder (ray_in_planet_shadow, the
+// test that makes the integration return zero): for a surface, the light of
+// frame.night, without the integration.
+INLINE bool pixel_low_sun_classes(IN(AtmosphereParams) atmosphere, IN(PassFrame) frame, IN(PixelRay) ray,
+                                   float depth, OUT(bool) night) {
+  night = false;
   vec3 view_ray;
   float t;
   if (depth_is_sky(depth, frame.depth_encoding)) {
@@ -995,7 +1009,16 @@ INLINE bool pixel_needs_low_sun_path(IN(AtmosphereParams) atmosphere, IN(PassFra
   if (!atmosphere_segment(atmosphere, camera_above_ground(atmosphere, frame.camera), view_ray, t,
                           frame.sun_direction, segment))
     return false;
-  return segment_low_sun_weight(segment, clamp_cosine(dot(view_ray, frame.sun_direction))) > 0.0f;
+  float nu = clamp_cosine(dot(view_ray, frame.sun_direction));
+  night = ray_in_planet_shadow(atmosphere, segment.mu_s,
+                               mu_s_at_ray_end(segment.r, segment.mu, segment.mu_s, nu, segment.t));
+  return segment_low_sun_weight(segment, nu) > 0.0f;
+}
+
+INLINE bool pixel_needs_low_sun_path(IN(AtmosphereParams) atmosphere, IN(PassFrame) frame, IN(PixelRay) ray,
+                                     float depth) {
+  bool night;
+  return pixel_low_sun_classes(atmosphere, frame, ray, depth, night);
 }
 
 // The pixel, whichever it is, with the frame's variant (the CPU twin; the

@@ -191,9 +191,10 @@ const std::vector<const char*> kEngineLibraryPhysics = {
 // subset macros, definitions.glsl with the atmosphere's constants, then the
 // parts of the physics `physics` (names in src/physics/).
 AssembledSource physics_shader_source(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
-                                      const std::vector<const char*>& physics) {
+                                      const std::vector<const char*>& physics,
+                                      const std::string& header = "#version 450 core\n") {
   AssembledSource s;
-  s.append("header", "#version 450 core\n");
+  s.append("header", header);
   s.append("macros", kSubsetMacros);
   // Shaders only run the run-time integration (see RAY_MAP_CAPACITY).
   s.append("capacities", "#define RAY_ARRAYS_FOR_RUNTIME\n#define SPECTRAL_SET_CAPACITY " +
@@ -235,13 +236,20 @@ AssembledSource sky_view_fragment_shader_source(const physics::AtmosphereParams&
 AssembledSource atmosphere_pass_fragment_shader_source(const physics::AtmosphereParams& params,
                                                       const physics::SpectralSets& spectral,
                                                       const PassVariant& variant) {
-  AssembledSource s = physics_shader_source(params, spectral, kCompositePhysics);
+  // The classifying program of all classes at once exports its stencil
+  // value (an extension's directive precedes every other token).
+  const bool export_stencil = variant.pixels == PassVariant::Pixels::classify_all;
+  AssembledSource s = physics_shader_source(
+      params, spectral, kCompositePhysics,
+      export_stencil ? "#version 450 core\n#extension GL_ARB_shader_stencil_export : require\n"
+                     : "#version 450 core\n");
   auto flag = [](bool b) { return b ? "true" : "false"; };
   s.append("variant", std::string("#define SKY_VIEW_CAMERA ") + flag(variant.sky_view_camera) +
                           "\n#define VARIANT_LOW_SUN " + flag(variant.low_sun) + "\n#define VARIANT_SHADOWS " +
                           flag(variant.shadows) + "\n#define VARIANT_VOLUME " + flag(variant.volume) +
                           "\n#define VARIANT_BLEND " + flag(variant.blend) +
                           "\n#define VARIANT_SPACE_VOLUME " + flag(variant.space_volume) +
+                          "\n#define VARIANT_NIGHT " + flag(variant.night) +
                           "\n#define VARIANT_SURFACE_MODE " + (variant.gbuffer ? "1" : "0") +
                           "\n#define VARIANT_PIXELS " + std::to_string(int(variant.pixels)) +
                           "\n#define VARIANT_STARS " + flag(variant.stars) +

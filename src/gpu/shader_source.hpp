@@ -63,6 +63,10 @@ struct PassVariant {
   // need the low-sun integration, the sky beside the atmosphere, the
   // surfaces the space volume covers), or shades
   // the sky's, the surfaces' or those of the space beside the atmosphere.
+  // classify_all sorts every pixel into all the frame's classes at once,
+  // writing their bits as its stencil value (GL_ARB_shader_stencil_export):
+  // the low-sun class with low_sun, the space beside the atmosphere without
+  // sky_view_camera, the space volume's surfaces with space_volume.
   enum class Pixels {
     classify = 0,
     sky = 1,
@@ -70,7 +74,8 @@ struct PassVariant {
     space = 3,
     classify_low_sun = 4,
     classify_space = 5,
-    classify_space_volume = 6
+    classify_space_volume = 6,
+    classify_all = 7
   };
   Pixels pixels = Pixels::sky;
   bool sky_view_camera = true;  // camera in the atmosphere: reads the sky-view table
@@ -82,11 +87,12 @@ struct PassVariant {
   bool stars = false;           // the star field behind the sky
   bool eclipse = false;         // the frame has moons (needs low_sun): the uniforms of uniform_moons()
   bool space_volume = false;    // surfaces read the volume of cameras above the atmosphere
-  static constexpr int kCount = 7 * 512;
+  bool night = false;           // surfaces in the planet's shadow: no single scattering (PassFrame::night)
+  static constexpr int kCount = 8 * 1024;
   int index() const {
-    return int(pixels) * 512 + ((sky_view_camera ? 1 : 0) | (low_sun ? 2 : 0) | (shadows ? 4 : 0) |
-                                (gbuffer ? 8 : 0) | (volume ? 16 : 0) | (blend ? 32 : 0) | (stars ? 64 : 0) |
-                                (eclipse ? 128 : 0) | (space_volume ? 256 : 0));
+    return int(pixels) * 1024 + ((sky_view_camera ? 1 : 0) | (low_sun ? 2 : 0) | (shadows ? 4 : 0) |
+                                 (gbuffer ? 8 : 0) | (volume ? 16 : 0) | (blend ? 32 : 0) | (stars ? 64 : 0) |
+                                 (eclipse ? 128 : 0) | (space_volume ? 256 : 0) | (night ? 512 : 0));
   }
 };
 
