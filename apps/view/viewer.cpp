@@ -187,6 +187,10 @@ struct Window {
     }
     glfwMakeContextCurrent(window);
     glfwSwapInterval(0);
+    // Keys and buttons are polled once a frame: sticky ones report a press
+    // released before the poll (a tap of 1-4 or Esc within a slow frame).
+    glfwSetInputMode(window, GLFW_STICKY_KEYS, GLFW_TRUE);
+    glfwSetInputMode(window, GLFW_STICKY_MOUSE_BUTTONS, GLFW_TRUE);
   }
   ~Window() {
     glfwDestroyWindow(window);
@@ -245,8 +249,6 @@ class Viewer {
   int run();
 
  private:
-  using Clock = std::chrono::steady_clock;
-
   Flight::GroundHeight ground() const {
     return [this](const glm::dvec3& p) { return scene_->ground_height_m(p); };
   }
@@ -374,6 +376,7 @@ FlightInput Viewer::window_input() {
     in.right = down(GLFW_KEY_D);
     in.down = down(GLFW_KEY_Q);
     in.up = down(GLFW_KEY_E);
+    if (down(GLFW_KEY_ESCAPE)) glfwSetWindowShouldClose(window_, GLFW_TRUE);
     if (down(GLFW_KEY_LEFT_SHIFT) || down(GLFW_KEY_RIGHT_SHIFT)) in.speed_multiplier = 10.0;
     if (down(GLFW_KEY_LEFT_CONTROL) || down(GLFW_KEY_RIGHT_CONTROL)) in.speed_multiplier = 0.1;
     // A jump on the press of its key, not on every frame it is held.
@@ -442,7 +445,7 @@ void Viewer::panel() {
       if (k) ImGui::SameLine();
       if (ImGui::Button(jumps[k])) flight_->jump(k + 1, g);
     }
-    ImGui::TextDisabled("drag: look; WASD, Q/E: fly; Shift x10, Ctrl x0.1");
+    ImGui::TextDisabled("drag: look; WASD, Q/E: fly; Shift x10, Ctrl x0.1; Esc: quit");
     float fov = float(look_.fov_deg);
     if (ImGui::SliderFloat("field of view", &fov, 5.0f, 120.0f, "%.1f deg")) set_slider("fov_deg", double(fov));
   }
@@ -733,9 +736,9 @@ int Viewer::run() {
   // Scripted sessions advance the flight by a fixed step, so that the
   // same script flies the same path on any machine.
   constexpr double kScriptStepS = 1.0 / 30.0;
-  // A script runs to its end (and --frames further), then on until the
-  // tables it asked for are swapped in (at most a minute more), so that
-  // the swap is measured.
+  // A script runs past its last event (or --frames, if more), then on
+  // until the tables it asked for are swapped in (at most three minutes
+  // more), so that the swap is measured.
   const int frames = std::max(o_.frames, script ? script->length() + 1 : 0);
   constexpr double kMaxWaitForTablesS = 180.0;
   double waited_from = -1.0;
