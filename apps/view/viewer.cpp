@@ -445,7 +445,8 @@ void Viewer::panel() {
       if (k) ImGui::SameLine();
       if (ImGui::Button(jumps[k])) flight_->jump(k + 1, g);
     }
-    ImGui::TextDisabled("drag: look; WASD, Q/E: fly; Shift x10, Ctrl x0.1; Esc: quit");
+    ImGui::TextDisabled("drag: look; WASD, Q/E: fly; Esc: quit");
+    ImGui::TextDisabled("Shift: 10x faster, Ctrl: 10x slower");
     float fov = float(look_.fov_deg);
     if (ImGui::SliderFloat("field of view", &fov, 5.0f, 120.0f, "%.1f deg")) set_slider("fov_deg", double(fov));
   }
@@ -606,7 +607,9 @@ void Viewer::loading_panel() {
   const ImVec2 size = ImGui::GetIO().DisplaySize;
   ImGui::SetNextWindowPos(ImVec2(size.x * 0.5f, size.y * 0.5f), ImGuiCond_Always, ImVec2(0.5f, 0.5f));
   ImGui::SetNextWindowSize(ImVec2(std::min(420.0f, size.x - 16.0f), 0), ImGuiCond_Always);
-  ImGui::Begin("atmos view", nullptr, ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove);
+  // Its own name: ImGui keeps a window's place and size by its name, and
+  // the panel's are its own.
+  ImGui::Begin("atmos view: loading", nullptr, ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove);
   ImGui::Text("%s: its tables and shaders", o_.planet.planet.c_str());
   if (job_->progress().busy)
     progress_bar();
