@@ -14,6 +14,9 @@
 // globe hands its farthest cascade to the pass, which removes the light the
 // shadowed air does not scatter (light shafts). --shadow-cascades 0 turns
 // both off.
+//
+// --ocean draws the sea (atmos::Ocean) over the terrain's flat sea, after
+// the globe and before the pass, with the wind of --wind.
 #include <epoxy/gl.h>
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
@@ -25,11 +28,13 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <atmos/atmosphere.hpp>
 #include <atmos/globe.hpp>
+#include <atmos/ocean.hpp>
 #include <atmos/planet_file.hpp>
 #include <atmos/plugin.hpp>
 #include <atmos/post.hpp>
@@ -57,6 +62,8 @@ struct Options {
   int shadow_size = 2048;        // texels per cascade
   double shadow_distance = 20e3;  // m
   int shadow_steps = 24;         // the pass's shadow-map samples per view ray
+  bool ocean = false;       // the sea (atmos::Ocean) over the terrain
+  double wind = 7.0;        // m/s, the sea's wind
   std::string out_dir = ".";
 };
 
@@ -103,6 +110,12 @@ int run(const Options& o) {
   settings.shadow_map_size = o.shadow_size;
   settings.shadow_distance_m = o.shadow_distance;
   atmos::Globe globe(planet, surface, pass, settings);
+  std::unique_ptr<atmos::Ocean> ocean;
+  if (o.ocean) {
+    atmos::OceanSettings sea;
+    sea.water.wind_speed_m_s = o.wind;
+    ocean = std::make_unique<atmos::Ocean>(planet, surface, pass, sea);
+  }
 
   // The engine's render targets: lit colour (RGBA32F) and reversed-Z depth.
   GLuint colour = 0, depth = 0, target = 0, output = 0;
@@ -163,6 +176,13 @@ int run(const Options& o) {
     globe.draw(view);
     glFinish();
     const double terrain_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    double ocean_ms = 0.0;
+    if (ocean) {
+      const auto sea_start = std::chrono::steady_clock::now();
+      ocean->draw(view);
+      glFinish();
+      ocean_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - sea_start).count();
+    }
 
     atmos::FrameInput input;
     input.colour = colour;
@@ -193,10 +213,10 @@ int run(const Options& o) {
     std::printf(
         "%s: altitude %.6g m, %d tiles (%d generated in %.1f ms), %lld triangles, selection %.3f ms (%d nodes), "
         "shadows %d cascades (%d casters, %lld triangles, %.3f ms selection), "
-        "terrain %.1f ms, frame %.1f ms, resident %.1f MiB\n",
+        "terrain %.1f ms, sea %.1f ms, frame %.1f ms, resident %.1f MiB\n",
         path.c_str(), altitude, s.tiles_drawn, s.tiles_generated, s.generation_ms, s.triangles, s.selection_ms,
         s.nodes_visited, s.shadow_cascades, s.shadow_casters, s.shadow_triangles, s.shadow_selection_ms, terrain_ms,
-        frame_ms, double(s.resident_bytes) / (1024.0 * 1024.0));
+        ocean_ms, frame_ms, double(s.resident_bytes) / (1024.0 * 1024.0));
   }
   glDeleteFramebuffers(1, &target);
   glDeleteTextures(1, &colour);
@@ -253,6 +273,8 @@ int main(int argc, char** argv) {
   app.add_option("--shadow-steps", o.shadow_steps, "Shadow map samples per view ray for the light shafts (1-256)")
       ->capture_default_str()
       ->check(CLI::Range(1, 256));
+  app.add_flag("--ocean", o.ocean, "Draw the sea (atmos::Ocean) over the terrain");
+  app.add_option("--wind", o.wind, "Wind over the sea, m/s")->capture_default_str()->check(CLI::Range(0.0, 50.0));
   app.add_option("--out-dir", o.out_dir, "Directory of the PNG frames")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   o.seed_given = seed->count() > 0;

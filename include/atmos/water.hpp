@@ -1,0 +1,43 @@
+// atmos — the optics of seas and lakes for renderers: the water's inputs in
+// SI units and its optical properties at the three channels of an
+// atmosphere's tables (docs/water.md). The shading functions themselves are
+// GLSL (the sea on the globe: atmos/ocean.hpp).
+#pragma once
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include <array>
+
+#include "atmos/atmosphere.hpp"
+
+namespace atmos {
+
+// The water, in SI units (chlorophyll in the oceanographers' mg m^-3).
+struct Water {
+  double wind_speed_m_s = 7.0;            // 12.5 m above the water (Cox & Munk 1954's height), [0, 50]
+  double chlorophyll_mg_m3 = 0.1;         // chlorophyll a, [0, 25] (Bricaud et al. 1998's fits)
+  double cdom_absorption_440_per_m = 0.0; // coloured dissolved organic matter at 440 nm, [0, 10]
+  double salinity_psu = 35.0;             // [0, 40]: 35 the open ocean, 0 fresh water
+  double temperature_c = 20.0;            // [0, 30] (Quan & Fry 1995's fit)
+};
+
+// The water's optical properties at three wavelengths, one per channel.
+struct WaterOptics {
+  std::array<double, 3> wavelengths_nm{};
+  glm::dvec3 refractive_index{1.0};      // relative to air (Quan & Fry 1995)
+  glm::dvec3 absorption_per_m{0.0};      // pure water + phytoplankton + dissolved organic matter
+  glm::dvec3 backscattering_per_m{0.0};  // pure water + particles
+  glm::dvec3 diffuse_reflectance{0.0};   // the flat surface's under a uniform sky
+  glm::dvec2 slope_variance{0.0};        // upwind and crosswind (Cox & Munk 1954)
+};
+
+// The optics of `water` at the channels of `atmosphere`'s tables: its three
+// working wavelengths in the three-wavelength mode; in the spectral mode
+// (channels linear sRGB) 680, 550 and 440 nm, the representative
+// wavelengths of the sRGB primaries that the renderer's phase functions
+// use too. Throws atmos::Error with one line naming the first input
+// outside its range (or not finite).
+WaterOptics water_optics(const Water& water, const Atmosphere& atmosphere);
+
+}  // namespace atmos

@@ -1,0 +1,485 @@
+// The sea on the globe (include/atmos/ocean.hpp): the water's parameters at
+// the channels' wavelengths, the wave spectrum, the bathymetry cube map and
+// the drawing.
+#include "atmos/ocean.hpp"
+
+#include <epoxy/gl.h>
+#include <glm/geometric.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <glm/mat4x4.hpp>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "data/embedded_files.hpp"
+#include "planet/ocean_internal.hpp"
+#include "planet/surface.hpp"
+
+namespace atmos {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kGravity = 9.81;  // m s^-2, the waves' dispersion ω² = g k (deep water)
+constexpr int kMaxWaves = 32;      // OCEAN_MAX_WAVES of ocean.frag.glsl
+
+// set_ocean_terms (ocean_internal.hpp).
+std::atomic<unsigned> terms_drawn{planet::kOceanAllTerms};
+
+const char* shader_text(const char* path) {
+  const char* text = data::embedded_file(path);
+  if (text == nullptr) throw Error(std::string("ocean: shader source ") + path + " is not embedded");
+  return text;
+}
+
+GLuint compile(GLenum stage, const std::string& source, const char* name) {
+  const GLuint shader = glCreateShader(stage);
+  const char* text = source.c_str();
+  glShaderSource(shader, 1, &text, nullptr);
+  glCompileShader(shader);
+  GLint ok = 0;
+  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    GLint length = 0;
+    glGetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
+    std::string log(size_t(std::max(length, 1)), '\0');
+    glGetShaderInfoLog(shader, length, nullptr, log.data());
+    glDeleteShader(shader);
+    throw Error(std::string("ocean: the ") + name + " shader does not compile: " + log.c_str());
+  }
+  return shader;
+}
+
+GLuint link(const std::string& vertex, const std::string& fragment) {
+  const GLuint vs = compile(GL_VERTEX_SHADER, vertex, "vertex");
+  GLuint fs = 0;
+  try {
+    fs = compile(GL_FRAGMENT_SHADER, fragment, "fragment");
+  } catch (...) {
+    glDeleteShader(vs);
+    throw;
+  }
+  const GLuint program = glCreateProgram();
+  glAttachShader(program, vs);
+  glAttachShader(program, fs);
+  glLinkProgram(program);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint ok = 0;
+  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    GLint length = 0;
+    glGetProgramiv(program, GL_INFO_LOG_LENGTH, &length);
+    std::string log(size_t(std::max(length, 1)), '\0');
+    glGetProgramInfoLog(program, length, nullptr, log.data());
+    glDeleteProgram(program);
+    throw Error(std::string("ocean: the shaders do not link: ") + log.c_str());
+  }
+  return program;
+}
+
+bool finite(const glm::dmat4& m) {
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r)
+      if (!std::isfinite(m[c][r])) return false;
+  return true;
+}
+
+// One sine wave of the sea's height: along the direction at `angle` from
+// the upwind axis, wavenumber k (rad/m), amplitude (m), angular frequency
+// (rad/s) and phase (rad).
+struct Wave {
+  double angle = 0.0, k = 0.0, amplitude = 0.0, omega = 0.0, phase = 0.0;
+};
+
+// The waves of a wind of speed U (m/s) whose slope variance along and
+// across the wind stays within `budget` (Cox & Munk's; the waves take at
+// most 80 % of each, the rest is the BRDF's at every distance).
+//
+// Heights: the Pierson & Moskowitz 1964 spectrum of a fully developed sea,
+// S(ω) = α g² ω⁻⁵ exp(−β (ω₀ / ω)⁴), α = 8.1e-3, β = 0.74, ω₀ = g / U
+// (U taken at 12.5 m rather than their 19.5 m: 3 % apart in a neutral
+// log profile), peaking at ω_p = (4β/5)^¼ ω₀ = 0.877 g / U. kMaxWaves
+// bands spaced evenly in log ω from 0.75 ω_p to the frequency of 0.1 m
+// waves, each a sine of amplitude a = √(2 S(ω) Δω) (its height variance
+// a²/2 is the band's) at the band's geometric centre, k = ω² / g. The slope
+// variance of a wave is ½ a² k²; the slope spectrum k² S(ω) =
+// α ω⁻¹ e^{−β (ω₀/ω)⁴} falls off slowly, so the waves down to 0.1 m carry
+// about α ln(ω_max / ω_p): 0.023 at 7 m/s, of Cox & Munk's 0.038; the
+// capillary waves below 0.1 m are the BRDF's.
+// Directions: the cos² spreading about the wind (Longuet-Higgins et al.
+// 1963's cos^2s with s = 1), each band's angle from the spreading's
+// inverse distribution at a golden-ratio sequence, on alternate sides.
+std::vector<Wave> make_waves(double wind_speed, glm::dvec2 budget) {
+  std::vector<Wave> waves;
+  if (!(wind_speed > 0.5)) return waves;  // calm: the slopes are all the BRDF's
+  const double omega_0 = kGravity / wind_speed;
+  const double omega_p = std::pow(0.8 * 0.74, 0.25) * omega_0;
+  const double omega_lo = 0.75 * omega_p, omega_hi = std::sqrt(kGravity * 2.0 * kPi / 0.1);
+  const double step = std::log(omega_hi / omega_lo) / kMaxWaves;
+  glm::dvec2 variance(0.0);
+  for (int i = 0; i < kMaxWaves; ++i) {
+    const double lo = omega_lo * std::exp(step * i), hi = omega_lo * std::exp(step * (i + 1));
+    const double omega = std::sqrt(lo * hi);
+    const double s = 8.1e-3 * kGravity * kGravity * std::pow(omega, -5.0) * std::exp(-0.74 * std::pow(omega_0 / omega, 4.0));
+    Wave w;
+    w.omega = omega;
+    w.k = omega * omega / kGravity;
+    w.amplitude = std::sqrt(2.0 * s * (hi - lo));
+    // cos² spreading on [-π/2, π/2]: F(θ) = (θ + π/2 + sin(2θ)/2) / π, inverted by bisection.
+    const double u = std::fmod(0.5 + 0.6180339887498949 * i, 1.0);
+    double a = -0.5 * kPi, b = 0.5 * kPi;
+    for (int it = 0; it < 50; ++it) {
+      const double m = 0.5 * (a + b);
+      ((m + 0.5 * kPi + 0.5 * std::sin(2.0 * m)) / kPi < u ? a : b) = m;
+    }
+    w.angle = 0.5 * (a + b) * (i % 2 == 0 ? 1.0 : -1.0);
+    w.phase = 2.0 * kPi * std::fmod(0.3 + 0.7548776662466927 * i, 1.0);
+    const double slope = 0.5 * w.amplitude * w.amplitude * w.k * w.k;
+    variance += slope * glm::dvec2(std::cos(w.angle) * std::cos(w.angle), std::sin(w.angle) * std::sin(w.angle));
+    waves.push_back(w);
+  }
+  const double scale = std::min({1.0, 0.8 * budget.x / variance.x, 0.8 * budget.y / variance.y});
+  for (Wave& w : waves) w.amplitude *= std::sqrt(scale);
+  return waves;
+}
+
+// The unit direction of texel (i, j) of cube-map face `face` (OpenGL's
+// cube-map layout: the face's major axis and its s, t axes).
+glm::dvec3 cube_direction(int face, int i, int j, int n) {
+  const double s = 2.0 * (i + 0.5) / n - 1.0, t = 2.0 * (j + 0.5) / n - 1.0;
+  glm::dvec3 d;
+  switch (face) {
+    case 0: d = {1.0, -t, -s}; break;
+    case 1: d = {-1.0, -t, s}; break;
+    case 2: d = {s, 1.0, t}; break;
+    case 3: d = {s, -1.0, -t}; break;
+    case 4: d = {s, -t, 1.0}; break;
+    default: d = {-s, -t, -1.0}; break;
+  }
+  return glm::normalize(d);
+}
+
+struct OceanProgram {
+  GLuint id = 0;
+  GLint clip = -1, inverse = -1, viewport = -1, camera = -1, up = -1, radius = -1, height_term = -1,
+        pixel_angle = -1, sun = -1, light = -1, refractive = -1, absorption = -1, backscattering = -1,
+        diffuse = -1, slope_variance = -1, upwind = -1, wave_count = -1, wave_vector = -1, wave_phase = -1,
+        bathymetry = -1, sea_level = -1, seabed = -1, moon_count = -1, moon_spheres = -1, terms = -1;
+  void locate() {
+    const auto at = [&](const char* name) { return glGetUniformLocation(id, name); };
+    clip = at("clip_from_offset");
+    inverse = at("offset_from_clip");
+    viewport = at("viewport_size");
+    camera = at("camera_planet");
+    up = at("camera_up");
+    radius = at("camera_radius");
+    height_term = at("camera_height_term");
+    pixel_angle = at("pixel_angle");
+    sun = at("sun_direction");
+    light = at("light_scale");
+    refractive = at("sea_refractive_index");
+    absorption = at("sea_absorption");
+    backscattering = at("sea_backscattering");
+    diffuse = at("sea_diffuse_reflectance");
+    slope_variance = at("sea_slope_variance");
+    upwind = at("wind_upwind");
+    wave_count = at("wave_count");
+    wave_vector = at("wave_vector");
+    wave_phase = at("wave_phase");
+    bathymetry = at("bathymetry");
+    sea_level = at("sea_level");
+    seabed = at("seabed_albedo");
+    moon_count = at("moon_count");
+    moon_spheres = at("moon_spheres");
+    terms = at("terms");
+  }
+};
+
+void require_range(double value, double lo, double hi, const char* name) {
+  if (!(value >= lo && value <= hi))
+    throw Error(std::string("ocean settings: ") + name + " must be in [" + std::to_string(lo) + ", " +
+                std::to_string(hi) + "], not " + std::to_string(value));
+}
+
+}  // namespace
+
+namespace planet {
+void set_ocean_terms(unsigned mask) { terms_drawn.store(mask, std::memory_order_relaxed); }
+}  // namespace planet
+
+struct Ocean::Impl {
+  const AtmospherePass* pass = nullptr;
+  OceanSettings settings;
+  bool has_sea = false;
+  double sea_level_m = std::numeric_limits<double>::quiet_NaN();
+  double sea_radius_m = 0.0, top_radius_m = 0.0, sun_angular_radius_rad = 0.0;
+  std::unique_ptr<planet::Surface> surface;
+  WaterOptics water;
+  std::vector<Wave> waves;
+  // The waves' anchor: the unit direction of the sea below the camera where
+  // the wind's frame was last set, and that frame (upwind, crosswind).
+  bool anchored = false;
+  glm::dvec3 anchor{0.0}, upwind{0.0}, crosswind{0.0};
+  OceanProgram program;            // the sky quadrature or the mean direction, as the settings say
+  OceanProgram eclipse_program;    // linked at the first draw with moons that eclipse
+  GLuint vertex_array = 0, bathymetry = 0;
+
+  ~Impl() {
+    if (program.id != 0) glDeleteProgram(program.id);
+    if (eclipse_program.id != 0) glDeleteProgram(eclipse_program.id);
+    if (vertex_array != 0) glDeleteVertexArrays(1, &vertex_array);
+    if (bathymetry != 0) glDeleteTextures(1, &bathymetry);
+  }
+
+  OceanProgram link(bool eclipse) const {
+    std::string head = "#version 450 core\n";
+    if (eclipse) head += "#define OCEAN_ECLIPSE 1\n";
+    if (!settings.sky_quadrature) head += "#define OCEAN_SKY_MEAN_DIRECTION 1\n";
+    OceanProgram p;
+    p.id = atmos::link(std::string("#version 450 core\n") + shader_text("src/planet/ocean.vert.glsl"),
+                       head + pass->glsl_library(settings.first_unit) + "\n" + shader_text("src/physics/water.glsl") +
+                           "\n" + shader_text("src/planet/ocean.frag.glsl"));
+    p.locate();
+    glProgramUniform1i(p.id, p.bathymetry, settings.first_unit + 5);
+    return p;
+  }
+
+  // The ground's height (r) and its least over the texel and its 8
+  // neighbours on the face (g), for every texel of the six faces.
+  void bake_bathymetry() {
+    const int n = settings.bathymetry_texels;
+    std::vector<float> height(size_t(6) * size_t(n) * size_t(n));
+    tbb::parallel_for(0, 6 * n, [&](int row) {
+      const int face = row / n, j = row % n;
+      for (int i = 0; i < n; ++i)
+        height[(size_t(face) * n + size_t(j)) * n + size_t(i)] =
+            float(surface->ground_height_m(cube_direction(face, i, j, n)));
+    });
+    glCreateTextures(GL_TEXTURE_CUBE_MAP, 1, &bathymetry);
+    glTextureStorage2D(bathymetry, 1, GL_RG32F, n, n);
+    std::vector<float> texels(size_t(2) * n * n);
+    for (int face = 0; face < 6; ++face) {
+      const float* h = &height[size_t(face) * n * n];
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+          float least = h[size_t(j) * n + size_t(i)];
+          for (int dj = -1; dj <= 1; ++dj)
+            for (int di = -1; di <= 1; ++di) {
+              const int a = std::clamp(i + di, 0, n - 1), b = std::clamp(j + dj, 0, n - 1);
+              least = std::min(least, h[size_t(b) * n + size_t(a)]);
+            }
+          texels[2 * (size_t(j) * n + size_t(i))] = h[size_t(j) * n + size_t(i)];
+          texels[2 * (size_t(j) * n + size_t(i)) + 1] = least;
+        }
+      glTextureSubImage3D(bathymetry, 0, 0, 0, face, n, n, 1, GL_RG, GL_FLOAT, texels.data());
+    }
+    glTextureParameteri(bathymetry, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTextureParameteri(bathymetry, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(bathymetry, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(bathymetry, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  }
+
+  // Sets the wind's frame at `nadir` when the sea below the camera has
+  // moved more than 0.5 degrees (55 km on Earth) from the anchor: the waves
+  // stay fixed in the world while the camera moves less than that, and
+  // change by one step when it moves farther (where the waves are smaller
+  // than the pixels but for cameras near the sea flying that far).
+  void anchor_at(const glm::dvec3& nadir) {
+    if (anchored && glm::dot(nadir, anchor) > std::cos(0.5 * kPi / 180.0)) return;
+    anchored = true;
+    anchor = nadir;
+    glm::dvec3 east = glm::cross(glm::dvec3(0.0, 0.0, 1.0), nadir);
+    if (glm::length(east) < 1e-6) east = glm::cross(glm::dvec3(0.0, 1.0, 0.0), nadir);
+    east = glm::normalize(east);
+    const glm::dvec3 north = glm::cross(nadir, east);
+    const double azimuth = settings.wind_azimuth_deg * kPi / 180.0;
+    upwind = std::cos(azimuth) * north + std::sin(azimuth) * east;
+    crosswind = glm::cross(nadir, upwind);
+  }
+};
+
+Ocean::Ocean(const Atmosphere& atmosphere, const PlanetSurface& surface, const AtmospherePass& pass,
+             const OceanSettings& settings) {
+  if (epoxy_gl_version() < 45) throw Error("ocean: needs a current OpenGL 4.5 core context");
+  WaterOptics optics;
+  try {
+    optics = water_optics(settings.water, atmosphere);
+  } catch (const Error& e) {
+    throw Error(std::string("ocean settings: ") + e.what());
+  }
+  for (int c = 0; c < 3; ++c)
+    if (!(settings.seabed_albedo[c] >= 0.0 && settings.seabed_albedo[c] <= 1.0))
+      throw Error("ocean settings: seabed_albedo must be in [0, 1] in every channel");
+  require_range(settings.wind_azimuth_deg, -360.0, 360.0, "wind_azimuth_deg");
+  if (settings.bathymetry_texels < 16 || settings.bathymetry_texels > 2048)
+    throw Error("ocean settings: bathymetry_texels must be in 16..2048, not " +
+                std::to_string(settings.bathymetry_texels));
+  if (settings.first_unit < 0) throw Error("ocean settings: first_unit must be a texture unit (>= 0)");
+  const std::optional<double> sea = surface.sea_level_m ? surface.sea_level_m
+                                    : surface.style == SurfaceStyle::earth ? std::optional<double>(0.0)
+                                                                            : std::nullopt;
+  if (sea && !(std::isfinite(*sea) && *sea > -atmosphere.bottom_radius_m &&
+               *sea < atmosphere.top_radius_m - atmosphere.bottom_radius_m))
+    throw Error("ocean: the sea level " + std::to_string(*sea) +
+                " m lies outside the atmosphere (below the planet's centre or above its top, " +
+                std::to_string(atmosphere.top_radius_m - atmosphere.bottom_radius_m) + " m)");
+
+  impl_ = std::make_unique<Impl>();
+  Impl& p = *impl_;
+  p.pass = &pass;
+  p.settings = settings;
+  p.top_radius_m = atmosphere.top_radius_m;
+  p.sun_angular_radius_rad = atmosphere.sun_angular_radius_rad;
+  if (!sea) return;
+  GLint units = 0;
+  glGetIntegerv(GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS, &units);
+  if (settings.first_unit + 6 > units)
+    throw Error("ocean settings: first_unit + 5 (the bathymetry) is beyond the context's " + std::to_string(units) +
+                " texture units");
+  p.has_sea = true;
+  p.sea_level_m = *sea;
+  p.sea_radius_m = atmosphere.bottom_radius_m + *sea;
+  // The channels' wavelengths (water_optics): the working ones, or in the
+  // spectral mode representative wavelengths of the sRGB primaries.
+  p.water = optics;
+  p.waves = make_waves(settings.water.wind_speed_m_s, optics.slope_variance);
+  p.surface = std::make_unique<planet::Surface>(surface, atmosphere.bottom_radius_m);
+  p.bake_bathymetry();
+  glCreateVertexArrays(1, &p.vertex_array);
+  p.program = p.link(false);
+}
+
+Ocean::~Ocean() = default;
+
+bool Ocean::has_sea() const { return impl_->has_sea; }
+double Ocean::sea_level_m() const { return impl_->sea_level_m; }
+
+double Ocean::depth_m(const glm::dvec3& direction) const {
+  const Impl& p = *impl_;
+  const double length = glm::length(direction);
+  if (!(length > 0.0) || !std::isfinite(length)) throw Error("ocean: depth_m of a zero or non-finite direction");
+  if (!p.has_sea) return 0.0;
+  return std::max(p.sea_level_m - p.surface->ground_height_m(direction / length), 0.0);
+}
+
+void Ocean::draw(const GlobeView& view, double time_s) {
+  Impl& p = *impl_;
+  if (view.width < 1 || view.height < 1) throw Error("ocean view: empty viewport");
+  if (!finite(view.view) || !finite(view.projection)) throw Error("ocean view: non-finite view or projection matrix");
+  if (!std::isfinite(glm::determinant(view.view)) || std::abs(glm::determinant(view.view)) < 1e-12)
+    throw Error("ocean view: singular view matrix");
+  if (!(std::abs(view.projection[1][1]) > 0.0)) throw Error("ocean view: degenerate projection");
+  const double sun_length = glm::length(view.sun_direction);
+  if (!(sun_length > 0.0) || !std::isfinite(sun_length)) throw Error("ocean view: zero or non-finite sun direction");
+  if (!(view.nits_per_unit > 0.0) || !std::isfinite(view.nits_per_unit))
+    throw Error("ocean view: nits_per_unit must be positive");
+  if (!(view.sun_illuminance_lux >= 0.0) || !std::isfinite(view.sun_illuminance_lux))
+    throw Error("ocean view: sun_illuminance_lux must be >= 0");
+  if (!std::isfinite(time_s)) throw Error("ocean view: the time must be finite");
+  bool eclipse = false;
+  try {
+    eclipse = moons_may_eclipse(view.moons, view.sun_direction, p.top_radius_m, p.sun_angular_radius_rad);
+  } catch (const Error& e) {
+    throw Error(std::string("ocean view: GlobeView::moons: ") + e.what());
+  }
+  if (!p.has_sea) return;
+
+  const PlanetFrame& frame = p.pass->frame();
+  const glm::dmat4 world_from_view = glm::inverse(view.view);
+  const glm::dvec3 eye_world(world_from_view[3]);
+  const glm::dvec3 camera = (eye_world - frame.centre) / frame.units_per_metre;
+  const double r_c = glm::length(camera);
+  // Below the sea (or at the centre) nothing is drawn: no underwater view.
+  if (!(r_c > p.sea_radius_m)) return;
+  glm::dmat4 rotation = view.view;
+  rotation[3] = glm::dvec4(0.0, 0.0, 0.0, 1.0);
+  glm::dmat4 scale(1.0);
+  scale[0][0] = scale[1][1] = scale[2][2] = frame.units_per_metre;
+  const glm::dmat4 clip_from_offset = view.projection * rotation * scale;
+  const glm::dmat4 offset_from_clip = glm::inverse(clip_from_offset);
+  if (!finite(offset_from_clip)) throw Error("ocean view: singular projection");
+  const glm::dvec3 up = camera / r_c;
+  const double height_term = (r_c - p.sea_radius_m) * (r_c + p.sea_radius_m);
+  const glm::dvec3 sun = view.sun_direction / sun_length;
+
+  // The waves: world wave vectors in the anchor's wind frame, and their
+  // phases at the camera, k · camera + φ − ω t, reduced in double.
+  p.anchor_at(up);
+  std::array<glm::vec4, kMaxWaves> vectors{};
+  std::array<float, kMaxWaves> phases{};
+  for (size_t i = 0; i < p.waves.size(); ++i) {
+    const Wave& w = p.waves[i];
+    const glm::dvec3 k = w.k * (std::cos(w.angle) * p.upwind + std::sin(w.angle) * p.crosswind);
+    vectors[i] = glm::vec4(glm::vec3(k), float(w.amplitude));
+    const double phase = glm::dot(k, camera) + w.phase - w.omega * time_s;
+    phases[i] = float(phase - 2.0 * kPi * std::floor(phase / (2.0 * kPi)));
+  }
+
+  OceanProgram* program = &p.program;
+  if (eclipse) {
+    if (p.eclipse_program.id == 0) p.eclipse_program = p.link(true);
+    program = &p.eclipse_program;
+  }
+  const OceanProgram& g = *program;
+  glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_GREATER);
+  glDepthMask(GL_TRUE);
+  glDisable(GL_CULL_FACE);
+  glDisable(GL_BLEND);
+  glEnable(GL_TEXTURE_CUBE_MAP_SEAMLESS);
+  glViewport(0, 0, view.width, view.height);
+  glUseProgram(g.id);
+  glBindVertexArray(p.vertex_array);
+  p.pass->bind_textures(p.settings.first_unit);
+  glBindTextureUnit(GLuint(p.settings.first_unit + 5), p.bathymetry);
+  glBindSampler(GLuint(p.settings.first_unit + 5), 0);
+
+  const glm::mat4 clip_f(clip_from_offset), inverse_f(offset_from_clip);
+  glUniformMatrix4fv(g.clip, 1, GL_FALSE, glm::value_ptr(clip_f));
+  glUniformMatrix4fv(g.inverse, 1, GL_FALSE, glm::value_ptr(inverse_f));
+  glUniform2f(g.viewport, float(view.width), float(view.height));
+  glUniform3f(g.camera, float(camera.x), float(camera.y), float(camera.z));
+  glUniform3f(g.up, float(up.x), float(up.y), float(up.z));
+  glUniform1f(g.radius, float(r_c));
+  glUniform1f(g.height_term, float(height_term));
+  glUniform1f(g.pixel_angle, float(2.0 / (std::abs(view.projection[1][1]) * view.height)));
+  glUniform3f(g.sun, float(sun.x), float(sun.y), float(sun.z));
+  const double lux_scale =
+      view.sun_illuminance_lux > 0.0 ? view.sun_illuminance_lux / p.pass->sun_illuminance_lux() : 1.0;
+  glUniform1f(g.light, float(lux_scale / view.nits_per_unit));
+  const WaterOptics& w = p.water;
+  const glm::vec3 n(w.refractive_index), a(w.absorption_per_m), b(w.backscattering_per_m), r(w.diffuse_reflectance);
+  glUniform3f(g.refractive, n.x, n.y, n.z);
+  glUniform3f(g.absorption, a.x, a.y, a.z);
+  glUniform3f(g.backscattering, b.x, b.y, b.z);
+  glUniform3f(g.diffuse, r.x, r.y, r.z);
+  glUniform2f(g.slope_variance, float(w.slope_variance.x), float(w.slope_variance.y));
+  glUniform3f(g.upwind, float(p.upwind.x), float(p.upwind.y), float(p.upwind.z));
+  glUniform1i(g.wave_count, int(p.waves.size()));
+  glUniform4fv(g.wave_vector, kMaxWaves, glm::value_ptr(vectors[0]));
+  glUniform1fv(g.wave_phase, kMaxWaves, phases.data());
+  glUniform1f(g.sea_level, float(p.sea_level_m));
+  glUniform3f(g.seabed, float(p.settings.seabed_albedo.x), float(p.settings.seabed_albedo.y),
+              float(p.settings.seabed_albedo.z));
+  if (eclipse) {
+    std::array<glm::vec4, kMaxMoons> spheres{};
+    for (size_t i = 0; i < view.moons.size(); ++i)
+      spheres[i] = glm::vec4(glm::vec3(view.moons[i].centre_m), float(view.moons[i].radius_m));
+    glUniform1i(g.moon_count, int(view.moons.size()));
+    glUniform4fv(g.moon_spheres, kMaxMoons, glm::value_ptr(spheres[0]));
+  }
+  glUniform1i(g.terms, int(terms_drawn.load(std::memory_order_relaxed)));
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glBindVertexArray(0);
+}
+
+}  // namespace atmos

@@ -1,0 +1,187 @@
+// The sea's fragment shader (src/planet/ocean.cpp, include/atmos/ocean.hpp),
+// appended after "#version 450 core", AtmospherePass::glsl_library() and
+// physics/water.glsl. Each pixel intersects its view ray with the sea-level
+// sphere, shades the point with the water's physics lit by the
+// atmosphere's functions, and writes radiance / nits_per_unit and the
+// point's reversed-Z depth.
+//
+// The ray and the sphere, in camera-relative float arithmetic: with r_c the
+// camera's distance from the centre, R the sphere's radius, up the camera's
+// zenith and d the ray, the distance t to the sphere solves
+// t² + 2 b t + c = 0, b = r_c (up · d), c = r_c² − R² = (r_c − R)(r_c + R)
+// (computed in double on the CPU: the camera's height above the sea
+// survives at any altitude). The nearer root, t = c / (−b + √(b² − c)),
+// has no cancellation for the descending rays (b < 0) that meet the sphere
+// from above, so the point is exact to float's relative precision at 2 m
+// above the sea as at 100 planet radii.
+//
+// Waves and levels of detail (Bruneton, Neyret & Holzschuch 2010, §4): the
+// sea's height is a sum of sine waves h = Σ a_i sin(k_i · x + φ_i), whose
+// slopes ∇h = Σ a_i cos(k_i · x + φ_i) k_i tilt the normal, and whose
+// slope variance ½ a_i² k_i² (per axis: the squares of k_i's upwind and
+// crosswind components) is part of Cox & Munk 1954's total. A wave is kept
+// in the normal with a weight w_i that goes from 1 to 0 as its phase
+// changes by π/4 to π/2 across the pixel's footprint on the sea (a
+// wavelength over 8 to 4 pixels); the variance it no longer shows,
+// (1 − w_i²) ½ a_i² k_i², widens the slope distribution of the BRDF,
+// whose variance is Cox & Munk's less what the normal shows. The slopes'
+// total variance is Cox & Munk's at every distance, which keeps the mean
+// radiance where waves fade into the BRDF. The footprint is the pixel's
+// angle times the distance, stretched by 1 / μ_v along the view's azimuth.
+// Wave phases are the world's: k_i · (camera + offset) with k_i · camera
+// reduced modulo 2π in double on the CPU.
+//
+// The radiance (docs/water.md): the glint f(v, l) E_sun (N · l) with the
+// microfacet BRDF over the unresolved slopes about the tilted normal N; the
+// sky reflected by those slopes (WATER_SKY_SAMPLE_COUNT sky lookups from
+// the point, or with OCEAN_SKY_MEAN_DIRECTION one lookup in their mean
+// direction times the rough surface's reflectance); and the light leaving
+// the water (Lee et al. 1999) through the flat surface, with the seabed at
+// the bathymetry's depth. E_sun is the sun's irradiance normal to it at the
+// point (transmittance and the planet's shadow), E_sky the sky's on the
+// horizontal; with OCEAN_ECLIPSE the moons' factors dim the sun's part and
+// the sky's (atmos_eclipse), as for the terrain.
+
+layout(location = 0) out vec4 colour;
+
+uniform mat4 clip_from_offset;    // camera-relative m -> clip space
+uniform mat4 offset_from_clip;    // its inverse
+uniform vec2 viewport_size;       // pixels
+uniform vec3 camera_planet;       // m, planet-centred
+uniform vec3 camera_up;           // unit: camera_planet / r_c
+uniform float camera_radius;      // r_c, m
+uniform float camera_height_term; // r_c² − R², m²
+uniform float pixel_angle;        // rad per pixel near the image centre
+uniform vec3 sun_direction;       // unit, planet axes
+uniform float light_scale;        // (sun illuminance / the atmosphere's own) / nits_per_unit
+
+uniform vec3 sea_refractive_index;
+uniform vec3 sea_absorption;
+uniform vec3 sea_backscattering;
+uniform vec3 sea_diffuse_reflectance;
+uniform vec2 sea_slope_variance;  // Cox & Munk's, upwind and crosswind
+
+uniform vec3 wind_upwind;  // unit, tangent at the waves' anchor
+#define OCEAN_MAX_WAVES 32
+uniform int wave_count;
+uniform vec4 wave_vector[OCEAN_MAX_WAVES];  // xyz: k (rad/m, planet axes), w: amplitude (m)
+uniform float wave_phase[OCEAN_MAX_WAVES];  // k · camera + phase − ω t, modulo 2π
+
+uniform samplerCube bathymetry;  // r: the ground's height (m above the datum), g: its least over 3 x 3 texels
+uniform float sea_level;         // m above the datum
+uniform vec3 seabed_albedo;
+
+// Tests' switches (planet/ocean_internal.hpp): 1 the glint, 2 the sky, 4
+// the light from below, 8 the sun's irradiance instead, 16 a uniform sky
+// of radiance 1.
+uniform int terms;
+
+#if defined(OCEAN_ECLIPSE)
+uniform int moon_count;
+uniform vec4 moon_spheres[MOON_CAPACITY];
+#endif
+
+// The factor on the reversed-Z depth that moves the sea towards the camera
+// by 1e-5 of its distance: ahead of the terrain's flat sea, which lies on
+// the same sphere at its vertices (and below it between them), by more
+// than the tiles' float positions differ from it (1e-6 of the distance).
+const float kDepthLead = 1.0 + 1.0e-5;
+
+void main() {
+  vec2 ndc = 2.0 * gl_FragCoord.xy / viewport_size - 1.0;
+  vec4 near_point = offset_from_clip * vec4(ndc, 1.0, 1.0);
+  vec3 d = normalize(near_point.xyz / near_point.w);
+  float b = camera_radius * dot(camera_up, d);
+  float disc = b * b - camera_height_term;
+  if (camera_height_term <= 0.0 || b >= 0.0 || disc < 0.0) discard;
+  float t = camera_height_term / (-b + sqrt(disc));
+  vec3 offset = t * d;
+  vec4 clip = clip_from_offset * vec4(offset, 1.0);
+  float depth = clip.z / clip.w;
+  if (!(clip.w > 0.0) || !(depth <= 1.0)) discard;
+
+  vec3 point = camera_planet + offset;
+  vec3 n = normalize(point);
+  vec2 ground = textureLod(bathymetry, n, 0.0).rg;
+  if (ground.g > sea_level + 1.0) discard;  // land all around: the terrain is in front
+  float water_depth = max(sea_level - ground.r, 0.0);
+
+  vec3 view = -d;
+  vec3 upwind = wind_upwind - dot(wind_upwind, n) * n;
+  float upwind_length = length(upwind);
+  upwind = upwind_length > 1e-3 ? upwind / upwind_length : normalize(cross(n, abs(n.x) < 0.9 ? vec3(1, 0, 0) : vec3(0, 1, 0)));
+  vec3 crosswind = cross(n, upwind);
+  float mu_v = max(dot(view, n), 1e-4);
+  vec3 along = view - dot(view, n) * n;
+  along = length(along) > 1e-6 ? normalize(along) : upwind;
+  vec3 across = cross(n, along);
+
+  // The resolved waves' slopes and variance.
+  float footprint = t * pixel_angle;
+  vec2 slope = vec2(0.0);
+  vec2 resolved = vec2(0.0);
+  for (int i = 0; i < wave_count; ++i) {
+    vec3 k = wave_vector[i].xyz;
+    float a = wave_vector[i].w;
+    vec3 kt = k - dot(k, n) * n;
+    float ka = dot(kt, along) / mu_v, kb = dot(kt, across);
+    float phase_change = footprint * sqrt(ka * ka + kb * kb);
+    float w = 1.0 - smoothstep(0.25 * PI, 0.5 * PI, phase_change);
+    if (w <= 0.0) continue;
+    vec2 k_wind = vec2(dot(kt, upwind), dot(kt, crosswind));
+    slope += (w * a * cos(wave_phase[i] + dot(k, offset))) * k_wind;
+    resolved += (w * w * 0.5 * a * a) * k_wind * k_wind;
+  }
+  WaterParams water;
+  water.refractive_index = sea_refractive_index;
+  water.absorption = sea_absorption;
+  water.backscattering = sea_backscattering;
+  water.diffuse_reflectance = sea_diffuse_reflectance;
+  water.slope_variance = max(sea_slope_variance - resolved, vec2(1e-5));
+  // The resolved surface's normal, kept facing the camera at no less than
+  // half the mean surface's cosine: the back sides of waves seen at grazing
+  // angles, and the facets that would mirror the view into the sea (whose
+  // light, that of other waves, the BRDF drops), are not drawn black.
+  vec3 normal = normalize(n - slope.x * upwind - slope.y * crosswind);
+  float facing = dot(view, normal), least_facing = 0.5 * mu_v;
+  if (facing < least_facing) normal = normalize(normal + (least_facing - facing) * view);
+  vec3 wave_upwind = normalize(upwind - dot(upwind, normal) * normal);
+
+  // The light at the point.
+  vec3 sun = sun_direction;
+  vec3 sky_irradiance, unused;
+  atmos_sun_and_sky_irradiance(point, n, sun, sky_irradiance);
+  vec3 sun_irradiance = atmos_sun_and_sky_irradiance(point, sun, sun, unused);
+  float sun_factor = 1.0, sky_factor = 1.0;
+#if defined(OCEAN_ECLIPSE)
+  atmos_eclipse(point, sun, moon_count, moon_spheres, sun_factor, sky_factor);
+#endif
+  sun_irradiance *= sun_factor;
+  sky_irradiance *= sky_factor;
+
+  vec3 glint = water_glint_brdf(water, normal, wave_upwind, view, sun) * sun_irradiance * max(dot(sun, normal), 0.0);
+  vec3 sky = vec3(0.0);
+  vec3 transmittance;
+#if defined(OCEAN_SKY_MEAN_DIRECTION)
+  vec3 mean_direction;
+  vec3 reflectance = water_sky_reflectance(water, normal, wave_upwind, view, mean_direction);
+  sky = reflectance * ((terms & 16) != 0 ? vec3(1.0) : atmos_sky_radiance(point, mean_direction, sun, transmittance));
+#else
+  WaterSkyQuadrature q = water_sky_quadrature(water, normal, wave_upwind, view);
+  for (int k = 0; k < WATER_SKY_SAMPLE_COUNT; ++k) {
+    vec3 direction;
+    vec3 weight = water_sky_sample(q, k, direction);
+    if (weight.x + weight.y + weight.z > 0.0)
+      sky += weight * ((terms & 16) != 0 ? vec3(1.0) : atmos_sky_radiance(point, direction, sun, transmittance));
+  }
+#endif
+  sky *= sky_factor;
+  vec3 below = water_leaving_radiance(water, n, view, sun, sun_irradiance, sky_irradiance, water_depth, seabed_albedo);
+
+  vec3 radiance = ((terms & 1) != 0 ? glint : vec3(0.0)) + ((terms & 2) != 0 ? sky : vec3(0.0)) +
+                  ((terms & 4) != 0 ? below : vec3(0.0));
+  if ((terms & 8) != 0) radiance = sun_irradiance;
+  if ((terms & 16) != 0 && (terms & 8) == 0) radiance = sky / light_scale;
+  colour = vec4(max(radiance * light_scale, vec3(0.0)), 1.0);
+  gl_FragDepth = min(depth * kDepthLead, 1.0);
+}

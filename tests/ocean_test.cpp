@@ -1,0 +1,466 @@
+// The sea on the globe (include/atmos/ocean.hpp) on the GPU: the glint seen
+// from orbit against its CPU twin (physics/water_cpp.hpp) pixel by pixel,
+// the reflected sky under a uniform sky against the rough surface's
+// reflectance, the mean radiance through the waves' levels of detail
+// during a dolly, a shallow seabed showing through, the terrain hiding the
+// sea where it rises above it, no NaN, and bad input.
+#include <gtest/gtest.h>
+
+#include <epoxy/gl.h>
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/mat4x4.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "atmos/globe.hpp"
+#include "atmos/ocean.hpp"
+#include "atmos/plugin.hpp"
+#include "globe_rays.hpp"
+#include "globe_target.hpp"
+#include "gpu_fixture.hpp"
+#include "atmos/water.hpp"
+#include "physics/water_cpp.hpp"
+#include "planet/ocean_internal.hpp"
+
+namespace {
+
+using atmos_test::GlobeTarget;
+using atmos_test::pixel_ray;
+namespace planet = atmos::planet;
+namespace physics = atmos::physics;
+
+atmos::PlanetSurface flat_sea(double sea_level_m) {
+  atmos::PlanetSurface s;
+  s.style = atmos::SurfaceStyle::flat;
+  s.sea_level_m = sea_level_m;
+  return s;
+}
+
+// Restores every term after a test that drew some of them.
+struct TermsGuard {
+  explicit TermsGuard(unsigned mask) { planet::set_ocean_terms(mask); }
+  ~TermsGuard() { planet::set_ocean_terms(planet::kOceanAllTerms); }
+  void set(unsigned mask) const { planet::set_ocean_terms(mask); }
+};
+
+class OceanGpu : public atmos_test::EarthGpuTest {
+ protected:
+  static void SetUpTestSuite() {
+    EarthGpuTest::SetUpTestSuite();
+    if (context_ == nullptr) return;
+    pass_ = std::make_unique<atmos::AtmospherePass>(*earth_, *tables_, atmos::PlanetFrame{});
+  }
+  static void TearDownTestSuite() {
+    pass_.reset();
+    EarthGpuTest::TearDownTestSuite();
+  }
+
+  // A camera at `camera` looking along `forward`, 60 degree field of view by default.
+  static atmos::GlobeView view_from(const glm::dvec3& camera, const glm::dvec3& forward, const glm::dvec3& up_hint,
+                                    int width, int height, const glm::dvec3& sun, double fov_y_deg = 60.0) {
+    atmos::GlobeView v;
+    v.view = glm::lookAt(camera, camera + forward, up_hint);
+    v.projection = atmos::reversed_z_projection(glm::radians(fov_y_deg), double(width) / height, 0.05);
+    v.width = width;
+    v.height = height;
+    v.sun_direction = sun;
+    v.nits_per_unit = 1000.0;
+    return v;
+  }
+
+  static std::vector<float> draw(atmos::Ocean& ocean, const atmos::GlobeView& view, const GlobeTarget& target,
+                                 double time_s = 0.0) {
+    target.clear();
+    ocean.draw(view, time_s);
+    return target.read_colour();
+  }
+
+  // The water's parameters as the ocean makes them for the Earth tables
+  // (water_optics), for the CPU twins.
+  static physics::WaterParams water_params(const atmos::OceanSettings& s) {
+    const atmos::WaterOptics o = atmos::water_optics(s.water, *earth_);
+    physics::WaterParams p{};
+    p.refractive_index = physics::vec3(o.refractive_index);
+    p.absorption = physics::vec3(o.absorption_per_m);
+    p.backscattering = physics::vec3(o.backscattering_per_m);
+    p.diffuse_reflectance = physics::vec3(o.diffuse_reflectance);
+    p.slope_variance = physics::vec2(o.slope_variance);
+    return p;
+  }
+
+  // The wind's upwind axis at `point` for waves anchored below `camera`
+  // (ocean.cpp's frame: azimuth clockwise from north).
+  static glm::dvec3 upwind_at(const glm::dvec3& camera, const glm::dvec3& normal, double azimuth_deg) {
+    const glm::dvec3 nadir = glm::normalize(camera);
+    glm::dvec3 east = glm::cross(glm::dvec3(0, 0, 1), nadir);
+    if (glm::length(east) < 1e-6) east = glm::cross(glm::dvec3(0, 1, 0), nadir);  // at the poles
+    east = glm::normalize(east);
+    const glm::dvec3 north = glm::cross(nadir, east);
+    const double a = glm::radians(azimuth_deg);
+    const glm::dvec3 w = std::cos(a) * north + std::sin(a) * east;
+    return glm::normalize(w - glm::dot(w, normal) * normal);
+  }
+
+  // The point where pixel (x, y)'s ray meets the sphere of `radius`, if it does.
+  static std::optional<glm::dvec3> sea_point(const atmos::GlobeView& view, const glm::dvec3& camera, double radius,
+                                             int x, int y) {
+    const glm::dvec3 d = pixel_ray(view, x, y);
+    const double b = glm::dot(camera, d), c = glm::dot(camera, camera) - radius * radius;
+    if (b >= 0.0 || b * b - c < 0.0) return std::nullopt;
+    return camera + (-b - std::sqrt(b * b - c)) * d;
+  }
+
+  static void expect_finite(const std::vector<float>& colour, const char* what) {
+    for (size_t i = 0; i < colour.size(); ++i) ASSERT_TRUE(std::isfinite(colour[i])) << what << " texel " << i / 4;
+  }
+
+  static inline std::unique_ptr<atmos::AtmospherePass> pass_;
+};
+
+// From 2000 km, the glint of every sea pixel against the CPU twin of the
+// same BRDF (water_glint_brdf) at the pixel's sphere point, times the sun's
+// irradiance the shader used there (drawn with kOceanSunIrradiance) and the
+// sun's cosine; the waves are all far below the pixels (36 km here), so the
+// BRDF has Cox & Munk's whole variance about the sphere's normal.
+TEST_F(OceanGpu, GlintFromOrbitMatchesTheCpuTwin) {
+  atmos::OceanSettings settings;
+  settings.water.wind_speed_m_s = 6.0;
+  settings.wind_azimuth_deg = 30.0;
+  settings.bathymetry_texels = 64;
+  const double sea_level = 100.0;
+  atmos::Ocean ocean(*earth_, flat_sea(sea_level), *pass_, settings);
+  const int width = 64, height = 64;
+  GlobeTarget target(width, height);
+  const double radius = earth_->bottom_radius_m + sea_level;
+  const glm::dvec3 up = glm::normalize(glm::dvec3(0.3, -1.0, 0.4));
+  const glm::dvec3 camera = up * (earth_->bottom_radius_m + 2000e3);
+  const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), up));
+  const glm::dvec3 sun = glm::normalize(up + 0.25 * east + 0.1 * glm::cross(up, east));
+  const atmos::GlobeView view = view_from(camera, -up, glm::cross(up, east), width, height, sun);
+  const TermsGuard guard(planet::kOceanGlint);
+  const std::vector<float> glint = draw(ocean, view, target);
+  guard.set(planet::kOceanSunIrradiance);
+  const std::vector<float> irradiance = draw(ocean, view, target);
+  expect_finite(glint, "glint");
+  const physics::WaterParams water = water_params(settings);
+  float peak = 0.0f;
+  for (size_t i = 0; i < glint.size(); i += 4) peak = std::max(peak, glint[i + 1]);
+  ASSERT_GT(peak, 0.0f);
+  int compared = 0;
+  double worst = 0.0;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const std::optional<glm::dvec3> p = sea_point(view, camera, radius, x, y);
+      const float* g = &glint[size_t(4 * (y * width + x))];
+      if (!p) {
+        EXPECT_EQ(g[0], -1.0f) << "drawn off the sphere at " << x << "," << y;
+        continue;
+      }
+      ASSERT_NE(g[0], -1.0f) << "not drawn on the sphere at " << x << "," << y;
+      const glm::dvec3 n = glm::normalize(*p);
+      const glm::dvec3 v = glm::normalize(camera - *p);
+      const physics::vec3 brdf = physics::water_glint_brdf(water, physics::vec3(n), physics::vec3(upwind_at(camera, n, 30.0)),
+                                                           physics::vec3(v), physics::vec3(sun));
+      const double mu_s = std::max(glm::dot(sun, n), 0.0);
+      for (int c = 0; c < 3; ++c) {
+        const double expected = double(brdf[c]) * irradiance[size_t(4 * (y * width + x) + c)] * mu_s;
+        if (expected < 0.01 * peak) continue;
+        ++compared;
+        worst = std::max(worst, std::abs(g[c] - expected) / expected);
+      }
+    }
+  EXPECT_GT(compared, 300);
+  EXPECT_LT(worst, 3e-3) << "over " << compared << " channels";
+  std::printf("glint vs CPU twin: %d channels, worst relative difference %.2e, peak %.3g\n", compared, worst, peak);
+}
+
+// Under a uniform sky of radiance 1 the reflected sky is the rough surface's
+// directional-hemispherical reflectance: from orbit, each pixel's against
+// the CPU twin (water_sky_reflectance), and between 0.015 and 1 (the flat
+// surface's 0.020 at normal incidence, less the rough surface's masking).
+TEST_F(OceanGpu, ReflectedUniformSkyIsTheSurfacesReflectance) {
+  atmos::OceanSettings settings;
+  settings.water.wind_speed_m_s = 9.0;
+  settings.bathymetry_texels = 64;
+  atmos::Ocean ocean(*earth_, flat_sea(0.0), *pass_, settings);
+  const int width = 48, height = 48;
+  GlobeTarget target(width, height);
+  const double radius = earth_->bottom_radius_m;
+  const glm::dvec3 up(0.0, 0.0, 1.0);
+  const glm::dvec3 camera = up * (radius + 800e3);
+  // Looking 50 degrees off the nadir: view angles at the sea up to grazing.
+  const glm::dvec3 forward = glm::normalize(-up + 1.2 * glm::dvec3(1, 0, 0));
+  const atmos::GlobeView view = view_from(camera, forward, up, width, height, glm::normalize(glm::dvec3(-1, 0.3, 1)));
+  const TermsGuard guard(planet::kOceanSky | planet::kOceanUniformSky);
+  const std::vector<float> sky = draw(ocean, view, target);
+  expect_finite(sky, "sky");
+  const physics::WaterParams water = water_params(settings);
+  int compared = 0;
+  double worst = 0.0, sum = 0.0;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const std::optional<glm::dvec3> p = sea_point(view, camera, radius, x, y);
+      if (!p) continue;
+      const glm::dvec3 n = glm::normalize(*p);
+      const glm::dvec3 v = glm::normalize(camera - *p);
+      physics::vec3 mean_direction;
+      const physics::vec3 expected = physics::water_sky_reflectance(
+          water, physics::vec3(n), physics::vec3(upwind_at(camera, n, settings.wind_azimuth_deg)), physics::vec3(v),
+          mean_direction);
+      const double mu_v = glm::dot(v, n);
+      if (mu_v < 0.05) continue;  // the last pixels before the limb: float's cosines
+      for (int c = 0; c < 3; ++c) {
+        const double got = sky[size_t(4 * (y * width + x) + c)];
+        ASSERT_TRUE(std::isfinite(expected[c]));
+        ++compared;
+        sum += got;
+        worst = std::max(worst, std::abs(got - expected[c]) / expected[c]);
+        EXPECT_GT(got, 0.015);
+        EXPECT_LE(got, 1.0);
+      }
+    }
+  EXPECT_GT(compared, 600);
+  EXPECT_LT(worst, 2e-3);
+  std::printf("uniform sky: %d channels, worst relative difference %.2e, mean reflectance %.4f\n", compared, worst,
+              sum / compared);
+}
+
+// A dolly down towards the sea at 51 degrees below the horizon, from 20 km
+// down, in steps of 1.25x: the waves move from the BRDF into the normals as
+// their wavelengths grow past 4-8 pixels (at 48 x 32 pixels, from ~700 m
+// for the longest waves down to centimetres). Each step's mean radiance of
+// the sea pixels is over six instants 1.5 s apart: a view of a few metres
+// holds a fraction of the longest waves (40-70 m at 7 m/s), whose tilt
+// there moves the mean by a few per cent (the sea's own variation, not the
+// levels').
+//  - A 60 degree view to 5 m, the sun 40 degrees up to the side: the mean
+//    changes by at most 1 % from one step to the next.
+//  - A 15 degree view, the sun where the view's centre mirrors it: the
+//    glint's core fills the view and its brightness follows the slopes'
+//    variance; down to 20 m every step's mean stays within 3 % of the
+//    farthest one's, where all waves are the BRDF's (the resolved waves'
+//    variance counted twice, in the normals and in the BRDF as well, dims
+//    it by 7 % at 20 m).
+TEST_F(OceanGpu, DollyKeepsTheMeanRadianceAcrossTheWavesLevels) {
+  atmos::OceanSettings settings;
+  settings.water.wind_speed_m_s = 7.0;
+  settings.bathymetry_texels = 64;
+  atmos::Ocean ocean(*earth_, flat_sea(0.0), *pass_, settings);
+  const int width = 48, height = 32;
+  GlobeTarget target(width, height);
+  const double radius = earth_->bottom_radius_m;
+  const glm::dvec3 up(0.0, 0.0, 1.0), east(1, 0, 0), north(0, 1, 0);
+  const glm::dvec3 forward = glm::normalize(-up + 0.8 * east);
+  const auto dolly = [&](double fov_deg, const glm::dvec3& sun, double lowest_m) {
+    std::vector<std::pair<double, double>> means;  // altitude, mean luminance
+    for (double altitude = 20e3; altitude >= lowest_m; altitude /= 1.25) {
+      const atmos::GlobeView view = view_from(up * (radius + altitude), forward, up, width, height, sun, fov_deg);
+      double sum = 0.0;
+      int count = 0;
+      for (double time_s : {0.0, 1.5, 3.0, 4.5, 6.0, 7.5}) {
+        const std::vector<float> colour = draw(ocean, view, target, time_s);
+        expect_finite(colour, "dolly");
+        for (size_t i = 0; i < colour.size(); i += 4) {
+          if (colour[i] == -1.0f) continue;
+          sum += 0.2126 * colour[i] + 0.7152 * colour[i + 1] + 0.0722 * colour[i + 2];
+          ++count;
+        }
+      }
+      EXPECT_EQ(count, 6 * width * height) << "the sea fills the view at " << altitude << " m";
+      means.emplace_back(altitude, sum / count);
+      if (std::getenv("OCEAN_TEST_VERBOSE")) std::printf("  %.4g m: %.6g\n", altitude, sum / count);
+    }
+    return means;
+  };
+  const auto side = dolly(60.0, glm::normalize(up + 1.2 * north + 0.5 * east), 5.0);
+  double worst_step = 0.0, step_altitude = 0.0;
+  for (size_t i = 1; i < side.size(); ++i) {
+    const double change = std::abs(side[i].second - side[i - 1].second) / side[i - 1].second;
+    if (change > worst_step) worst_step = change, step_altitude = side[i].first;
+  }
+  EXPECT_LT(worst_step, 0.01) << "at " << step_altitude << " m";
+  const auto glint = dolly(15.0, glm::normalize(up + 0.8 * east + 0.15 * north), 20.0);
+  double worst_drift = 0.0, drift_altitude = 0.0;
+  for (const auto& [altitude, mean] : glint) {
+    const double drift = std::abs(mean - glint.front().second) / glint.front().second;
+    if (drift > worst_drift) worst_drift = drift, drift_altitude = altitude;
+  }
+  EXPECT_LT(worst_drift, 0.03) << "at " << drift_altitude << " m";
+  std::printf("dolly: largest step change %.3f %% at %.3g m (%zu steps); glint's core within %.2f %% (at %.3g m)\n",
+              100.0 * worst_step, step_altitude, side.size(), 100.0 * worst_drift, drift_altitude);
+}
+
+// The same view from 500 m over a sea 3 m deep and one 3 km deep on a flat
+// planet: the sandy seabed shows through the shallow water, brighter in the
+// green than the deep water, which is bluer.
+TEST_F(OceanGpu, ShallowSeabedShowsThrough) {
+  atmos::OceanSettings settings;
+  settings.bathymetry_texels = 32;
+  atmos::Ocean shallow(*earth_, flat_sea(3.0), *pass_, settings), deep(*earth_, flat_sea(3000.0), *pass_, settings);
+  EXPECT_NEAR(shallow.depth_m(glm::dvec3(0, 0, 1)), 3.0, 1e-9);
+  EXPECT_NEAR(deep.depth_m(glm::dvec3(0, 1, 0)), 3000.0, 1e-9);
+  const int width = 32, height = 32;
+  GlobeTarget target(width, height);
+  const glm::dvec3 up(0.0, 1.0, 0.0);
+  const glm::dvec3 sun = glm::normalize(up + 0.6 * glm::dvec3(0, 0, 1));
+  const auto mean_of = [&](atmos::Ocean& ocean, double sea_level) {
+    const glm::dvec3 camera = up * (earth_->bottom_radius_m + sea_level + 500.0);
+    const std::vector<float> colour =
+        draw(ocean, view_from(camera, glm::normalize(-up + 0.3 * glm::dvec3(1, 0, 0)), glm::dvec3(0, 0, 1), width,
+                              height, sun),
+             target);
+    glm::dvec3 sum(0.0);
+    for (size_t i = 0; i < colour.size(); i += 4) {
+      EXPECT_NE(colour[i], -1.0f);
+      sum += glm::dvec3(colour[i], colour[i + 1], colour[i + 2]);
+    }
+    return sum / double(width * height);
+  };
+  const glm::dvec3 a = mean_of(shallow, 3.0), b = mean_of(deep, 3000.0);
+  EXPECT_GT(a.y, 2.0 * b.y) << "shallow " << a.y << " deep " << b.y;
+  EXPECT_GT(b.z / b.y, a.z / a.y);
+  std::printf("green: shallow %.4g, deep %.4g (x %.2f)\n", a.y, b.y, a.y / b.y);
+}
+
+// Earth from 3000 km over its oceans, the terrain drawn first: the sea
+// covers the terrain's flat sea (whose chords sag up to a few metres below
+// the sea's sphere from this far), and every pixel whose terrain point lies
+// more than 30 m above sea level keeps the terrain's colour.
+TEST_F(OceanGpu, TerrainAboveTheSeaHidesIt) {
+  atmos::PlanetSurface earth_surface;
+  earth_surface.style = atmos::SurfaceStyle::earth;
+  earth_surface.seed = 1;
+  atmos::GlobeSettings globe_settings;
+  globe_settings.complete_every_frame = true;
+  atmos::Globe globe(*earth_, earth_surface, *pass_, globe_settings);
+  atmos::OceanSettings settings;
+  settings.bathymetry_texels = 256;
+  atmos::Ocean ocean(*earth_, earth_surface, *pass_, settings);
+  const int width = 96, height = 96;
+  GlobeTarget target(width, height);
+  const glm::dvec3 up = glm::normalize(glm::dvec3(1.0, 0.2, 0.3));
+  const glm::dvec3 camera = up * (earth_->bottom_radius_m + 3000e3);
+  const atmos::GlobeView view = view_from(camera, -up, glm::dvec3(0, 0, 1), width, height, up);
+  target.clear();
+  globe.draw(view);
+  const std::vector<float> terrain = target.read_colour();
+  const std::vector<float> depth = target.read_depth();
+  ocean.draw(view);
+  const std::vector<float> both = target.read_colour();
+  expect_finite(both, "terrain and sea");
+  int land = 0, sea = 0, land_kept = 0;
+  const glm::dvec3 forward = -up;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const size_t i = size_t(y * width + x);
+      if (depth[i] <= 0.0f) continue;
+      const glm::dvec3 d = pixel_ray(view, x, y);
+      const glm::dvec3 point = camera + d * (0.05 / depth[i] / glm::dot(d, forward));
+      const double height_m = glm::length(point) - earth_->bottom_radius_m;
+      const bool changed = both[4 * i] != terrain[4 * i] || both[4 * i + 1] != terrain[4 * i + 1];
+      if (height_m > 30.0) {
+        ++land;
+        if (!changed) ++land_kept;
+      }
+      if (changed) ++sea;
+    }
+  EXPECT_GT(land, 200);
+  EXPECT_GT(sea, 1000);
+  EXPECT_EQ(land_kept, land);
+  std::printf("terrain and sea: %d land pixels kept of %d, %d sea pixels drawn\n", land_kept, land, sea);
+}
+
+// From 2 m above the sea at sunset and from orbit over the night side: finite,
+// non-negative radiance everywhere.
+TEST_F(OceanGpu, NoNanFromTheDeckAtSunsetNorOnTheNightSide) {
+  atmos::OceanSettings settings;
+  settings.bathymetry_texels = 32;
+  atmos::Ocean ocean(*earth_, flat_sea(0.0), *pass_, settings);
+  const int width = 64, height = 36;
+  GlobeTarget target(width, height);
+  const glm::dvec3 up(0, 0, 1);
+  const glm::dvec3 camera = up * (earth_->bottom_radius_m + 2.0);
+  const glm::dvec3 sun = glm::normalize(glm::dvec3(1, 0, 0.03));
+  for (const glm::dvec3& forward : {glm::normalize(glm::dvec3(1, 0, -0.05)), glm::normalize(glm::dvec3(0, 1, -0.2))}) {
+    const std::vector<float> colour = draw(ocean, view_from(camera, forward, up, width, height, sun), target, 12.5);
+    int drawn = 0;
+    for (size_t i = 0; i < colour.size(); i += 4) {
+      if (colour[i] == -1.0f) continue;
+      ++drawn;
+      for (int c = 0; c < 3; ++c) {
+        ASSERT_TRUE(std::isfinite(colour[i + size_t(c)]));
+        ASSERT_GE(colour[i + size_t(c)], 0.0f);
+      }
+    }
+    EXPECT_GT(drawn, width * height / 3);
+  }
+  const glm::dvec3 orbit = glm::dvec3(0, 0, earth_->bottom_radius_m + 1000e3);
+  const std::vector<float> night =
+      draw(ocean, view_from(orbit, -up, glm::dvec3(0, 1, 0), width, height, glm::dvec3(0, 0, -1)), target);
+  for (size_t i = 0; i < night.size(); i += 4) {
+    if (night[i] == -1.0f) continue;
+    for (int c = 0; c < 3; ++c) {
+      ASSERT_TRUE(std::isfinite(night[i + size_t(c)]));
+      ASSERT_LT(night[i + size_t(c)], 1e-4f);
+    }
+  }
+}
+
+TEST_F(OceanGpu, RejectsBadInput) {
+  const auto message = [&](const atmos::PlanetSurface& surface, const atmos::OceanSettings& s) {
+    try {
+      atmos::Ocean ocean(*earth_, surface, *pass_, s);
+    } catch (const atmos::Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  atmos::OceanSettings s;
+  s.water.wind_speed_m_s = -1.0;
+  std::string m = message(flat_sea(0.0), s);
+  EXPECT_NE(m.find("wind"), std::string::npos) << m;
+  EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+  s = {};
+  s.water.wind_speed_m_s = std::nan("");
+  EXPECT_NE(message(flat_sea(0.0), s).find("wind"), std::string::npos);
+  s = {};
+  m = message(flat_sea(200e3), s);
+  EXPECT_NE(m.find("sea level"), std::string::npos) << m;
+  EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+  EXPECT_NE(message(flat_sea(-7000e3), s).find("sea level"), std::string::npos);
+  s.water.chlorophyll_mg_m3 = 30.0;
+  EXPECT_NE(message(flat_sea(0.0), s).find("chlorophyll"), std::string::npos);
+  s = {};
+  s.seabed_albedo = glm::dvec3(0.5, 1.5, 0.5);
+  EXPECT_NE(message(flat_sea(0.0), s).find("albedo"), std::string::npos);
+  s = {};
+  s.bathymetry_texels = 4;
+  EXPECT_NE(message(flat_sea(0.0), s).find("bathymetry_texels"), std::string::npos);
+
+  s = {};
+  s.bathymetry_texels = 16;
+  atmos::Ocean ocean(*earth_, flat_sea(0.0), *pass_, s);
+  atmos::GlobeView view = view_from(glm::dvec3(0, 0, 7e6), glm::dvec3(0, 0, -1), glm::dvec3(0, 1, 0), 8, 8,
+                                    glm::dvec3(0, 0, 1));
+  EXPECT_THROW(ocean.draw(view, std::nan("")), atmos::Error);
+  view.sun_direction = glm::dvec3(0.0);
+  EXPECT_THROW(ocean.draw(view), atmos::Error);
+  // A surface without a sea: an ocean that draws nothing.
+  atmos::PlanetSurface mars;
+  mars.style = atmos::SurfaceStyle::mars;
+  atmos::Ocean dry(*earth_, mars, *pass_, s);
+  EXPECT_FALSE(dry.has_sea());
+  EXPECT_TRUE(std::isnan(dry.sea_level_m()));
+}
+
+}  // namespace
