@@ -3,7 +3,7 @@
 // the reflected sky under a uniform sky against the rough surface's
 // reflectance, the mean radiance through the waves' levels of detail
 // during a dolly, a shallow seabed showing through, the terrain hiding the
-// sea where it rises above it, no NaN, and bad input.
+// sea where it rises above it, a moon's eclipse, no NaN, and bad input.
 #include <gtest/gtest.h>
 
 #include <epoxy/gl.h>
@@ -29,6 +29,9 @@
 #include "globe_target.hpp"
 #include "gpu_fixture.hpp"
 #include "atmos/water.hpp"
+#include "physics/eclipse_cpp.hpp"
+#include "physics/moons.hpp"
+#include "physics/parameters.hpp"
 #include "physics/water_cpp.hpp"
 #include "planet/ocean_internal.hpp"
 
@@ -414,6 +417,50 @@ TEST_F(OceanGpu, NoNanFromTheDeckAtSunsetNorOnTheNightSide) {
       ASSERT_LT(night[i + size_t(c)], 1e-4f);
     }
   }
+}
+
+// A moon that leaves an annulus of the sun (0.8 of its radius) over the sea
+// point below the camera: the sun's irradiance the shader uses there (drawn
+// with kOceanSunIrradiance) is the uneclipsed one times the CPU twin of the
+// eclipse's sun factor (sunlight_visible_fraction), and the sea's radiance
+// drops.
+TEST_F(OceanGpu, MoonOnTheSunDimsTheSea) {
+  atmos::OceanSettings settings;
+  settings.bathymetry_texels = 16;
+  atmos::Ocean ocean(*earth_, flat_sea(0.0), *pass_, settings);
+  const glm::dvec3 up = glm::normalize(glm::dvec3(0.3, -0.5, 0.8));
+  const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), up));
+  const glm::dvec3 north = glm::cross(up, east);
+  const glm::dvec3 sea = up * earth_->bottom_radius_m;
+  // 33 x 33: the centre pixel's ray is the view axis, straight down to `sea`.
+  const int size = 33, centre = 16;
+  GlobeTarget target(size, size);
+  const glm::dvec3 sun = glm::normalize(up * std::sin(glm::radians(60.0)) + east * std::cos(glm::radians(60.0)));
+  atmos::GlobeView view = view_from(sea + up * 2000.0, -up, north, size, size, sun);
+  const double a = earth_->sun_angular_radius_rad;
+  const atmos::Moon moon = atmos::moon_in_sky(sea, sun, 0.8 * a);
+  const TermsGuard guard(planet::kOceanSunIrradiance);
+  const std::vector<float> day = draw(ocean, view, target);
+  view.moons = {moon};
+  const std::vector<float> eclipse = draw(ocean, view, target);
+  guard.set(planet::kOceanAllTerms);
+  const std::vector<float> eclipse_radiance = draw(ocean, view, target);
+  view.moons.clear();
+  const std::vector<float> day_radiance = draw(ocean, view, target);
+  const physics::AtmosphereParams params = physics::make_render_params(*earth_, tables_->sizes);
+  const physics::Moons moons = physics::make_moons(params, {moon});
+  const double sun_factor = physics::sunlight_visible_fraction(moons, float(a), physics::vec3(sea), physics::vec3(sun));
+  EXPECT_NEAR(sun_factor, 0.288, 0.01);
+  for (int c = 0; c < 3; ++c) {
+    const size_t i = size_t(4 * (centre * size + centre) + c);
+    EXPECT_NEAR(eclipse[i], day[i] * sun_factor, 2e-3 * day[i]) << "channel " << c;
+    EXPECT_TRUE(std::isfinite(eclipse_radiance[i]));
+    EXPECT_LT(eclipse_radiance[i], 0.6 * day_radiance[i]) << "channel " << c;
+  }
+  std::printf("eclipse on the sea: sun factor %.4f; green %.4g of %.4g (day), radiance %.4g of %.4g\n", sun_factor,
+              double(eclipse[size_t(4 * (centre * size + centre) + 1)]), double(day[size_t(4 * (centre * size + centre) + 1)]),
+              double(eclipse_radiance[size_t(4 * (centre * size + centre) + 1)]),
+              double(day_radiance[size_t(4 * (centre * size + centre) + 1)]));
 }
 
 TEST_F(OceanGpu, RejectsBadInput) {
