@@ -87,6 +87,19 @@ uniform vec4 moon_spheres[MOON_CAPACITY];
 // than the tiles' float positions differ from it (1e-6 of the distance).
 const float kDepthLead = 1.0 + 1.0e-5;
 
+// The sky's radiance seen from the sea point `point` (zenith n) in
+// `direction`, lifted to the horizon when it points below it: directions
+// mirrored by facets tilted by the resolved waves, and the mean direction
+// at grazing views (rounded in float), may dip below the horizon, where
+// the tables' ray meets the ground and returns only the air in front of
+// it. The sea there would mirror other waves; the horizon's sky stands in.
+vec3 sky_seen_from_sea(vec3 point, vec3 n, vec3 direction, vec3 sun) {
+  float below = dot(direction, n);
+  if (below < 1e-4) direction = normalize(direction + (1e-4 - below) * n);
+  vec3 transmittance;
+  return atmos_sky_radiance(point, direction, sun, transmittance);
+}
+
 void main() {
   vec2 ndc = 2.0 * gl_FragCoord.xy / viewport_size - 1.0;
   vec4 near_point = offset_from_clip * vec4(ndc, 1.0, 1.0);
@@ -161,18 +174,17 @@ void main() {
 
   vec3 glint = water_glint_brdf(water, normal, wave_upwind, view, sun) * sun_irradiance * max(dot(sun, normal), 0.0);
   vec3 sky = vec3(0.0);
-  vec3 transmittance;
 #if defined(OCEAN_SKY_MEAN_DIRECTION)
   vec3 mean_direction;
   vec3 reflectance = water_sky_reflectance(water, normal, wave_upwind, view, mean_direction);
-  sky = reflectance * ((terms & 16) != 0 ? vec3(1.0) : atmos_sky_radiance(point, mean_direction, sun, transmittance));
+  sky = reflectance * ((terms & 16) != 0 ? vec3(1.0) : sky_seen_from_sea(point, n, mean_direction, sun));
 #else
   WaterSkyQuadrature q = water_sky_quadrature(water, normal, wave_upwind, view);
   for (int k = 0; k < WATER_SKY_SAMPLE_COUNT; ++k) {
     vec3 direction;
     vec3 weight = water_sky_sample(q, k, direction);
     if (weight.x + weight.y + weight.z > 0.0)
-      sky += weight * ((terms & 16) != 0 ? vec3(1.0) : atmos_sky_radiance(point, direction, sun, transmittance));
+      sky += weight * ((terms & 16) != 0 ? vec3(1.0) : sky_seen_from_sea(point, n, direction, sun));
   }
 #endif
   sky *= sky_factor;
