@@ -114,7 +114,8 @@ struct Wave {
 // α ω⁻¹ e^{−β (ω₀/ω)⁴} falls off slowly, so the waves down to 0.1 m carry
 // about α ln(ω_max / ω_p): 0.023 at 7 m/s, of Cox & Munk's 0.038; the
 // capillary waves below 0.1 m are the BRDF's.
-// Directions: the cos² spreading about the wind (Longuet-Higgins et al.
+// The waves are in increasing frequency, hence wavenumber (the shader stops
+// at the first one a pixel filters out). Directions: the cos² spreading about the wind (Longuet-Higgins et al.
 // 1963's cos^2s with s = 1), each band's angle from the spreading's
 // inverse distribution at a golden-ratio sequence, on alternate sides.
 std::vector<Wave> make_waves(double wind_speed, glm::dvec2 budget) {

@@ -139,6 +139,12 @@ void main() {
     vec3 kt = k - dot(k, n) * n;
     float ka = dot(kt, along) / mu_v, kb = dot(kt, across);
     float phase_change = footprint * sqrt(ka * ka + kb * kb);
+    // The waves come in increasing wavenumber, and the phase change is at
+    // least the footprint times |k_t|: once that filters a wave out, it
+    // filters out the shorter ones (|k_t| = |k| to 1e-4 within the 0.5
+    // degrees of the anchor; farther, a shorter wave left out is counted in
+    // the BRDF, which keeps the total variance).
+    if (footprint * length(kt) >= 0.5 * PI) break;
     float w = 1.0 - smoothstep(0.25 * PI, 0.5 * PI, phase_change);
     if (w <= 0.0) continue;
     vec2 k_wind = vec2(dot(kt, upwind), dot(kt, crosswind));
