@@ -81,11 +81,17 @@ uniform int moon_count;
 uniform vec4 moon_spheres[MOON_CAPACITY];
 #endif
 
-// The factor on the reversed-Z depth that moves the sea towards the camera
-// by 1e-5 of its distance: ahead of the terrain's flat sea, which lies on
-// the same sphere at its vertices (and below it between them), by more
-// than the tiles' float positions differ from it (1e-6 of the distance).
-const float kDepthLead = 1.0 + 1.0e-5;
+// The sea is moved towards the camera, ahead of the terrain's flat sea,
+// which lies on the same sphere at its vertices (below it between them):
+// by 1e-5 of its distance, more than the tiles' float positions differ
+// from the sphere (1e-6 of the distance), and at grazing views by the
+// distance along the ray over which the sea rises kHeightTolerance, which
+// covers the tiles' float heights (under a millimetre) however flat the
+// ray (from 2 m the horizon is seen 0.05 degrees down: a millimetre is
+// metres along the ray). The sea covers land less than kHeightTolerance
+// above it.
+const float kRelativeLead = 1.0e-5;
+const float kHeightTolerance = 0.01;  // m
 
 // The sky's radiance seen from the sea point `point` (zenith n) in
 // `direction`, lifted to the horizon when it points below it: directions
@@ -201,5 +207,6 @@ void main() {
   if ((terms & 8) != 0) radiance = sun_irradiance;
   if ((terms & 16) != 0 && (terms & 8) == 0) radiance = sky / light_scale;
   colour = vec4(max(radiance * light_scale, vec3(0.0)), 1.0);
-  gl_FragDepth = min(depth * kDepthLead, 1.0);
+  float lead = clamp(kHeightTolerance / (t * max(dot(view, n), 1e-9)), kRelativeLead, 0.1);
+  gl_FragDepth = min(depth * (1.0 + lead), 1.0);
 }
