@@ -347,7 +347,7 @@ TEST_F(OceanGpu, TerrainAboveTheSeaHidesIt) {
   globe_settings.complete_every_frame = true;
   atmos::Globe globe(*earth_, earth_surface, *pass_, globe_settings);
   atmos::OceanSettings settings;
-  settings.bathymetry_texels = 256;
+  settings.bathymetry_texels = 64;
   atmos::Ocean ocean(*earth_, earth_surface, *pass_, settings);
   const int width = 96, height = 96;
   GlobeTarget target(width, height);
