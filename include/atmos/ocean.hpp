@@ -15,8 +15,9 @@
 //
 // The radiance at a point (docs/water.md, "The sea on the globe"): the sun
 // glint (Cox & Munk 1954 slopes, microfacet BRDF) times the sun's light
-// transmitted to the point, the reflected sky (the 16-node slope
-// quadrature, each node a sky lookup from the point), and the light leaving
+// transmitted to the point, the reflected sky (the rough surface's
+// reflectance times one sky lookup from the point in the mean reflected
+// direction, or the 16-node slope quadrature's 16), and the light leaving
 // the water (Lee et al. 1999's column over the seabed at the point's depth,
 // read from a cube map of the ground's height baked at construction). The
 // slopes are split between resolved waves — a sum of sine waves from a
