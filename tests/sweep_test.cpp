@@ -211,6 +211,17 @@ void expect_clean_subset(std::uint64_t seed, int runs, int runs_per_planet) {
   EXPECT_TRUE(result.failures.empty()) << sweep::summary(result, options) << failures.str();
 }
 
+// Run `run` of the 10^4 sweep of seed 2026 with 250 runs per planet
+// (docs/hardening.md), by itself.
+sweep::SweepResult replay_2026(int run) {
+  sweep::SweepOptions options;
+  options.seed = 2026;
+  options.runs = 10000;
+  options.runs_per_planet = 250;
+  options.replay = run;
+  return sweep::run_sweep(options);
+}
+
 // A planet the library refuses with a clear error (seed 2026, 250 runs per
 // planet, planet 2: the Venus preset at 9 wavelengths with coarse random
 // tables, whose third scattering order would add more light than the
@@ -218,12 +229,7 @@ void expect_clean_subset(std::uint64_t seed, int runs, int runs_per_planet) {
 TEST(Sweep, ThickPlanetOnCoarseTablesIsRefusedWithAClearErrorNotAFailure) {
   const std::unique_ptr<atmos::GlContext> context = headless_context();
   ASSERT_TRUE(context != nullptr);
-  sweep::SweepOptions options;
-  options.seed = 2026;
-  options.runs = 10000;
-  options.runs_per_planet = 250;
-  options.replay = 500;
-  const sweep::SweepResult result = sweep::run_sweep(options);
+  const sweep::SweepResult result = replay_2026(500);
   EXPECT_EQ(result.runs, 1);
   EXPECT_EQ(result.refused_runs, 1);
   ASSERT_EQ(result.refusals.size(), 1u);
@@ -241,12 +247,7 @@ TEST(Sweep, ThickPlanetOnCoarseTablesIsRefusedWithAClearErrorNotAFailure) {
 TEST(Sweep, FaintTwilightOnHalfFloatTablesHasNoNegativeLight) {
   const std::unique_ptr<atmos::GlContext> context = headless_context();
   ASSERT_TRUE(context != nullptr);
-  sweep::SweepOptions options;
-  options.seed = 2026;
-  options.runs = 10000;
-  options.runs_per_planet = 250;
-  options.replay = 8209;
-  const sweep::SweepResult result = sweep::run_sweep(options);
+  const sweep::SweepResult result = replay_2026(8209);
   std::ostringstream failures;
   for (const sweep::Failure& f : result.failures) failures << sweep::describe(f) << "\n";
   EXPECT_EQ(result.runs, 1);
