@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "data/embedded_files.hpp"
+#include "planet/gl_program.hpp"
 #include "planet/cube_sphere.hpp"
 #include "planet/globe_internal.hpp"
 #include "planet/globe_mesh.hpp"
@@ -41,65 +41,6 @@ double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std
 
 // set_globe_morph (globe_internal.hpp).
 std::atomic<bool> morph_enabled{true};
-
-const char* shader_text(const char* path) {
-  const char* text = data::embedded_file(path);
-  if (text == nullptr) throw Error(std::string("globe: shader source ") + path + " is not embedded");
-  return text;
-}
-
-GLuint compile(GLenum stage, const std::string& source, const char* name) {
-  const GLuint shader = glCreateShader(stage);
-  const char* text = source.c_str();
-  glShaderSource(shader, 1, &text, nullptr);
-  glCompileShader(shader);
-  GLint ok = 0;
-  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    GLint length = 0;
-    glGetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
-    std::string log(size_t(std::max(length, 1)), '\0');
-    glGetShaderInfoLog(shader, length, nullptr, log.data());
-    glDeleteShader(shader);
-    throw Error(std::string("globe: the ") + name + " shader does not compile: " + log.c_str());
-  }
-  return shader;
-}
-
-GLuint link(const std::string& vertex, const std::string& fragment) {
-  const GLuint vs = compile(GL_VERTEX_SHADER, vertex, "vertex");
-  GLuint fs = 0;
-  try {
-    fs = compile(GL_FRAGMENT_SHADER, fragment, "fragment");
-  } catch (...) {
-    glDeleteShader(vs);
-    throw;
-  }
-  const GLuint program = glCreateProgram();
-  glAttachShader(program, vs);
-  glAttachShader(program, fs);
-  glLinkProgram(program);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    GLint length = 0;
-    glGetProgramiv(program, GL_INFO_LOG_LENGTH, &length);
-    std::string log(size_t(std::max(length, 1)), '\0');
-    glGetProgramInfoLog(program, length, nullptr, log.data());
-    glDeleteProgram(program);
-    throw Error(std::string("globe: the shaders do not link: ") + log.c_str());
-  }
-  return program;
-}
-
-bool finite(const glm::dmat4& m) {
-  for (int c = 0; c < 4; ++c)
-    for (int r = 0; r < 4; ++r)
-      if (!std::isfinite(m[c][r])) return false;
-  return true;
-}
 
 // A tile resident on the GPU.
 struct Resident {
@@ -189,8 +130,9 @@ TileProgram lit_program(const AtmospherePass& pass, int first_unit, bool shadows
   if (eclipse) head += "#define ATMOS_GLOBE_ECLIPSE 1\n";
   const std::string library = pass.glsl_library(first_unit) + "\n";
   TileProgram program;
-  program.id = link(head + library + shader_text("src/planet/globe.vert.glsl"),
-                    head + (eclipse ? library : std::string()) + shader_text("src/planet/globe.frag.glsl"));
+  program.id = planet::link_program(
+      "globe", head + library + planet::shader_text("globe", "src/planet/globe.vert.glsl"),
+      head + (eclipse ? library : std::string()) + planet::shader_text("globe", "src/planet/globe.frag.glsl"));
   program.locate();
   if (shadows) glProgramUniform1i(program.id, program.maps, first_unit + 5);
   return program;
@@ -511,8 +453,9 @@ void Globe::Impl::create_shadows(const std::string& version) {
   glSamplerParameterfv(s->sampler, GL_TEXTURE_BORDER_COLOR, far_depth);
 
   const std::string depth_only = version + "#define ATMOS_GLOBE_DEPTH_ONLY 1\n";
-  s->depth.id = link(depth_only + shader_text("src/planet/globe.vert.glsl"),
-                     depth_only + shader_text("src/planet/globe.frag.glsl"));
+  s->depth.id = planet::link_program("globe",
+                                     depth_only + planet::shader_text("globe", "src/planet/globe.vert.glsl"),
+                                     depth_only + planet::shader_text("globe", "src/planet/globe.frag.glsl"));
   s->depth.locate();
   s->lit = lit_program(*pass, settings.first_unit, true, false);
   shadows = std::move(s);
@@ -720,7 +663,8 @@ void Globe::draw(const GlobeView& view) {
   const PlanetFrame& frame = p.pass->frame();
   // --- Validation, before any state change. ---
   if (view.width < 1 || view.height < 1) throw Error("globe view: empty viewport");
-  if (!finite(view.view) || !finite(view.projection)) throw Error("globe view: non-finite view or projection matrix");
+  if (!planet::finite(view.view) || !planet::finite(view.projection))
+    throw Error("globe view: non-finite view or projection matrix");
   if (!std::isfinite(glm::determinant(view.view)) || std::abs(glm::determinant(view.view)) < 1e-12)
     throw Error("globe view: singular view matrix");
   if (!(std::abs(view.projection[1][1]) > 0.0)) throw Error("globe view: degenerate projection");

@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "data/embedded_files.hpp"
+#include "planet/gl_program.hpp"
 #include "planet/ocean_internal.hpp"
 #include "planet/surface.hpp"
 
@@ -32,65 +32,6 @@ constexpr int kMaxWaves = 32;      // OCEAN_MAX_WAVES of ocean.frag.glsl
 
 // set_ocean_terms (ocean_internal.hpp).
 std::atomic<unsigned> terms_drawn{planet::kOceanAllTerms};
-
-const char* shader_text(const char* path) {
-  const char* text = data::embedded_file(path);
-  if (text == nullptr) throw Error(std::string("ocean: shader source ") + path + " is not embedded");
-  return text;
-}
-
-GLuint compile(GLenum stage, const std::string& source, const char* name) {
-  const GLuint shader = glCreateShader(stage);
-  const char* text = source.c_str();
-  glShaderSource(shader, 1, &text, nullptr);
-  glCompileShader(shader);
-  GLint ok = 0;
-  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    GLint length = 0;
-    glGetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
-    std::string log(size_t(std::max(length, 1)), '\0');
-    glGetShaderInfoLog(shader, length, nullptr, log.data());
-    glDeleteShader(shader);
-    throw Error(std::string("ocean: the ") + name + " shader does not compile: " + log.c_str());
-  }
-  return shader;
-}
-
-GLuint link(const std::string& vertex, const std::string& fragment) {
-  const GLuint vs = compile(GL_VERTEX_SHADER, vertex, "vertex");
-  GLuint fs = 0;
-  try {
-    fs = compile(GL_FRAGMENT_SHADER, fragment, "fragment");
-  } catch (...) {
-    glDeleteShader(vs);
-    throw;
-  }
-  const GLuint program = glCreateProgram();
-  glAttachShader(program, vs);
-  glAttachShader(program, fs);
-  glLinkProgram(program);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    GLint length = 0;
-    glGetProgramiv(program, GL_INFO_LOG_LENGTH, &length);
-    std::string log(size_t(std::max(length, 1)), '\0');
-    glGetProgramInfoLog(program, length, nullptr, log.data());
-    glDeleteProgram(program);
-    throw Error(std::string("ocean: the shaders do not link: ") + log.c_str());
-  }
-  return program;
-}
-
-bool finite(const glm::dmat4& m) {
-  for (int c = 0; c < 4; ++c)
-    for (int r = 0; r < 4; ++r)
-      if (!std::isfinite(m[c][r])) return false;
-  return true;
-}
 
 // One sine wave of the sea's height: along the direction at `angle` from
 // the upwind axis, wavenumber k (rad/m), amplitude (m), angular frequency
@@ -245,9 +186,10 @@ struct Ocean::Impl {
     if (eclipse) head += "#define OCEAN_ECLIPSE 1\n";
     if (!settings.sky_quadrature) head += "#define OCEAN_SKY_MEAN_DIRECTION 1\n";
     OceanProgram p;
-    p.id = atmos::link(std::string("#version 450 core\n") + shader_text("src/planet/ocean.vert.glsl"),
-                       head + pass->glsl_library(settings.first_unit) + "\n" + shader_text("src/physics/water.glsl") +
-                           "\n" + shader_text("src/planet/ocean.frag.glsl"));
+    p.id = planet::link_program(
+        "ocean", std::string("#version 450 core\n") + planet::shader_text("ocean", "src/planet/ocean.vert.glsl"),
+        head + pass->glsl_library(settings.first_unit) + "\n" + planet::shader_text("ocean", "src/physics/water.glsl") +
+            "\n" + planet::shader_text("ocean", "src/planet/ocean.frag.glsl"));
     p.locate();
     glProgramUniform1i(p.id, p.bathymetry, settings.first_unit + 5);
     return p;
@@ -374,7 +316,8 @@ double Ocean::depth_m(const glm::dvec3& direction) const {
 void Ocean::draw(const GlobeView& view, double time_s) {
   Impl& p = *impl_;
   if (view.width < 1 || view.height < 1) throw Error("ocean view: empty viewport");
-  if (!finite(view.view) || !finite(view.projection)) throw Error("ocean view: non-finite view or projection matrix");
+  if (!planet::finite(view.view) || !planet::finite(view.projection))
+    throw Error("ocean view: non-finite view or projection matrix");
   if (!std::isfinite(glm::determinant(view.view)) || std::abs(glm::determinant(view.view)) < 1e-12)
     throw Error("ocean view: singular view matrix");
   if (!(std::abs(view.projection[1][1]) > 0.0)) throw Error("ocean view: degenerate projection");
@@ -406,7 +349,7 @@ void Ocean::draw(const GlobeView& view, double time_s) {
   scale[0][0] = scale[1][1] = scale[2][2] = frame.units_per_metre;
   const glm::dmat4 clip_from_offset = view.projection * rotation * scale;
   const glm::dmat4 offset_from_clip = glm::inverse(clip_from_offset);
-  if (!finite(offset_from_clip)) throw Error("ocean view: singular projection");
+  if (!planet::finite(offset_from_clip)) throw Error("ocean view: singular projection");
   const glm::dvec3 up = camera / r_c;
   const double height_term = (r_c - p.sea_radius_m) * (r_c + p.sea_radius_m);
   const glm::dvec3 sun = view.sun_direction / sun_length;
