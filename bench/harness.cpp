@@ -7,10 +7,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 
 #include "atmos/eclipse.hpp"
 #include "atmos/globe.hpp"
+#include "atmos/ocean.hpp"
 #include "atmos/post.hpp"
 #include "atmos/sky.hpp"
 
@@ -206,17 +208,19 @@ void time_ground_albedo(const atmos::Atmosphere& atmosphere, const atmos::Precom
 
 namespace {
 
-// A camera `altitude_m` above the ground at latitude 20°, longitude 30°,
-// looking at the planet's centre from afar and towards the horizon (8°
-// down) below 1 km, as examples/globe does; sun 25° up in the north.
+// A camera `altitude_m` above the ground (or above `floor_m`, the sea level
+// over a sea) at latitude 20°, longitude 30° (or the given point), looking
+// at the planet's centre from afar and towards the horizon (8° down) below
+// 1 km, as examples/globe does; sun 25° up in the north.
 atmos::GlobeView globe_view(const atmos::Globe& globe, const atmos::Atmosphere& atmosphere, double altitude_m,
-                            int width, int height) {
-  const double lat = 20.0 * M_PI / 180.0, lon = 30.0 * M_PI / 180.0;
+                            int width, int height, double latitude_deg = 20.0, double longitude_deg = 30.0,
+                            double floor_m = -std::numeric_limits<double>::infinity()) {
+  const double lat = latitude_deg * M_PI / 180.0, lon = longitude_deg * M_PI / 180.0;
   const glm::dvec3 up(std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat));
   const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), up));
   const glm::dvec3 north = glm::cross(up, east);
   const double radius = atmosphere.bottom_radius_m;
-  const double ground = radius + globe.height_m(up * radius);
+  const double ground = radius + std::max(globe.height_m(up * radius), floor_m);
   const double far = 2.5 * radius;
   const double w = std::clamp(std::log10(altitude_m / 1e3) / std::log10(far / 1e3), 0.0, 1.0);
   const double pitch = (-8.0 + (-90.0 + 8.0) * w) * M_PI / 180.0;
@@ -252,8 +256,10 @@ void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables
   const auto ms_since = [](Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   };
-  // One frame: the terrain into the engine's targets, then the pass.
-  const auto frame = [&](atmos::Globe& globe, const atmos::GlobeView& view, double& terrain_ms) {
+  // One frame: the terrain into the engine's targets, the sea over it if
+  // `ocean` (its own time in `sea_ms`), then the pass.
+  const auto frame = [&](atmos::Globe& globe, const atmos::GlobeView& view, double& terrain_ms,
+                         atmos::Ocean* ocean = nullptr, double* sea_ms = nullptr) {
     const auto t0 = Clock::now();
     const float clear_colour[4] = {0, 0, 0, 0}, clear_depth = 0.0f;
     glClearNamedFramebufferfv(framebuffer, GL_COLOR, 0, clear_colour);
@@ -262,6 +268,12 @@ void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables
     globe.draw(view);
     glFinish();
     terrain_ms = ms_since(t0);
+    if (ocean != nullptr) {
+      const auto sea_start = Clock::now();
+      ocean->draw(view);
+      glFinish();
+      if (sea_ms != nullptr) *sea_ms = ms_since(sea_start);
+    }
     atmos::FrameInput input;
     input.colour = colour;
     input.depth = depth;
@@ -331,6 +343,34 @@ void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables
       sink({prefix + ".selection", median(shadow_selection), "ms"});
       sink({prefix + ".triangles", double(globe.last_stats().shadow_triangles), "count"});
       sink({prefix + ".casters", double(globe.last_stats().shadow_casters), "count"});
+    }
+  }
+  {
+    // The sea (atmos::Ocean) over the Pacific at 0°, 150° W, drawn after the
+    // terrain: the frame with it, the sea's own draw, and the frame without
+    // it, from 2 m, 1 km and 400 km above the sea level.
+    atmos::GlobeSettings settings;
+    settings.complete_every_frame = true;
+    const atmos::PlanetSurface surface = atmos::load_surface("earth");
+    atmos::Globe globe(atmosphere, surface, pass, settings);
+    atmos::Ocean ocean(atmosphere, surface, pass);
+    const std::pair<const char*, double> altitudes[] = {{"2m", 2.0}, {"1km", 1e3}, {"400km", 400e3}};
+    for (const auto& [name, altitude] : altitudes) {
+      const atmos::GlobeView view =
+          globe_view(globe, atmosphere, altitude, width, height, 0.0, -150.0, ocean.sea_level_m());
+      double terrain_ms = 0.0, sea_ms = 0.0;
+      frame(globe, view, terrain_ms, &ocean, &sea_ms);  // generates the tiles, compiles the programs
+      std::vector<double> with_sea, without_sea, sea;
+      for (int i = 0; i < 3; ++i) {
+        without_sea.push_back(frame(globe, view, terrain_ms));
+        with_sea.push_back(frame(globe, view, terrain_ms, &ocean, &sea_ms));
+        sea.push_back(sea_ms);
+      }
+      const std::string prefix = std::string("water.") + name;
+      sink({prefix + ".frame", median(with_sea), "ms"});
+      sink({prefix + ".sea", median(sea), "ms"});
+      sink({prefix + ".frame_without_sea", median(without_sea), "ms"});
+      sink({prefix + ".overhead", median(with_sea) / median(without_sea) - 1.0, "ratio"});
     }
   }
   {
