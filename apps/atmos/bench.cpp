@@ -40,7 +40,8 @@ Command add_bench_command(CLI::App& app) {
       "the spectral tables), of the engine plugin (by day, at sunset, in a total eclipse), of the "
       "post-processing passes, and of the terrain globe under the plugin (globe.*: the frame, the terrain, the "
       "CPU selection, triangles and tiles from 2 m, 10 km, 400 km and 2.5 planet radii; the longest over the "
-      "median frame of a streamed descent)");
+      "median frame of a streamed descent) and of the sea over it (water.*: the sea's draw and the frame with and "
+      "without it from 2 m, 1 km and 400 km)");
   o->planet.add(*cmd);
   o->tables.add(*cmd);
   o->size.add(*cmd, "Size of the timed frames (the frame figures are named after it)");
