@@ -16,7 +16,9 @@ namespace atmos {
 // The water, in SI units (chlorophyll in the oceanographers' mg m^-3).
 struct Water {
   double wind_speed_m_s = 7.0;            // 12.5 m above the water (Cox & Munk 1954's height), [0, 50]
-  double chlorophyll_mg_m3 = 0.1;         // chlorophyll a, [0, 25] (Bricaud et al. 1998's fits)
+  // Chlorophyll a, [0, 25]: the range of Bricaud et al. 1998's fits (0.02-25;
+  // below 0.02 their power laws go to 0 with the chlorophyll).
+  double chlorophyll_mg_m3 = 0.1;
   double cdom_absorption_440_per_m = 0.0; // coloured dissolved organic matter at 440 nm, [0, 10]
   double salinity_psu = 35.0;             // [0, 40]: 35 the open ocean, 0 fresh water
   double temperature_c = 20.0;            // [0, 30] (Quan & Fry 1995's fit)

@@ -6,27 +6,14 @@
 
 #include <array>
 
+#include "atmos/water.hpp"
 #include "physics/water_cpp.hpp"
 
 namespace atmos::physics {
 
-// The water of a planet's seas and lakes, in SI units (chlorophyll in the
-// oceanographers' mg m^-3).
-struct Water {
-  // Wind speed 12.5 m above the water, m/s (Cox & Munk 1954's anemometer
-  // height), in [0, 50].
-  double wind_speed_m_s = 5.0;
-  // Chlorophyll a concentration, mg m^-3, in [0, 25]: the range of the
-  // bio-optical fits (Bricaud et al. 1998: 0.02-25; below 0.02 their power
-  // laws go to 0 with the chlorophyll).
-  double chlorophyll_mg_m3 = 0.1;
-  // Absorption of coloured dissolved organic matter at 440 nm, m^-1, in [0, 10].
-  double cdom_absorption_440_per_m = 0.0;
-  // Salinity, PSU, in [0, 40] (35 for the open ocean, 0 for fresh water).
-  double salinity_psu = 35.0;
-  // Temperature, °C, in [0, 30] (the range of Quan & Fry 1995's fit).
-  double temperature_c = 20.0;
-};
+// The water's inputs (wind, chlorophyll, dissolved matter, salinity,
+// temperature): the public atmos::Water (atmos/water.hpp) with its ranges.
+using Water = atmos::Water;
 
 // Throws atmos::Error with one line naming the first input outside its range
 // (or not finite).

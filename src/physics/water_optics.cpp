@@ -7,17 +7,11 @@
 namespace atmos {
 
 WaterOptics water_optics(const Water& water, const Atmosphere& atmosphere) {
-  physics::Water w;
-  w.wind_speed_m_s = water.wind_speed_m_s;
-  w.chlorophyll_mg_m3 = water.chlorophyll_mg_m3;
-  w.cdom_absorption_440_per_m = water.cdom_absorption_440_per_m;
-  w.salinity_psu = water.salinity_psu;
-  w.temperature_c = water.temperature_c;
   WaterOptics o;
   o.wavelengths_nm = physics::kRenderPhaseWavelengths;
   if (atmosphere.wavelengths_nm.size() == 3)
     o.wavelengths_nm = {atmosphere.wavelengths_nm[0], atmosphere.wavelengths_nm[1], atmosphere.wavelengths_nm[2]};
-  const physics::WaterParams p = physics::make_water_params(w, o.wavelengths_nm);
+  const physics::WaterParams p = physics::make_water_params(water, o.wavelengths_nm);
   o.refractive_index = glm::dvec3(p.refractive_index);
   o.absorption_per_m = glm::dvec3(p.absorption);
   o.backscattering_per_m = glm::dvec3(p.backscattering);
