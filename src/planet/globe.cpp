@@ -582,12 +582,7 @@ void Globe::Impl::render_shadow_maps(const std::vector<std::vector<TileDraw>>& c
 Globe::Globe(const Atmosphere& atmosphere, const PlanetSurface& surface, const AtmospherePass& pass,
              const GlobeSettings& settings) {
   if (epoxy_gl_version() < 45) throw Error("globe: needs a current OpenGL 4.5 core context");
-  if (surface.sea_level_m &&
-      !(std::isfinite(*surface.sea_level_m) && *surface.sea_level_m > -atmosphere.bottom_radius_m &&
-        *surface.sea_level_m < atmosphere.top_radius_m - atmosphere.bottom_radius_m))
-    throw Error("globe: the sea level " + std::to_string(*surface.sea_level_m) +
-                " m lies outside the atmosphere (below the planet's centre or above its top, " +
-                std::to_string(atmosphere.top_radius_m - atmosphere.bottom_radius_m) + " m)");
+  planet::validate_sea_level(surface, atmosphere, "globe");
   if (!(settings.max_screen_error_px > 0.0) || !std::isfinite(settings.max_screen_error_px))
     throw Error("globe settings: max_screen_error_px must be a positive number of pixels");
   if (settings.max_tiles_per_frame < 1) throw Error("globe settings: max_tiles_per_frame must be at least 1");

@@ -14,7 +14,6 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -266,14 +265,8 @@ Ocean::Ocean(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
     throw Error("ocean settings: bathymetry_texels must be in 16..2048, not " +
                 std::to_string(settings.bathymetry_texels));
   if (settings.first_unit < 0) throw Error("ocean settings: first_unit must be a texture unit (>= 0)");
-  const std::optional<double> sea = surface.sea_level_m ? surface.sea_level_m
-                                    : surface.style == SurfaceStyle::earth ? std::optional<double>(0.0)
-                                                                            : std::nullopt;
-  if (sea && !(std::isfinite(*sea) && *sea > -atmosphere.bottom_radius_m &&
-               *sea < atmosphere.top_radius_m - atmosphere.bottom_radius_m))
-    throw Error("ocean: the sea level " + std::to_string(*sea) +
-                " m lies outside the atmosphere (below the planet's centre or above its top, " +
-                std::to_string(atmosphere.top_radius_m - atmosphere.bottom_radius_m) + " m)");
+  planet::validate_sea_level(surface, atmosphere, "ocean");
+  const double sea = planet::sea_level_of(surface);
 
   impl_ = std::make_unique<Impl>();
   Impl& p = *impl_;
@@ -281,15 +274,15 @@ Ocean::Ocean(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
   p.settings = settings;
   p.top_radius_m = atmosphere.top_radius_m;
   p.sun_angular_radius_rad = atmosphere.sun_angular_radius_rad;
-  if (!sea) return;
+  if (!std::isfinite(sea)) return;
   GLint units = 0;
   glGetIntegerv(GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS, &units);
   if (settings.first_unit + 6 > units)
     throw Error("ocean settings: first_unit + 5 (the bathymetry) is beyond the context's " + std::to_string(units) +
                 " texture units");
   p.has_sea = true;
-  p.sea_level_m = *sea;
-  p.sea_radius_m = atmosphere.bottom_radius_m + *sea;
+  p.sea_level_m = sea;
+  p.sea_radius_m = atmosphere.bottom_radius_m + sea;
   // The channels' wavelengths (water_optics): the working ones, or in the
   // spectral mode representative wavelengths of the sRGB primaries.
   p.water = optics;

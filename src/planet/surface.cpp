@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "atmos/atmosphere.hpp"
@@ -140,6 +141,20 @@ RasterSettings raster_settings(const SurfaceRaster& r, RasterKind kind, const ch
 
 }  // namespace
 
+double sea_level_of(const PlanetSurface& s) {
+  if (s.sea_level_m) return *s.sea_level_m;
+  return s.style == SurfaceStyle::earth ? 0.0 : -std::numeric_limits<double>::infinity();
+}
+
+void validate_sea_level(const PlanetSurface& surface, const Atmosphere& atmosphere, const char* who) {
+  const double top_m = atmosphere.top_radius_m - atmosphere.bottom_radius_m;
+  if (surface.sea_level_m && !(std::isfinite(*surface.sea_level_m) &&
+                               *surface.sea_level_m > -atmosphere.bottom_radius_m && *surface.sea_level_m < top_m))
+    throw Error(std::string(who) + ": the sea level " + std::to_string(*surface.sea_level_m) +
+                " m lies outside the atmosphere (below the planet's centre or above its top, " +
+                std::to_string(top_m) + " m)");
+}
+
 struct Surface::Data {
   std::unique_ptr<RasterSource> elevation, imagery;
   std::unique_ptr<CoastDistanceGrid> coast;
@@ -151,11 +166,6 @@ namespace {
 // Grid of the coast's distance: 2048 x 1024 cells (about 20 km on Earth,
 // the resolution of Debian's Blue Marble).
 constexpr int kCoastGridWidth = 2048;
-
-double sea_level_of(const PlanetSurface& s) {
-  if (s.sea_level_m) return *s.sea_level_m;
-  return s.style == SurfaceStyle::earth ? 0.0 : -std::numeric_limits<double>::infinity();
-}
 
 std::unique_ptr<Surface::Data> open_data(const PlanetSurface& s, double radius_m) {
   if (!(std::isfinite(radius_m) && radius_m > 0.0)) throw Error("surface: the radius must be finite and positive");

@@ -33,6 +33,15 @@
 
 namespace atmos::planet {
 
+// The sea level of `surface` above the datum, m: its own, else the style's
+// (Earth's 0); -infinity without a sea.
+double sea_level_of(const PlanetSurface& surface);
+
+// Throws atmos::Error ("<who>: the sea level ... lies outside the
+// atmosphere") unless the surface's own sea level, if it gives one, is
+// finite, above the planet's centre and below the top of `atmosphere`.
+void validate_sea_level(const PlanetSurface& surface, const Atmosphere& atmosphere, const char* who);
+
 // The lowest drawn height of a surface, m above the datum, estimated
 // (surface.cpp): the relief's sampled minimum less a margin, elevation
 // data's own minimum less the detail's bound; at least the sea level.
