@@ -293,4 +293,6 @@ atmos::Image GlobeRenderer::render(const atmos::Camera& camera, const glm::dvec3
   return impl_->draw(v, sun_direction, stars, moons);
 }
 
+void GlobeRenderer::set_star_catalogue(const std::vector<atmos::Star>& stars) { impl_->pass.set_star_catalogue(stars); }
+
 }  // namespace atmos_cli

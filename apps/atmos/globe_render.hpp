@@ -46,6 +46,10 @@ class GlobeRenderer {
   atmos::Image render(const atmos::Camera& camera, const glm::dvec3& sun_direction, bool stars,
                       const std::vector<atmos::Moon>& moons);
 
+  // The stars of a catalogue instead of the procedural field, in the
+  // planet's frame (AtmospherePass::set_star_catalogue); empty: procedural.
+  void set_star_catalogue(const std::vector<atmos::Star>& stars);
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

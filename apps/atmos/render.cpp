@@ -16,6 +16,7 @@
 #include "atmos/post.hpp"
 #include "atmos/renderer.hpp"
 #include "atmos/sky.hpp"
+#include "atmos/star_catalogue.hpp"
 #include "commands.hpp"
 #include "globe_render.hpp"
 
@@ -42,6 +43,9 @@ struct RenderOptions {
   std::string precision = "full";
   bool cpu = false;
   bool stars = false;
+  // The stars of --date: the catalogue's (this file) or the procedural field.
+  std::string star_catalogue = atmos::kXplanetBrightStarCatalogue;
+  bool procedural_stars = false;
   // Camera-like PNG output (PostProcess): --tonemap, --bloom, --auto-exposure.
   std::string tonemap = "exp";
   double bloom = 0.0;
@@ -198,8 +202,26 @@ void check_options(const RenderOptions& o) {
                      "full-precision textures");
 }
 
+// The catalogue's stars in the sky of --date seen from --latitude,
+// --longitude, in the planet-centred (Earth-fixed) frame of the camera:
+// placed by the apparent sidereal time (atmos/star_catalogue.hpp), their
+// spectra blackbodies of their B-V's temperature (the Sun's B-V for a
+// catalogue without colours, as xplanet's).
+std::vector<atmos::Star> stars_of_date(const RenderOptions& o) {
+  const std::vector<atmos::CatalogueStar> catalogue = atmos::load_bright_star_catalogue(o.star_catalogue);
+  const atmos::Instant instant = atmos::instant_of(atmos::parse_utc_time(o.date.date));
+  std::vector<atmos::Star> stars;
+  for (const atmos::SkyStar& s :
+       atmos::stars_in_sky(catalogue, instant, {o.viewpoint.latitude, o.viewpoint.longitude, 0.0}))
+    stars.push_back({s.direction, s.v_band_irradiance, s.temperature_k});
+  return stars;
+}
+
 int run_render(const RenderOptions& o) {
   check_options(o);
+  // The catalogue is read before the slow work, so that its errors come first.
+  const std::vector<atmos::Star> catalogue_stars =
+      o.date.given() && !o.procedural_stars ? stars_of_date(o) : std::vector<atmos::Star>{};
   const atmos::Atmosphere atmosphere = o.planet.atmosphere();
   const std::vector<Shot> shots = o.gallery ? gallery(atmosphere) : std::vector<Shot>{single_shot(o, atmosphere)};
   // The planet file's surface is read before the slow work, so that its
@@ -221,6 +243,8 @@ int run_render(const RenderOptions& o) {
   else if (!o.cpu)
     renderer = std::make_unique<atmos::Renderer>(
         a, loaded.tables, o.precision == "half" ? atmos::TexturePrecision::half : atmos::TexturePrecision::full);
+  if (globe) globe->set_star_catalogue(catalogue_stars);
+  if (renderer) renderer->set_star_catalogue(catalogue_stars);
   // The post-processing runs on the GPU, also after a --cpu render.
   std::unique_ptr<atmos::PostProcess> post;
   if (o.post) post = std::make_unique<atmos::PostProcess>();
@@ -236,7 +260,7 @@ int run_render(const RenderOptions& o) {
     }
     atmos::Image image;
     if (o.cpu) {
-      image = atmos::render_cpu(a, loaded.tables, shot.camera, shot.sun, stars, shot.moons);
+      image = atmos::render_cpu(a, loaded.tables, shot.camera, shot.sun, stars, shot.moons, catalogue_stars);
     } else if (globe) {
       // The viewpoint's altitude is above the terrain under it.
       atmos::Camera camera = shot.camera;
@@ -308,6 +332,16 @@ Command add_render_command(CLI::App& app) {
                 "post-processing)");
   cmd->add_flag("--stars", o->stars,
                 "Draw the star field also with the sun above the horizon (it is drawn whenever the sun is below it)");
+  cmd->add_option("--star-catalogue", o->star_catalogue,
+                  "With --date: the star catalogue whose stars are drawn, placed for the date and place (the Yale "
+                  "Bright Star Catalogue in xplanet's layout: Dec RA Mag \"Name\" ...)")
+      ->type_name("FILE")
+      ->needs("--date")
+      ->capture_default_str();
+  cmd->add_flag("--procedural-stars", o->procedural_stars,
+                "With --date: draw the procedural star field instead of the catalogue's stars")
+      ->needs("--date")
+      ->excludes("--star-catalogue");
   auto* tonemap = cmd->add_option("--tonemap", o->tonemap,
                                   "Tone mapping of the PNG outputs through the post-processing chain: exp (the "
                                   "default curve above), reinhard, filmic or aces")

@@ -50,6 +50,7 @@
 #include "atmos/atmosphere.hpp"
 #include "atmos/eclipse.hpp"
 #include "atmos/image.hpp"
+#include "atmos/renderer.hpp"
 #include "atmos/tables.hpp"
 
 namespace atmos {
@@ -119,6 +120,11 @@ struct FrameInput {
   // a pixel wide at the image centre). Off by default: turn it on at night,
   // or always (by day it is invisible but costs a little per sky pixel).
   bool stars = false;
+  // With a star catalogue (AtmospherePass::set_star_catalogue), the
+  // rotation from its frame to the world's axes (e.g. the Earth's rotation
+  // by the sidereal time of the frame's instant); a rotation (orthonormal,
+  // determinant 1), else render() throws.
+  glm::dmat3 world_from_star_catalogue{1.0};
   // Moons that eclipse the sun (include/atmos/eclipse.hpp), at most
   // kMaxMoons: spheres in PLANET-CENTRED METRES in the world's axes — the
   // frame of sun_direction (the world's axes are the planet's: PlanetFrame
@@ -227,6 +233,14 @@ class AtmospherePass {
   void set_ground_albedo(const glm::dvec3& albedo);
   // The ground albedo of the current tables (the atmosphere's until set).
   glm::dvec3 ground_albedo() const;
+
+  // The stars of a catalogue instead of the procedural field, drawn when
+  // FrameInput::stars is on, turned into the world's axes by
+  // FrameInput::world_from_star_catalogue; empty (the default): the
+  // procedural field. Throws atmos::Error as validate_stars does (the
+  // previous catalogue is kept).
+  void set_star_catalogue(const std::vector<Star>& stars);
+  const std::vector<Star>& star_catalogue() const;
 
   const PlanetFrame& frame() const;
   // The radius of the atmosphere's ground (its bottom_radius), m: the

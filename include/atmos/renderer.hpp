@@ -14,6 +14,7 @@
 // output in linear sRGB on the cd/m² luminance scale (atmos/image.hpp).
 #pragma once
 
+#include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
 #include <cstdint>
@@ -56,6 +57,26 @@ struct Camera {
   int width = 640;               // pixels, 1..16384
   int height = 360;
 };
+
+// A star of a catalogue, as the renderers draw it instead of the procedural
+// star field (atmos/star_catalogue.hpp places the Yale Bright Star
+// Catalogue's for a date and place: renderer_stars). Its image is a
+// Gaussian of width star_image_sigma that integrates to its irradiance,
+// attenuated by the atmosphere along the view ray like the sun's disc.
+struct Star {
+  glm::dvec3 direction{0.0, 0.0, 1.0};  // towards the star, the catalogue's frame (normalised internally)
+  // Spectral irradiance above the atmosphere at 545 nm, the V band's
+  // effective wavelength, W m⁻² nm⁻¹ (v_band_spectral_irradiance of its V).
+  double v_band_irradiance = 0.0;
+  // Its spectrum: a blackbody of this temperature, kelvin, in [1000, 100000],
+  // scaled to v_band_irradiance at 545 nm.
+  double temperature_k = 5772.0;
+};
+
+// Throws atmos::Error with one line naming the first bad star: a direction
+// that is zero or not finite, an irradiance that is negative or not finite,
+// a temperature outside [1000, 100000] K.
+void validate_stars(const std::vector<Star>& stars);
 
 // Throws atmos::Error with one line naming the first problem: non-finite
 // position, zero or non-finite forward/up, up parallel to forward, size
@@ -120,6 +141,19 @@ class Renderer {
   void set_stars(bool enabled);
   bool stars() const;
 
+  // The stars of a catalogue instead of the procedural field, drawn when
+  // the stars are on; empty (the default): the procedural field. Throws
+  // atmos::Error as validate_stars does (the previous catalogue is kept).
+  // The catalogue's frame is turned into the camera's by
+  // set_star_orientation (the identity by default), so that a sky of
+  // another time needs only a new rotation.
+  void set_star_catalogue(const std::vector<Star>& stars);
+  const std::vector<Star>& star_catalogue() const;
+  // The rotation from the catalogue's frame to the camera's (world) frame;
+  // throws atmos::Error unless it is a rotation (orthonormal, determinant 1,
+  // to 1e-6).
+  void set_star_orientation(const glm::dmat3& world_from_catalogue);
+
   // The moons that may eclipse the sun (include/atmos/eclipse.hpp), in the
   // planet-centred frame of the camera; none by default. Throws
   // atmos::Error as validate_moons does (the previous moons are kept).
@@ -147,8 +181,12 @@ class Renderer {
 // The same image computed on the CPU (all cores, TBB) with the same shared
 // functions and camera model; for tests and as a fallback without OpenGL.
 // `stars`: as Renderer::set_stars; `moons`: as Renderer::set_moons.
+// `star_catalogue` and `world_from_catalogue`: as Renderer::set_star_catalogue
+// and set_star_orientation.
 Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camera& camera,
-                 const glm::dvec3& sun_direction, bool stars = false, const std::vector<Moon>& moons = {});
+                 const glm::dvec3& sun_direction, bool stars = false, const std::vector<Moon>& moons = {},
+                 const std::vector<Star>& star_catalogue = {},
+                 const glm::dmat3& world_from_catalogue = glm::dmat3(1.0));
 
 // Width (Gaussian sigma, radians) of a star's image in this camera's pixels:
 // 0.6 of a pixel's angular size at the image centre, so that a star lights a

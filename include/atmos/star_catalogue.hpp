@@ -95,6 +95,8 @@ struct SkyStar {
   double elevation_deg = 0.0;           // geometric (no refraction)
   double v_magnitude = 0.0;
   glm::dvec3 srgb_irradiance{0.0};      // star_srgb_irradiance, linear sRGB, Y in lux
+  double v_band_irradiance = 0.0;       // v_band_spectral_irradiance(V), W m⁻² nm⁻¹ at 545 nm
+  double temperature_k = 0.0;           // temperature_from_b_minus_v: its blackbody spectrum
   bool colour_from_catalogue = false;   // false: the catalogue had no B−V, kSolarBMinusV was used
   int bright_star_number = 0;
 };

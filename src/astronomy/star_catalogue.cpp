@@ -189,6 +189,8 @@ std::vector<SkyStar> stars_in_sky(const std::vector<CatalogueStar>& catalogue, c
     s.colour_from_catalogue = std::isfinite(c.b_minus_v);
     const double b_minus_v = s.colour_from_catalogue ? std::clamp(c.b_minus_v, -0.4, 2.0) : kSolarBMinusV;
     s.srgb_irradiance = star_srgb_irradiance(c.v_magnitude, b_minus_v);
+    s.v_band_irradiance = v_band_spectral_irradiance(c.v_magnitude);
+    s.temperature_k = temperature_from_b_minus_v(b_minus_v);
     s.bright_star_number = c.bright_star_number;
     out.push_back(s);
   }

@@ -18,6 +18,7 @@
 #include "gpu/atmosphere_pass.hpp"
 #include "gpu/gl_util.hpp"
 #include "gpu/shader_source.hpp"
+#include "gpu/star_catalogue_bins.hpp"
 #include "physics/parameters.hpp"
 
 namespace atmos {
@@ -149,6 +150,10 @@ struct AtmospherePass::Impl {
   double own_sun_lux = 0.0;   // the atmosphere's sun illuminance
   bool stencil_export = false;  // GL_ARB_shader_stencil_export: one classifying draw
   PassTimings timings;
+  // The star catalogue (none: the procedural field), its irradiance in the
+  // channels of the tables' wavelengths.
+  std::vector<double> wavelengths_nm;
+  gpu::StarCatalogueBuffers star_catalogue;
 
   void release() {
     for (GLuint& program : programs) {
@@ -177,6 +182,7 @@ struct AtmospherePass::Impl {
     if (depth_sampler != 0) glDeleteSamplers(1, &depth_sampler);
     if (shadow_sampler != 0) glDeleteSamplers(1, &shadow_sampler);
     vertex_array = framebuffer = own_output = depth_sampler = shadow_sampler = 0;
+    star_catalogue.release();
     timer.reset();
     tables.reset();
   }
@@ -193,6 +199,7 @@ AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const Tables& table
   Impl& p = *impl_;
   p.frame = frame;
   p.bottom_radius_m = atmosphere.bottom_radius_m;
+  p.wavelengths_nm = tables.wavelengths_nm;
   gpu::clear_gl_errors();
   try {
     p.tables = std::make_unique<gpu::GpuTables>(atmosphere, tables, TexturePrecision::full);
@@ -298,6 +305,12 @@ void AtmospherePass::set_ground_albedo(const glm::dvec3& albedo) {
 
 glm::dvec3 AtmospherePass::ground_albedo() const { return impl_->ground_albedo; }
 
+void AtmospherePass::set_star_catalogue(const std::vector<Star>& stars) {
+  impl_->star_catalogue.set(stars, impl_->wavelengths_nm);
+}
+
+const std::vector<Star>& AtmospherePass::star_catalogue() const { return impl_->star_catalogue.stars(); }
+
 const PlanetFrame& AtmospherePass::frame() const { return impl_->frame; }
 
 double AtmospherePass::bottom_radius_m() const { return impl_->bottom_radius_m; }
@@ -351,6 +364,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
       throw Error("plugin input: the output texture must be RGBA16F or RGBA32F (HDR)");
   }
   gpu::validate_frame_numbers(input);
+  gpu::validate_star_orientation(input.world_from_star_catalogue, "plugin input");
   const bool shadows = input.shadow_map != 0;
   if (shadows) {
     const TextureInfo shadow = texture_info(input.shadow_map, "shadow map");
@@ -608,6 +622,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     draws.push_back({program_of(gpu::PassVariant::Pixels::space, false), false, kSkyBit | kSpaceBit});
 
   const physics::SkyViewFrame sky_view = frame.sky_view;
+  const bool star_catalogue = frame.stars.enabled && !p.star_catalogue.empty();
   for (const Draw& draw : draws) {
     const GLuint program = draw.program;
     glProgramUniform3f(program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
@@ -633,7 +648,9 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     glProgramUniform1f(program, 37, frame.surface_shell_radius);
     gpu::set_sky_view_frame_uniforms(program, sky_view);
     if (eclipse && !draw.classify) gpu::set_moons_uniforms(program, frame.moons);
+    gpu::set_star_catalogue_uniforms(program, star_catalogue, input.world_from_star_catalogue);
   }
+  if (star_catalogue) p.star_catalogue.bind(double(frame.stars.sigma));
   p.tables->bind();
   for (GLuint unit = 0; unit < gpu::kTableUnitCount; ++unit) glBindSampler(unit, 0);
   glBindTextureUnit(kDepthUnit, input.depth);
@@ -690,6 +707,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   glDisable(GL_STENCIL_TEST);
   if (input.timed) timings.composite_ms = p.timer->end_ms();
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  if (star_catalogue) gpu::StarCatalogueBuffers::unbind();
   gpu::check_gl("while compositing the atmosphere");
   p.timings = timings;
   return output;

@@ -26,6 +26,8 @@ layout(location = 9) uniform mat3 radiance_to_srgb;
 // The star field (stars.glsl): on or off, and the width of a star's image.
 layout(location = 12) uniform bool stars_enabled;
 layout(location = 13) uniform float star_sigma;
+// A star catalogue instead of the procedural field: stars.glsl's uniforms
+// (locations 60-63) and buffers.
 // The moons (eclipse.glsl): uniform_moons() of table_bindings.glsl in the
 // variant RENDER_ECLIPSE 1 (with moons), none in RENDER_ECLIPSE 0; and
 // whether they may hide the sun from the atmosphere this frame

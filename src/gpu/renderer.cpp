@@ -25,6 +25,7 @@
 #include "gpu/camera_cpp.hpp"
 #include "gpu/gl_util.hpp"
 #include "gpu/shader_source.hpp"
+#include "gpu/star_catalogue_bins.hpp"
 #include "physics/moons.hpp"
 #include "physics/parameters.hpp"
 #include "physics/radiance_to_camera_cpp.hpp"
@@ -145,6 +146,10 @@ struct Renderer::Impl {
   double last_sky_view_ms = 0.0;
   bool stars = false;
   std::vector<Moon> moons;
+  // The catalogue's stars (none: the procedural field) and its rotation.
+  std::vector<double> wavelengths_nm;
+  gpu::StarCatalogueBuffers star_catalogue;
+  glm::dmat3 world_from_catalogue{1.0};
 
   std::uint32_t program(bool sky_view_camera, bool eclipse) {
     std::uint32_t& p = programs[(sky_view_camera ? 1 : 0) + (eclipse ? 2 : 0)];
@@ -166,6 +171,7 @@ struct Renderer::Impl {
     if (framebuffer != 0) glDeleteFramebuffers(1, &framebuffer);
     if (tile_texture != 0) glDeleteTextures(1, &tile_texture);
     vertex_array = framebuffer = tile_texture = 0;
+    star_catalogue.release();
     timer.reset();
     tables.reset();
   }
@@ -201,6 +207,7 @@ Renderer::Renderer(const Atmosphere& atmosphere, const Tables& tables, TexturePr
   gpu::clear_gl_errors();
   Impl& p = *impl_;
   try {
+    p.wavelengths_nm = tables.wavelengths_nm;
     p.tables = std::make_unique<gpu::GpuTables>(atmosphere, tables, precision);
     p.timer = std::make_unique<gpu::GpuTimer>();
     p.program(true, false);
@@ -230,6 +237,14 @@ Renderer::~Renderer() {
 
 void Renderer::set_stars(bool enabled) { impl_->stars = enabled; }
 bool Renderer::stars() const { return impl_->stars; }
+void Renderer::set_star_catalogue(const std::vector<Star>& stars) {
+  impl_->star_catalogue.set(stars, impl_->wavelengths_nm);
+}
+const std::vector<Star>& Renderer::star_catalogue() const { return impl_->star_catalogue.stars(); }
+void Renderer::set_star_orientation(const glm::dmat3& world_from_catalogue) {
+  gpu::validate_star_orientation(world_from_catalogue, "Renderer::set_star_orientation");
+  impl_->world_from_catalogue = world_from_catalogue;
+}
 const std::vector<Moon>& Renderer::moons() const { return impl_->moons; }
 double Renderer::last_frame_ms() const { return impl_->last_frame_ms; }
 double Renderer::last_sky_view_ms() const { return impl_->last_sky_view_ms; }
@@ -289,6 +304,9 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   gpu::set_sky_view_frame_uniforms(program, sky_view);
   glProgramUniform1i(program, 12, p.stars ? 1 : 0);
   glProgramUniform1f(program, 13, float(star_image_sigma(camera)));
+  const bool catalogue = p.stars && !p.star_catalogue.empty();
+  gpu::set_star_catalogue_uniforms(program, catalogue, p.world_from_catalogue);
+  if (catalogue) p.star_catalogue.bind(double(float(star_image_sigma(camera))));
   gpu::set_moons_uniforms(program, moons);
   glProgramUniform1i(program, kMoonsEclipseLocation, eclipsing.count > 0 ? 1 : 0);
   tables.bind();
@@ -325,6 +343,7 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
     }
   }
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  if (catalogue) gpu::StarCatalogueBuffers::unbind();
   gpu::check_gl("while rendering");
   p.last_frame_ms = gpu_ms;
   return image;
@@ -350,8 +369,11 @@ double star_image_sigma(const Camera& camera) {
 }
 
 Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camera& camera,
-                 const glm::dvec3& sun_direction, bool stars, const std::vector<Moon>& moon_list) {
+                 const glm::dvec3& sun_direction, bool stars, const std::vector<Moon>& moon_list,
+                 const std::vector<Star>& star_catalogue, const glm::dmat3& world_from_catalogue) {
   check_tables_match(atmosphere, tables);
+  validate_stars(star_catalogue);
+  gpu::validate_star_orientation(world_from_catalogue, "render_cpu");
   const CameraFrame frame = camera_frame(camera);
   const glm::vec3 sun = sun_vector(sun_direction);
   const physics::AtmosphereParams params = physics::make_render_params(atmosphere, tables.sizes);
@@ -369,7 +391,18 @@ Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camer
   gpu::CpuSkyView sky_view;
   if (sky_view_camera)
     sky_view = gpu::compute_sky_view_cpu(params, *spectral, samplers, frame.position, sun, eclipsing);
-  const physics::StarField star_field{stars, float(star_image_sigma(camera))};
+  physics::StarField star_field{stars, float(star_image_sigma(camera))};
+  // The catalogue's stars, binned as Renderer::render bins them.
+  gpu::StarBins star_bins;
+  if (stars && !star_catalogue.empty()) {
+    std::vector<glm::vec3> directions, irradiances;
+    for (const Star& star : star_catalogue) {
+      directions.push_back(glm::vec3(glm::normalize(star.direction)));
+      irradiances.push_back(gpu::star_channel_irradiance(star, tables.wavelengths_nm));
+    }
+    star_bins = gpu::bin_stars(directions, irradiances, gpu::star_bin_radius(double(star_field.sigma)));
+    star_field.catalogue = star_bins.view(world_from_catalogue);
+  }
 
   Image image;
   image.width = camera.width;

@@ -1,9 +1,10 @@
-// atmos — the stars behind the atmosphere: a procedural star field.
+// atmos — the stars behind the atmosphere: a procedural star field, or the
+// stars of a catalogue.
 //
 // Needs: definitions.glsl. radiance_to_camera.glsl adds the stars to what
 // a view ray sees beyond the atmosphere.
 //
-// No catalogue: the sky is divided into the cells of a cube map,
+// The procedural field, without a catalogue: the sky is divided into the cells of a cube map,
 // STAR_CELLS x STAR_CELLS per face, and each cell holds one star placed and
 // scaled by a hash of the cell's index. The magnitudes follow the counts of
 // the real sky: the number of stars brighter than V is N(V) = 10^(0.5 V +
@@ -31,9 +32,15 @@
 // pixel or two (sigma ~ 0.6 of the pixel's angular size, see the renderers),
 // so that it neither falls between pixel centres nor flickers, and its
 // radiance integrates over the image to its irradiance.
+// In C++ the field also carries the catalogue (STAR_CATALOGUE_MEMBER, see
+// physics/stars_cpp.hpp); in GLSL the catalogue is the program's (below).
+#ifndef STAR_CATALOGUE_MEMBER
+#define STAR_CATALOGUE_MEMBER
+#endif
 struct StarField {
   bool enabled;
   float sigma;
+  STAR_CATALOGUE_MEMBER
 };
 
 // A 32-bit integer hash (C. Wellons' "lowbias32", 2018): well mixed, the same
@@ -75,8 +82,9 @@ INLINE vec3 star_of_cell(int cell, OUT(float) magnitude) {
   return normalize(star_cube_direction(face, uv));
 }
 
-// The cell whose star can light direction `view_ray` (unit).
-INLINE int star_cell(vec3 view_ray) {
+// The cell of direction `view_ray` (unit) in a cube map of `cells` x `cells`
+// cells per face: face * cells² + row * cells + column.
+INLINE int star_cube_cell(vec3 view_ray, int cells) {
   vec3 a = abs(view_ray);
   int face;
   vec2 uv;
@@ -90,9 +98,72 @@ INLINE int star_cell(vec3 view_ray) {
     face = view_ray.z > 0.0f ? 4 : 5;
     uv = vec2(view_ray.x, view_ray.y) / a.z;
   }
-  int column = clamp(int(floor((0.5f * uv.x + 0.5f) * float(STAR_CELLS))), 0, STAR_CELLS - 1);
-  int row = clamp(int(floor((0.5f * uv.y + 0.5f) * float(STAR_CELLS))), 0, STAR_CELLS - 1);
-  return (face * STAR_CELLS + row) * STAR_CELLS + column;
+  int column = clamp(int(floor((0.5f * uv.x + 0.5f) * float(cells))), 0, cells - 1);
+  int row = clamp(int(floor((0.5f * uv.y + 0.5f) * float(cells))), 0, cells - 1);
+  return (face * cells + row) * cells + column;
+}
+
+// The cell whose star can light direction `view_ray` (unit).
+INLINE int star_cell(vec3 view_ray) { return star_cube_cell(view_ray, STAR_CELLS); }
+
+// The stars of a catalogue (atmos::Star, set by Renderer::set_star_catalogue
+// and AtmospherePass::set_star_catalogue): each star's direction in the
+// catalogue's frame and its irradiance in the tables' channels above the
+// atmosphere. They are binned on the CPU (gpu/star_catalogue_bins.cpp) into
+// the STAR_CATALOGUE_CELLS² cells of each face of a cube map in that frame:
+// a cell lists every star whose image can reach into it (every star closer
+// to the cell than the bins' radius, at least five image widths), so that
+// a pixel sums the stars of its own cell alone. A cell's stars are records
+// first .. end - 1 (star_catalogue_cell_first of the cell and of the next
+// one); record 2 i holds the star's unit direction (xyz), 2 i + 1 its
+// irradiance (xyz). The view ray is turned into the catalogue's frame by
+// catalogue_from_world, so that the stars of a date turn with the sky
+// without new bins.
+#define STAR_CATALOGUE_CELLS 64
+// The buffers' binding points, within the 8 that every OpenGL 4.3+
+// implementation has (GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS).
+#define STAR_CATALOGUE_CELLS_BINDING 6
+#define STAR_CATALOGUE_RECORDS_BINDING 7
+
+#ifdef __cplusplus
+INLINE bool star_catalogue_enabled(IN(StarField) stars) { return stars.catalogue.enabled; }
+INLINE mat3 star_catalogue_from_world(IN(StarField) stars) { return stars.catalogue.from_world; }
+INLINE uint star_catalogue_cell_first(IN(StarField) stars, int cell) { return stars.catalogue.cell_first[cell]; }
+INLINE vec4 star_catalogue_record(IN(StarField) stars, uint i) { return stars.catalogue.records[i]; }
+#else
+// The program's catalogue: whether it is drawn (else the procedural field),
+// the rotation from the world's axes to its frame, and its bins.
+layout(location = 60) uniform bool star_catalogue_on;
+layout(location = 61) uniform mat3 star_catalogue_rotation;  // 61-63
+layout(std430, binding = STAR_CATALOGUE_CELLS_BINDING) readonly buffer StarCatalogueCells {
+  uint star_catalogue_cells[];
+};
+layout(std430, binding = STAR_CATALOGUE_RECORDS_BINDING) readonly buffer StarCatalogueRecords {
+  vec4 star_catalogue_records[];
+};
+bool star_catalogue_enabled(StarField stars) { return star_catalogue_on; }
+mat3 star_catalogue_from_world(StarField stars) { return star_catalogue_rotation; }
+uint star_catalogue_cell_first(StarField stars, int cell) { return star_catalogue_cells[cell]; }
+vec4 star_catalogue_record(StarField stars, uint i) { return star_catalogue_records[i]; }
+#endif
+
+// Radiance of the catalogue's stars in direction `view_ray` (unit, world
+// axes) above the atmosphere: each star's image a Gaussian of width
+// stars.sigma that integrates to its irradiance, as the procedural field's.
+INLINE vec3 star_catalogue_radiance(IN(StarField) stars, vec3 view_ray) {
+  vec3 ray = star_catalogue_from_world(stars) * view_ray;
+  int cell = star_cube_cell(ray, STAR_CATALOGUE_CELLS);
+  uint first = star_catalogue_cell_first(stars, cell);
+  uint end = star_catalogue_cell_first(stars, cell + 1);
+  float inverse_two_sigma2 = 0.5f / (stars.sigma * stars.sigma);
+  vec3 sum = vec3(0.0f);
+  for (uint i = first; i < end; ++i) {
+    vec3 star = vec3(star_catalogue_record(stars, 2u * i));
+    vec3 c = cross(ray, star);
+    float theta2 = dot(ray, star) > 0.0f ? dot(c, c) : 4.0f;  // sin²: the angle², to 1e-8 over an image
+    sum += vec3(star_catalogue_record(stars, 2u * i + 1u)) * exp(-theta2 * inverse_two_sigma2);
+  }
+  return sum * (inverse_two_sigma2 / PI);
 }
 
 // Irradiance of a star of magnitude V in the tables' channels: a fraction of
@@ -109,6 +180,7 @@ INLINE vec3 star_irradiance(IN(AtmosphereParams) atmosphere, float magnitude) {
 // image a Gaussian of width stars.sigma that integrates to its irradiance.
 INLINE vec3 star_field_radiance(IN(AtmosphereParams) atmosphere, IN(StarField) stars, vec3 view_ray) {
   if (!stars.enabled) return vec3(0.0f);
+  if (star_catalogue_enabled(stars)) return star_catalogue_radiance(stars, view_ray);
   float magnitude;
   vec3 star = star_of_cell(star_cell(view_ray), magnitude);
   vec3 c = cross(view_ray, star);
