@@ -42,6 +42,13 @@ done
 (cd "$out/earth" && "$atmos" render --planet earth --wavelengths 15 --orders auto --date 2024-04-08T18:42:30Z \
   --latitude 32.78 --longitude -96.80 --look 170,40 --fov 90 --size 960x540 --stars --exposure 2 \
   -o eclipse-dallas.png)
+# The real night sky by date and place: Orion, Sirius, Procyon, Aldebaran
+# and the Pleiades over Vienna on 2025-01-29 at 20:30 UTC (new Moon, the sun
+# 46° down), the Yale Bright Star Catalogue's stars placed by the sidereal
+# time (docs/ephemeris.md, Drawing the stars).
+(cd "$out/earth" && "$atmos" render --planet earth --wavelengths 15 --orders auto --date 2025-01-29T20:30:00Z \
+  --latitude 48.21 --longitude 16.37 --altitude 2 --look 175,35 --fov 70 --size 960x540 --exposure -3 \
+  -o night-orion-vienna.png)
 # Mars's blue sunset: the glow around the sun, at EV 13 (the default
 # sunset's exposure saturates it).
 (cd "$out/mars" && "$atmos" render --planet mars --wavelengths 15 --orders auto --altitude 2 --look 270,6 --fov 60 \
