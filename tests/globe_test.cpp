@@ -733,6 +733,48 @@ TEST_F(GlobeGpu, DaySideIsLitAndNightSideIsDark) {
   EXPECT_LT(night / night_pixels, 1e-3 * (day / day_pixels));
 }
 
+// New tables for the same ground: a globe rebound to another pass draws
+// what a new globe built with that pass draws, bit for bit, and a rebind
+// it refuses (another datum) leaves it bound to the pass it had.
+TEST_F(GlobeGpu, RebindDrawsAsANewGlobeWithTheNewPass) {
+  atmos::Atmosphere dense = *earth_;
+  atmos::scale_density(dense, 4.0);
+  atmos::PrecomputeOptions options;
+  options.sizes = atmos_test::small_gpu_sizes();
+  const atmos::Tables dense_tables = atmos::precompute_tables(dense, options);
+  const atmos::AtmospherePass dense_pass(dense, dense_tables, atmos::PlanetFrame{});
+  atmos::GlobeSettings settings;
+  settings.complete_every_frame = true;
+  const atmos::PlanetSurface surface = surface_of(atmos::SurfaceStyle::earth, 3);
+  atmos::Globe globe(*earth_, surface, *pass_, settings);
+  const int width = 64, height = 64;
+  Target target(width, height);
+  const double radius = earth_->bottom_radius_m;
+  const atmos::GlobeView view =
+      view_from(glm::dvec3(0.0, -3.0 * radius, 0.0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1), width, height);
+  const auto draw = [&](atmos::Globe& g) {
+    target.clear();
+    g.draw(view);
+    return target.read_colour();
+  };
+  const std::vector<float> thin = draw(globe);
+  globe.rebind(dense, dense_pass);
+  const std::vector<float> rebound = draw(globe);
+  atmos::Globe fresh(dense, surface, dense_pass, settings);
+  EXPECT_EQ(rebound, draw(fresh));
+  // The denser air dims the sunlight on the ground.
+  double thin_sum = 0.0, dense_sum = 0.0;
+  for (size_t k = 0; k < thin.size(); k += 4)
+    if (thin[k] != -1.0f) thin_sum += thin[k + 1], dense_sum += rebound[k + 1];
+  EXPECT_LT(dense_sum, 0.99 * thin_sum);
+
+  atmos::Atmosphere other_datum = dense;
+  other_datum.bottom_radius_m += 1000.0;
+  other_datum.top_radius_m += 1000.0;
+  EXPECT_THROW(globe.rebind(other_datum, *pass_), atmos::Error);
+  EXPECT_EQ(draw(globe), rebound);
+}
+
 // Mars's lowlands lie kilometres below its datum: lit and composited by the
 // pass of extend_below_datum's atmosphere, the ground there is finite and
 // sunlit, and so is the final image.

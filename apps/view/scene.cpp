@@ -23,11 +23,23 @@ atmos::GlobeSettings globe_settings(bool complete_tiles) {
 }  // namespace
 
 Scene::Scene(const PlanetTables& t, bool globe, bool regional_albedo, bool complete_tiles)
-    : params_(t.params), planet_(t.planet), terrain_ms_(std::numeric_limits<double>::quiet_NaN()) {
+    : params_(t.params), planet_(t.planet), surface_(t.surface), terrain_ms_(std::numeric_limits<double>::quiet_NaN()) {
   pass_ = std::make_unique<atmos::AtmospherePass>(t.air, t.tables, atmos::PlanetFrame{});
   if (globe) globe_ = std::make_unique<atmos::Globe>(t.planet, t.surface, *pass_, globe_settings(complete_tiles));
-  regional_albedo_ = globe && regional_albedo && !t.tables.ground_response.empty();
+  regional_albedo_requested_ = globe && regional_albedo;
+  regional_albedo_ = regional_albedo_requested_ && !t.tables.ground_response.empty();
   glCreateQueries(GL_TIME_ELAPSED, kQueries, queries_.data());
+}
+
+bool Scene::rebind(const PlanetTables& t) {
+  if (!globe_ || !(t.surface == surface_) || t.planet.bottom_radius_m != planet_.bottom_radius_m) return false;
+  auto pass = std::make_unique<atmos::AtmospherePass>(t.air, t.tables, atmos::PlanetFrame{});
+  globe_->rebind(t.planet, *pass);
+  pass_ = std::move(pass);
+  params_ = t.params;
+  planet_ = t.planet;
+  regional_albedo_ = regional_albedo_requested_ && !t.tables.ground_response.empty();
+  return true;
 }
 
 Scene::~Scene() {

@@ -4,9 +4,9 @@
 // atmos::AtmospherePass for the aerial perspective, the sky, the sun, the
 // stars and the moons. Only the public API of include/atmos is used.
 //
-// A Scene holds one set of tables; a parameter change builds a new Scene
-// from new tables (computed on another thread, tables_job.hpp) and the
-// viewer swaps it in. Construct, use and destroy it with the viewer's
+// A Scene holds one set of tables; new tables (computed on another
+// thread, tables_job.hpp) are swapped in by rebind() over the same ground,
+// else by a new Scene. Construct, use and destroy it with the viewer's
 // OpenGL 4.5 context current.
 #pragma once
 
@@ -65,6 +65,13 @@ class Scene {
   Scene(const Scene&) = delete;
   Scene& operator=(const Scene&) = delete;
 
+  // Takes new tables of the same ground (the same surface on the same
+  // datum radius) without a new globe: a new pass, the globe rebound to it
+  // (atmos::Globe::rebind) with its tiles kept. False, with the scene
+  // unchanged, when the ground differs or the scene has no globe (build a
+  // new Scene then); atmos::Error as the constructor.
+  bool rebind(const PlanetTables& tables);
+
   // Draws the frame; returns the composited HDR texture (RGBA32F, valid
   // until the next render or the scene's destruction).
   GLuint render(const SceneFrame& frame);
@@ -89,9 +96,10 @@ class Scene {
 
   PlanetParams params_;
   atmos::Atmosphere planet_;
+  atmos::PlanetSurface surface_;
   std::unique_ptr<atmos::AtmospherePass> pass_;
   std::unique_ptr<atmos::Globe> globe_;
-  bool regional_albedo_ = false;
+  bool regional_albedo_requested_ = false, regional_albedo_ = false;
   int width_ = 0, height_ = 0;
   GLuint colour_ = 0, depth_ = 0, output_ = 0, framebuffer_ = 0;
   // A ring of timer queries: query i is read once the frame after next

@@ -176,6 +176,18 @@ class Globe {
   Globe(const Globe&) = delete;
   Globe& operator=(const Globe&) = delete;
 
+  // Binds the globe to another atmosphere of the same planet and its pass
+  // (new tables: another density, other constituents, other wavelengths),
+  // keeping the surface, its open rasters and the resident tiles, so that
+  // new tables cost one link of the lit programs (a cache hit once the
+  // driver has compiled them for `pass`) instead of a new globe. `pass`
+  // must outlive the globe (the old one may then be destroyed). Throws
+  // atmos::Error, with the globe still bound to its old pass, when
+  // `atmosphere`'s bottom radius is not the globe's datum (the relief is
+  // built on it: build a new Globe), on a sea level outside `atmosphere`,
+  // or a pass that does not reach the lowest ground, as the constructor.
+  void rebind(const Atmosphere& atmosphere, const AtmospherePass& pass);
+
   // Draws the surface into the bound framebuffer's colour attachment 0 (lit
   // colour, RGB) and depth attachment (reversed-Z: clear it to 0 first),
   // after the shadow maps when shadows are on. Throws atmos::Error, with

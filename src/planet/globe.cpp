@@ -164,6 +164,8 @@ void set_globe_morph(bool enabled) { morph_enabled.store(enabled, std::memory_or
 struct Globe::Impl {
   const AtmospherePass* pass = nullptr;
   GlobeSettings settings;
+  PlanetSurface description;  // what `surface` was opened from (rebind's checks)
+  double datum_radius_m = 0.0;
   planet::Surface surface;
   planet::MeshBuilder builder;
   TileProgram program;
@@ -187,6 +189,8 @@ struct Globe::Impl {
   Impl(const Atmosphere& a, const PlanetSurface& s, const AtmospherePass& p, const GlobeSettings& g)
       : pass(&p),
         settings(g),
+        description(s),
+        datum_radius_m(a.bottom_radius_m),
         surface(s, a.bottom_radius_m),
         builder(surface, a.bottom_radius_m) {}
 
@@ -199,6 +203,18 @@ struct Globe::Impl {
     if (program.id != 0) glDeleteProgram(program.id);
     for (const TileProgram& e : eclipse_programs)
       if (e.id != 0) glDeleteProgram(e.id);
+  }
+
+  // The pass's tables must reach the lowest ground (as lowest_surface_height_m
+  // estimates it): below their bottom the light and the aerial perspective
+  // would be clamped to it.
+  void check_pass_reaches_ground(const AtmospherePass& with) const {
+    const double lowest = surface.estimated_lowest_m();
+    if (with.bottom_radius_m() > datum_radius_m + lowest + 1.0)
+      throw Error("globe: the ground goes down to " + std::to_string(lowest) +
+                  " m, below the bottom of the pass's atmosphere (" +
+                  std::to_string(with.bottom_radius_m() - datum_radius_m) +
+                  " m): build the pass from extend_below_datum(atmosphere, surface)");
   }
 
   void upload(const TileKey& key, const planet::TileMesh& mesh) {
@@ -599,16 +615,7 @@ Globe::Globe(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
   }
   impl_ = std::make_unique<Impl>(atmosphere, surface, pass, settings);
   Impl& p = *impl_;
-  // The pass's tables must reach the lowest ground (as lowest_surface_height_m
-  // estimates it): below their bottom the light and the aerial perspective
-  // would be clamped to it.
-  const double lowest = p.surface.estimated_lowest_m();
-  const double lowest_radius = atmosphere.bottom_radius_m + lowest;
-  if (pass.bottom_radius_m() > lowest_radius + 1.0)
-    throw Error("globe: the ground goes down to " + std::to_string(lowest) +
-                " m, below the bottom of the pass's atmosphere (" +
-                std::to_string(pass.bottom_radius_m() - atmosphere.bottom_radius_m) +
-                " m): build the pass from extend_below_datum(atmosphere, surface)");
+  p.check_pass_reaches_ground(pass);
   if (settings.memory_cap_bytes < std::size_t(kPermanentTiles) * p.builder.vertex_count() * sizeof(planet::TileVertex))
     throw Error("globe settings: memory_cap_bytes " + std::to_string(settings.memory_cap_bytes) +
                 " holds less than the " + std::to_string(kPermanentTiles) + " tiles of levels 0 and 1");
@@ -652,6 +659,43 @@ Globe::Globe(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
 }
 
 Globe::~Globe() = default;
+
+void Globe::rebind(const Atmosphere& atmosphere, const AtmospherePass& pass) {
+  Impl& p = *impl_;
+  if (atmosphere.bottom_radius_m != p.datum_radius_m)
+    throw Error("globe rebind: the atmosphere's bottom radius " + std::to_string(atmosphere.bottom_radius_m) +
+                " m is not the globe's datum " + std::to_string(p.datum_radius_m) +
+                " m (the relief is built on it): build a new Globe");
+  planet::validate_sea_level(p.description, atmosphere, "globe");
+  p.check_pass_reaches_ground(pass);
+  // The programs that light tiles carry the pass's library: the new ones
+  // are linked before anything changes, so that a failure leaves the globe
+  // bound to its old pass.
+  TileProgram lit = lit_program(pass, p.settings.first_unit, false, false);
+  TileProgram shadowed;
+  if (p.shadows) {
+    try {
+      shadowed = lit_program(pass, p.settings.first_unit, true, false);
+    } catch (...) {
+      glDeleteProgram(lit.id);
+      throw;
+    }
+  }
+  glDeleteProgram(p.program.id);
+  p.program = lit;
+  if (p.shadows) {
+    glDeleteProgram(p.shadows->lit.id);
+    p.shadows->lit = shadowed;
+  }
+  // The eclipse's variants are linked again at their next use.
+  for (TileProgram& e : p.eclipse_programs) {
+    if (e.id != 0) glDeleteProgram(e.id);
+    e = TileProgram{};
+  }
+  p.pass = &pass;
+  p.top_radius_m = atmosphere.top_radius_m;
+  p.sun_angular_radius_rad = atmosphere.sun_angular_radius_rad;
+}
 
 void Globe::draw(const GlobeView& view) {
   Impl& p = *impl_;
