@@ -49,6 +49,8 @@ struct SurfaceRaster {
   // PNG): the longitudes and latitudes of its edges, degrees, west, south,
   // east, north. None: the raster's own georeferencing.
   std::optional<std::array<double, 4>> bounds_deg;
+
+  bool operator==(const SurfaceRaster&) const = default;
 };
 
 struct PlanetSurface {
@@ -66,6 +68,8 @@ struct PlanetSurface {
   // 1996; Debian's gmt-gshhg-* packages): the style's relief is drawn
   // inside the real coastlines. "" = none.
   std::string coastline;
+
+  bool operator==(const PlanetSurface&) const = default;
 };
 
 // The surface of a preset or planet file: its "surface" object, or the flat
@@ -77,4 +81,14 @@ PlanetSurface load_surface(const std::string& name_or_path);
 PlanetSurface parse_surface(const std::string& json_text, const std::string& origin);
 // "earth", "mars", "venus", "titan", "flat" (atmos::Error for another name).
 SurfaceStyle surface_style_from_name(const std::string& name);
+
+// A planet file (atmos-planet-1) of `atmosphere` and `surface` (omitted
+// when it is the default, flat one): SI units, every spectrum with its own
+// samples, raster paths made absolute, so that parse_atmosphere and
+// parse_surface read back the same atmosphere and surface, sample for
+// sample (the atmosphere's origin aside). Throws atmos::Error for an
+// atmosphere that fails validate().
+std::string format_planet(const Atmosphere& atmosphere, const PlanetSurface& surface = {});
+// format_planet written to `path` (replaced); atmos::Error when it cannot be written.
+void write_planet_file(const std::string& path, const Atmosphere& atmosphere, const PlanetSurface& surface = {});
 }  // namespace atmos

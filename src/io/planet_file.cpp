@@ -13,6 +13,7 @@
 #include <set>
 #include <sstream>
 
+#include "atmos/planet_parameters.hpp"
 #include "data/embedded_files.hpp"
 
 namespace atmos {
@@ -126,6 +127,18 @@ std::vector<double> number_list(const json& v, const std::string& origin, const 
 
 Spectrum parse_spectrum(const json& q, const std::string& kind, const std::vector<double>& wavelengths,
                         const std::string& origin, const std::string& path);
+
+// A value (SI) against the range of its parameter in planet_parameters().
+// The samples of spectra (albedo, phase parameters) are checked by
+// Atmosphere::validate, whose messages name the wavelength, against the
+// same ranges (tests/planet_writer_test.cpp holds them equal).
+void check_parameter(const char* name, double value_si, const std::string& origin, const std::string& path) {
+  try {
+    check_planet_parameter(name, value_si, path);
+  } catch (const Error& e) {
+    fail(origin, e.what());
+  }
+}
 
 // A coefficient (m^-1 at the reference density) from physical inputs
 // (the formulas are in atmosphere.hpp):
@@ -426,9 +439,12 @@ Atmosphere parse_atmosphere(const std::string& json_text, const std::string& ori
   if (unit_of(w, origin, "wavelengths") != "nm") fail(origin, "wavelengths must be given in nm");
   a.wavelengths_nm = number_list(require(w, "values", origin, "wavelengths"), origin, "wavelengths.values");
 
+  check_parameter("wavelengths", double(a.wavelengths_nm.size()), origin, "the number of wavelengths");
   a.bottom_radius_m = scalar(doc, "bottom_radius", "length", origin, "planet");
+  check_parameter("bottom_radius", a.bottom_radius_m, origin, "bottom_radius");
   a.top_radius_m = scalar(doc, "top_radius", "length", origin, "planet");
   a.sun_angular_radius_rad = scalar(doc, "sun_angular_radius", "angle", origin, "planet");
+  check_parameter("sun_angular_radius", a.sun_angular_radius_rad, origin, "sun_angular_radius");
   a.solar_irradiance = parse_spectrum(require(doc, "solar_irradiance", origin, "planet"), "spectral_irradiance",
                                       a.wavelengths_nm, origin, "solar_irradiance");
   a.ground_albedo = parse_spectrum(require(doc, "ground_albedo", origin, "planet"), "dimensionless",
@@ -448,6 +464,9 @@ Atmosphere parse_atmosphere(const std::string& json_text, const std::string& ori
                                   path + ".absorption");
     k.phase = parse_phase(require(c, "phase_function", origin, path), a.wavelengths_nm, origin,
                           path + ".phase_function");
+    if (k.density.kind == DensityProfile::Kind::exponential)
+      check_parameter("constituents[].density.scale_height", k.density.scale_height_m, origin,
+                      path + ".density.scale_height");
     a.constituents.push_back(std::move(k));
   }
   a.validate();
