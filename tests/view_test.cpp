@@ -15,6 +15,7 @@
 #include "cli_support.hpp"
 #include "png_decoder.hpp"
 #include "atmos/image.hpp"
+#include "atmos/planet_file.hpp"
 #include <nlohmann/json.hpp>
 #include <algorithm>
 
@@ -227,10 +228,41 @@ TEST(ViewFlight, PlanetEditsChangeTheAtmosphere) {
   expect_error(bad, "the planet has 3 constituents, 7 edited");
   bad = {};
   bad.thickness_m = 10.0;
-  expect_error(bad, "atmosphere thickness must be in [1 km, 10000 km]");
+  expect_error(bad, "atmosphere thickness must be in [1, 10000] km, got 0.01 km");
   bad = {};
   bad.density_scale = -1.0;
   expect_error(bad, "density scale must be in (0, 10000]");
+}
+
+// The panel's "save": the planet with its edits, as a planet file that
+// reads back as that planet.
+TEST(ViewFlight, SavedPlanetReadsBackWithItsEdits) {
+  atmos_view::PlanetParams p;
+  p.planet = "mars";
+  p.density_scale = 0.5;
+  p.ground_albedo = 0.3;
+  p.thickness_m = 90e3;
+  p.constituents.resize(2);
+  p.constituents[1].phase_g = 0.8;
+  const fs::path path = atmos_test::scratch_directory("view") / "saved-mars.json";
+  atmos_view::save_planet(p, path.string());
+  const atmos::Atmosphere want = atmos_view::make_atmosphere(p);
+  const atmos::Atmosphere got = atmos::load_atmosphere(path.string());
+  EXPECT_EQ(got.top_radius_m, want.top_radius_m);
+  EXPECT_TRUE(got.ground_albedo == want.ground_albedo);
+  ASSERT_EQ(got.constituents.size(), want.constituents.size());
+  for (size_t i = 0; i < got.constituents.size(); ++i) {
+    EXPECT_TRUE(got.constituents[i].scattering == want.constituents[i].scattering) << i;
+    EXPECT_TRUE(got.constituents[i].phase == want.constituents[i].phase) << i;
+  }
+  EXPECT_TRUE(atmos::load_surface(path.string()) == atmos::load_surface("mars"));
+  // Loaded again as the viewer's planet, with no edits: the same atmosphere.
+  atmos_view::PlanetParams again;
+  again.planet = path.string();
+  EXPECT_EQ(atmos_view::make_atmosphere(again).top_radius_m, want.top_radius_m);
+  p.ground_albedo = 2.0;
+  EXPECT_THROW(atmos_view::save_planet(p, (path.parent_path() / "unsaved.json").string()), atmos::Error);
+  EXPECT_FALSE(fs::exists(path.parent_path() / "unsaved.json"));
 }
 
 TEST(ViewFlight, ScriptsGiveTheInputOfEachFrame) {
@@ -346,9 +378,16 @@ TEST(ViewCli, ScriptFliesTheCameraAndDragsASlider) {
       {"frame": 9, "frames": 4, "mouse": [30, -10]},
       {"frame": 13, "key": "2"},
       {"frame": 20, "frames": 12, "slider": "sun_azimuth", "from": 180, "to": 200},
-      {"frame": 33, "frames": 2, "slider": "ground_albedo", "from": 0.5, "to": 1.5}]})";
+      {"frame": 33, "frames": 2, "slider": "ground_albedo", "from": 0.5, "to": 1.5},
+      {"frame": 36, "save": ")" + (scratch() / "saved.json").string() + R"("},
+      {"frame": 37, "save": ")" + (scratch() / "no-such-dir" / "saved.json").string() + R"("}]})";
   const CliRun r = view("--surface sphere --script " + script.string() + " --record " + record.string());
   ASSERT_EQ(r.code, 0) << r.err;
+  // The planet on screen saved from the panel (the impossible albedo was
+  // not kept), and a path that cannot be written: an error in the panel.
+  const atmos::Atmosphere saved = atmos::load_atmosphere((scratch() / "saved.json").string());
+  EXPECT_TRUE(saved.ground_albedo == atmos::load_atmosphere("earth").ground_albedo);
+  EXPECT_NE(r.err.find("cannot write the planet file"), std::string::npos) << r.err;
   // W for 8 frames of 1/30 s at 2 m/s, then the jump to 10 km.
   EXPECT_NEAR(figure(r.out, "camera: altitude "), 10e3, 1.0) << r.out;
   EXPECT_NEAR(figure(r.out, "heading "), 90.0 + 4 * 30 * 0.15, 1e-6) << r.out;
@@ -369,6 +408,27 @@ TEST(ViewCli, ScriptFliesTheCameraAndDragsASlider) {
   double moved = 0.0;
   for (size_t i = 0; i < 3; ++i) moved += std::pow(last[i].get<double>() - first[i].get<double>(), 2);
   EXPECT_GT(std::sqrt(moved), 9e3);
+}
+
+// --date: the sun and the Moon of that instant over the starting point. In
+// the totality of 8 April 2024 at Mazatlan the sky is dark; an hour later,
+// with the Moon off the sun, it is a day sky again.
+TEST(ViewCli, DatePlacesTheSunAndTheMoonOfThatInstant) {
+  SKIP_WITHOUT_VIEWER();
+  const auto sky = [&](const std::string& time) {
+    const fs::path png = scratch() / ("date-" + time.substr(0, 2) + ".png");
+    const CliRun r = view("--surface sphere --no-ui --frames 2 --pitch 30 --latitude 25.29 --longitude -104.14 --date 2024-04-08T" +
+                          time + "Z --screenshot " + png.string());
+    EXPECT_EQ(r.code, 0) << r.err;
+    const Rgb m = mean_rows(png, 0.0, 1.0);
+    return m.r + m.g + m.b;
+  };
+  const double totality = sky("18:18:00"), after = sky("19:30:00");
+  EXPECT_GT(after, 200.0);
+  EXPECT_LT(totality, 0.1 * after);
+  const CliRun r = view("--frames 1 --date 2024-04-08T18:18:00Z", false);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--latitude"), std::string::npos) << r.err;
 }
 
 // A flight replayed twice, headless, gives the same files byte for byte.

@@ -5,6 +5,7 @@
 
 #include "commands.hpp"
 #include "harness.hpp"
+#include "view_bench.hpp"
 
 namespace atmos_cli {
 
@@ -21,10 +22,12 @@ int run_bench(const BenchOptions& o) {
   o.tables.validate();
   const auto [w, h] = o.size.parse();
   const atmos::Atmosphere atmosphere = o.planet.atmosphere();
-  atmos_bench::run_all(atmosphere, o.tables.precompute_options(), w, h, [](const atmos_bench::Figure& figure) {
+  const auto print = [](const atmos_bench::Figure& figure) {
     std::printf("%s\n", atmos_bench::format_figure(figure).c_str());
     std::fflush(stdout);
-  });
+  };
+  atmos_bench::run_all(atmosphere, o.tables.precompute_options(), w, h, print);
+  view_bench(o.planet.planet, print);
   return 0;
 }
 
@@ -41,7 +44,8 @@ Command add_bench_command(CLI::App& app) {
       "post-processing passes, and of the terrain globe under the plugin (globe.*: the frame, the terrain, the "
       "CPU selection, triangles and tiles from 2 m, 10 km, 400 km and 2.5 planet radii; the longest over the "
       "median frame of a streamed descent) and of the sea over it (water.*: the sea's draw and the frame with and "
-      "without it from 2 m, 1 km and 400 km)");
+      "without it from 2 m, 1 km and 400 km), and of the viewer at 1280x720 (view.*: its median frame over the "
+      "analytic sphere and the globe, its first frame with a cold shader cache)");
   o->planet.add(*cmd);
   o->tables.add(*cmd);
   o->size.add(*cmd, "Size of the timed frames (the frame figures are named after it)");

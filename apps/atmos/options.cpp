@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "atmos/ephemeris.hpp"
+#include "atmos/planet_parameters.hpp"
 #include "atmos/planet_file.hpp"
 #include "atmos/sky.hpp"
 
@@ -86,12 +87,14 @@ void PlanetOptions::add(CLI::App& app) {
       ->type_name("NAME|FILE")
       ->capture_default_str();
   app.add_option("--wavelengths", wavelengths,
-                 "Working wavelengths, N in [3, 48]: 3 is the fast mode (680, 550, 440 nm), more are spectral, "
+                 "Working wavelengths, N " + atmos::valid_range_text(atmos::planet_parameter("wavelengths")) +
+                     ": 3 is the fast mode (680, 550, 440 nm), more are spectral, "
                  "evenly spaced over 360-830 nm and converted to colour with the CIE 1931 2-degree observer "
                  "(default: the planet file's; 3 for the presets)")
       ->type_name("N");
   app.add_option("--density-scale", density_scale,
-                 "Multiply the density of every constituent by X, in (0, 10000]")
+                 "Multiply the density of every constituent by X, " +
+                     atmos::valid_range_text(atmos::planet_parameter("density_scale")))
       ->type_name("X")
       ->capture_default_str();
   app.add_option("--solar", solar,
@@ -101,10 +104,13 @@ void PlanetOptions::add(CLI::App& app) {
 }
 
 void PlanetOptions::validate() const {
-  if (wavelengths != 0 && (wavelengths < 3 || wavelengths > 48))
-    throw UsageError("--wavelengths must be in [3, 48], got " + std::to_string(wavelengths));
-  if (!(density_scale > 0.0 && density_scale <= 1e4))
-    throw UsageError("--density-scale must be in (0, 10000], got " + quote(density_scale));
+  // The ranges of atmos/planet_parameters.hpp, as the planet files'.
+  try {
+    if (wavelengths != 0) atmos::check_planet_parameter("wavelengths", double(wavelengths), "--wavelengths");
+    atmos::check_planet_parameter("density_scale", density_scale, "--density-scale");
+  } catch (const atmos::Error& e) {
+    throw UsageError(e.what());
+  }
   if (!solar.empty() && solar != "table") {
     const std::string prefix = "blackbody:";
     char* end = nullptr;

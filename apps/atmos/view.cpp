@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "atmos/ephemeris.hpp"
 #include "commands.hpp"
 #include "options.hpp"
 
@@ -26,6 +27,7 @@ struct ViewCommandOptions {
   CacheOptions cache;
   SurfaceOption surface;
   SunOptions sun;
+  DateOptions date;
   int width = 1280, height = 720;
   double altitude = 2.0, latitude = 20.0, longitude = 30.0, heading = 90.0, pitch = 0.0;
   double exposure = 13.0, bloom = 0.0, fov = 60.0;
@@ -98,6 +100,19 @@ int run_view(const ViewCommandOptions& o) {
   v.pitch_deg = o.pitch;
   v.sun_elevation_deg = o.sun.elevation;
   v.sun_azimuth_deg = o.sun.azimuth;
+  if (o.date.given()) {
+    // The sun and the Moon of the date seen from the starting ground point
+    // (atmos/ephemeris.hpp), as `atmos render --date` places them.
+    atmos::SkyOfDate sky;
+    try {
+      sky = atmos::sky_of_date(atmos::parse_utc_time(o.date.date), {o.latitude, o.longitude, 0.0});
+    } catch (const atmos::Error& e) {
+      throw UsageError(std::string("--date: ") + e.what());
+    }
+    v.sun_elevation_deg = sky.sun.elevation_deg;
+    v.sun_azimuth_deg = sky.sun.azimuth_deg;
+    v.moon_of_date_m = sky.moon.topocentric_m;
+  }
   v.look.exposure_ev = o.exposure;
   v.look.auto_exposure = o.auto_exposure;
   v.look.tone_mapping = atmos::parse_tone_mapping(o.tonemap);
@@ -140,8 +155,11 @@ Command add_view_command(CLI::App& app) {
                   "the camera stays 0.5 m above the ground and within 100 planet radii of its centre")
       ->type_name("M")
       ->capture_default_str();
-  cmd->add_option("--latitude", o->latitude, "Latitude of the starting ground point, degrees")->capture_default_str();
-  cmd->add_option("--longitude", o->longitude, "Longitude of the starting ground point, degrees")->capture_default_str();
+  cmd->add_option("--latitude", o->latitude, "Latitude of the starting ground point, degrees, in [-90, 90]")
+      ->capture_default_str();
+  cmd->add_option("--longitude", o->longitude, "Longitude of the starting ground point, degrees east")
+      ->capture_default_str();
+  o->date.add(*cmd);
   cmd->add_option("--heading", o->heading, "Starting view direction, degrees clockwise from north")->capture_default_str();
   cmd->add_option("--pitch", o->pitch, "Starting view elevation, degrees, in [-89.5, 89.5]")->capture_default_str();
   cmd->add_option("--fov", o->fov, "Vertical field of view, degrees, in [5, 120]")->capture_default_str();

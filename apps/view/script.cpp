@@ -80,8 +80,13 @@ Script Script::read(const std::string& path) {
       if (!e["planet"].is_string() || e["planet"].get<std::string>().empty())
         throw atmos::Error(where + "\"planet\" must be a preset name or a file");
       ev.planet = e["planet"].get<std::string>();
+    } else if (e.contains("save")) {
+      ev.kind = ScriptEvent::Kind::save;
+      if (!e["save"].is_string() || e["save"].get<std::string>().empty())
+        throw atmos::Error(where + "\"save\" must be the path of a planet file to write");
+      ev.save = e["save"].get<std::string>();
     } else {
-      throw atmos::Error(where + "expected one of \"key\", \"mouse\", \"slider\", \"planet\"");
+      throw atmos::Error(where + "expected one of \"key\", \"mouse\", \"slider\", \"planet\", \"save\"");
     }
     script.events.push_back(ev);
   }

@@ -6,7 +6,8 @@
 //     {"frame": 30, "frames": 10, "mouse": [4, -2]},          // drag the view 4, -2 px per frame
 //     {"frame": 40, "key": "2"},                               // jump to 10 km
 //     {"frame": 50, "frames": 20, "slider": "sun_elevation", "from": 30, "to": 5},
-//     {"frame": 80, "planet": "mars"}]}
+//     {"frame": 80, "planet": "mars"},
+//     {"frame": 90, "save": "my-planet.json"}]}                // the panel's "save"
 // A slider moves linearly from `from` (its first frame) to `to` (its last),
 // as a hand drags it; a planet slider's new tables are requested at its
 // last frame, as on the release of the mouse.
@@ -20,7 +21,7 @@
 namespace atmos_view {
 
 struct ScriptEvent {
-  enum class Kind { key, mouse, slider, planet };
+  enum class Kind { key, mouse, slider, planet, save };
   Kind kind = Kind::key;
   int frame = 0;   // first frame
   int frames = 1;  // how many frames it lasts (>= 1)
@@ -29,6 +30,7 @@ struct ScriptEvent {
   std::string slider;  // a name of slider_names()
   double from = 0.0, to = 0.0;
   std::string planet;  // a preset or a planet file
+  std::string save;    // where the planet of the panel is saved
 };
 
 // The sliders a script can drag: the look and the sun (applied at once) and

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "atmos/planet_file.hpp"
+#include "atmos/planet_parameters.hpp"
 
 namespace atmos_view {
 
@@ -14,20 +15,17 @@ namespace {
 
 using nlohmann::json;
 
-std::string number(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
 }  // namespace
 
 atmos::Atmosphere make_atmosphere(const PlanetParams& p) {
-  if (p.wavelengths != 0 && (p.wavelengths < 3 || p.wavelengths > 48))
-    throw atmos::Error("wavelengths must be in [3, 48], got " + std::to_string(p.wavelengths));
+  // The planet's values against their ranges (atmos/planet_parameters.hpp),
+  // named by the panel's labels.
+  const auto check = [](const char* name, double value_si, const std::string& prefix = "") {
+    atmos::check_planet_parameter(name, value_si, prefix + atmos::planet_parameter(name).label);
+  };
+  if (p.wavelengths != 0) check("wavelengths", double(p.wavelengths));
   if (p.orders < 1 || p.orders > 100) throw atmos::Error("orders must be in [1, 100], got " + std::to_string(p.orders));
-  if (!(p.density_scale > 0.0 && p.density_scale <= 1e4))
-    throw atmos::Error("density scale must be in (0, 10000], got " + number(p.density_scale));
+  check("density_scale", p.density_scale);
   if (p.table_sizes != "default" && p.table_sizes != "small")
     throw atmos::Error("table sizes must be default or small, got \"" + p.table_sizes + "\"");
   atmos::Atmosphere a = atmos::load_atmosphere(p.planet);
@@ -36,16 +34,13 @@ atmos::Atmosphere make_atmosphere(const PlanetParams& p) {
   if (!p.solar.empty()) atmos::set_solar_spectrum(a, p.solar);
   const double thickness = p.thickness_m.value_or(a.top_radius_m - a.bottom_radius_m);
   if (p.bottom_radius_m) {
-    if (!(*p.bottom_radius_m >= 1e3 && *p.bottom_radius_m <= 1e9))
-      throw atmos::Error("ground radius must be in [1 km, 1e6 km], got " + number(*p.bottom_radius_m) + " m");
+    check("bottom_radius", *p.bottom_radius_m);
     a.bottom_radius_m = *p.bottom_radius_m;
   }
-  if (p.thickness_m && !(*p.thickness_m >= 1e3 && *p.thickness_m <= 1e7))
-    throw atmos::Error("atmosphere thickness must be in [1 km, 10000 km], got " + number(*p.thickness_m) + " m");
+  if (p.thickness_m) check("atmosphere_thickness", *p.thickness_m);
   a.top_radius_m = a.bottom_radius_m + thickness;
   if (p.ground_albedo) {
-    if (!(*p.ground_albedo >= 0.0 && *p.ground_albedo <= 1.0))
-      throw atmos::Error("ground albedo must be in [0, 1], got " + number(*p.ground_albedo));
+    check("ground_albedo", *p.ground_albedo);
     a.ground_albedo = atmos::Spectrum::constant(*p.ground_albedo);
   }
   if (p.constituents.size() > a.constituents.size())
@@ -56,32 +51,32 @@ atmos::Atmosphere make_atmosphere(const PlanetParams& p) {
     atmos::Constituent& c = a.constituents[i];
     const std::string name = "constituent \"" + c.name + "\": ";
     if (e.scattering_scale) {
-      if (!(*e.scattering_scale >= 0.0 && *e.scattering_scale <= 100.0))
-        throw atmos::Error(name + "scattering scale must be in [0, 100], got " + number(*e.scattering_scale));
+      check("constituents[].scattering_scale", *e.scattering_scale, name);
       c.scattering = c.scattering.scaled(*e.scattering_scale);
     }
     if (e.absorption_scale) {
-      if (!(*e.absorption_scale >= 0.0 && *e.absorption_scale <= 100.0))
-        throw atmos::Error(name + "absorption scale must be in [0, 100], got " + number(*e.absorption_scale));
+      check("constituents[].absorption_scale", *e.absorption_scale, name);
       c.absorption = c.absorption.scaled(*e.absorption_scale);
     }
     if (e.scale_height_m) {
       if (c.density.kind != atmos::DensityProfile::Kind::exponential)
         throw atmos::Error(name + "its density profile is not exponential: it has no scale height");
-      if (!(*e.scale_height_m >= 10.0 && *e.scale_height_m <= 1e6))
-        throw atmos::Error(name + "scale height must be in [10 m, 1000 km], got " + number(*e.scale_height_m) + " m");
+      check("constituents[].density.scale_height", *e.scale_height_m, name);
       c.density.scale_height_m = *e.scale_height_m;
     }
     if (e.phase_g) {
       if (c.phase.kind == atmos::PhaseFunction::Kind::rayleigh)
         throw atmos::Error(name + "a Rayleigh phase function has no asymmetry parameter");
-      if (!(std::abs(*e.phase_g) < 0.999))
-        throw atmos::Error(name + "phase g must be in (-0.999, 0.999), got " + number(*e.phase_g));
+      check("constituents[].phase_function.g", *e.phase_g, name);
       c.phase.g = atmos::Spectrum::constant(*e.phase_g);
     }
   }
   a.validate();
   return a;
+}
+
+void save_planet(const PlanetParams& params, const std::string& path) {
+  atmos::write_planet_file(path, make_atmosphere(params), atmos::load_surface(params.planet));
 }
 
 atmos::PrecomputeOptions make_precompute_options(const PlanetParams& p, bool ground_albedo_response) {
@@ -179,7 +174,7 @@ json look_json(const LookSettings& l) {
 
 void write_flight(const FlightRecord& record, const std::string& path) {
   json frames = json::array();
-  for (const FrameRecord& f : record.frames)
+  for (const FrameRecord& f : record.frames) {
     frames.push_back({{"time_s", f.time_s},
                       {"position_m", vec(f.pose.position)},
                       {"forward", vec(f.pose.forward)},
@@ -188,6 +183,8 @@ void write_flight(const FlightRecord& record, const std::string& path) {
                       {"look", look_json(f.look)},
                       {"planet", planet_json(f.planet)},
                       {"frame_ms", f.frame_ms}});
+    if (f.moon_of_date_m) frames.back()["moon_of_date_m"] = vec(*f.moon_of_date_m);
+  }
   const json j = {{"format", "atmos-flight"},
                   {"version", 1},
                   {"surface", record.globe ? "globe" : "sphere"},
@@ -233,6 +230,7 @@ FlightRecord read_flight(const std::string& path) {
     out.pose.forward = r.vector(f, "forward", where);
     out.pose.up = r.vector(f, "up", where);
     out.sun = r.vector(f, "sun", where);
+    if (f.contains("moon_of_date_m")) out.moon_of_date_m = r.vector(f, "moon_of_date_m", where);
     const json& look = r.field(f, "look", where);
     const std::string lw = where + ".look";
     out.look.exposure_ev = r.real(look, "exposure_ev", lw);

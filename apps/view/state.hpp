@@ -51,6 +51,11 @@ struct PlanetParams {
 // naming the first bad value (an unreadable planet file, a density scale or
 // radius out of range, an albedo outside [0, 1], ...).
 atmos::Atmosphere make_atmosphere(const PlanetParams& params);
+// Writes the planet of `params` (its planet file with the edits applied,
+// and the file's surface) as a planet file (atmos::write_planet_file) that
+// reads back as that planet. atmos::Error as make_atmosphere, or when the
+// file cannot be written.
+void save_planet(const PlanetParams& params, const std::string& path);
 // The precomputation options of `params` (fixed orders, the table sizes).
 atmos::PrecomputeOptions make_precompute_options(const PlanetParams& params, bool ground_albedo_response);
 
@@ -79,6 +84,9 @@ struct FrameRecord {
   glm::dvec3 sun{0, 0, 1};  // towards the sun, planet frame
   LookSettings look;
   PlanetParams planet;  // the planet of the tables on screen
+  // The Moon of `atmos view --date`: its centre, planet-centred m (none:
+  // no Moon of a date; the look's moon is placed apart).
+  std::optional<glm::dvec3> moon_of_date_m;
   double frame_ms = 0.0;  // how long the viewer took to draw it (informative; a replay ignores it)
 };
 

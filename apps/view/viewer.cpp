@@ -25,6 +25,7 @@
 
 #include "atmos/image.hpp"
 #include "atmos/planet_file.hpp"
+#include "atmos/planet_parameters.hpp"
 #include "atmos/post.hpp"
 #include "atmos/renderer.hpp"
 #include "scene.hpp"
@@ -85,8 +86,8 @@ glm::dvec3 sun_at_time(const glm::dvec3& position, const glm::dvec3& sun, double
 
 // The moon of LookSettings: the Moon's apparent size, `separation` from the
 // sun's centre towards the local zenith (or any side for a sun at the zenith).
-std::vector<atmos::Moon> place_moons(const LookSettings& look, const glm::dvec3& position, const glm::dvec3& sun,
-                                     double top_radius_m) {
+std::vector<atmos::Moon> look_moons(const LookSettings& look, const glm::dvec3& position, const glm::dvec3& sun,
+                                    double top_radius_m) {
   if (!look.moon) return {};
   glm::dvec3 towards = glm::normalize(position) - sun * glm::dot(glm::normalize(position), sun);
   if (glm::length(towards) < 1e-6) towards = glm::cross(sun, glm::dvec3(1, 0, 0));
@@ -101,6 +102,22 @@ std::vector<atmos::Moon> place_moons(const LookSettings& look, const glm::dvec3&
     atmos::validate_moons(moons, top_radius_m);
   } catch (const atmos::Error&) {
     return {};
+  }
+  return moons;
+}
+
+// The moons of a frame: the look's, and the Moon of a date (its centre,
+// planet-centred m) unless it would stand inside the atmosphere.
+std::vector<atmos::Moon> place_moons(const LookSettings& look, const glm::dvec3& position, const glm::dvec3& sun,
+                                     double top_radius_m, const std::optional<glm::dvec3>& moon_of_date_m) {
+  std::vector<atmos::Moon> moons = look_moons(look, position, sun, top_radius_m);
+  if (moon_of_date_m) {
+    const atmos::Moon moon{*moon_of_date_m, atmos::kMoonRadiusM};
+    try {
+      atmos::validate_moons({moon}, top_radius_m);
+      moons.push_back(moon);
+    } catch (const atmos::Error&) {
+    }
   }
   return moons;
 }
@@ -138,6 +155,16 @@ atmos::DisplayImage read_display(GLuint texture, int width, int height) {
   atmos::DisplayImage image = atmos::read_display_image(texture, width, height);
   flip_rows(image.rgb, width, height);
   return image;
+}
+
+// The slider of a planet parameter as planet_parameters() describes it: its
+// label, its value in its unit, its slider's range and scale. Ctrl+click
+// types a value, which may lie outside the range: make_atmosphere checks it.
+bool parameter_slider(const char* parameter, float& value) {
+  const atmos::PlanetParameter& p = atmos::planet_parameter(parameter);
+  const std::string format = std::string("%.4g") + (std::string(p.unit) == "1" ? "" : std::string(" ") + p.unit);
+  return ImGui::SliderFloat(p.label, &value, float(p.slider_min), float(p.slider_max), format.c_str(),
+                            p.logarithmic ? ImGuiSliderFlags_Logarithmic : ImGuiSliderFlags_None);
 }
 
 double median(std::vector<double> v) {
@@ -240,7 +267,22 @@ struct FrameLog {
       if (!swapped[i]) out.push_back(ms[i]);
     return out;
   }
+  // The frames that swap tables in and the `after` frames that follow each
+  // (where a swap's cost would show: its new programs, its first draws).
+  std::vector<double> around_swaps(size_t after) const {
+    std::vector<double> out;
+    size_t until = 0;
+    for (size_t i = 1; i < ms.size(); ++i) {
+      if (swapped[i]) until = i + after + 1;
+      if (i < until) out.push_back(ms[i]);
+    }
+    return out;
+  }
 };
+
+// Frames a scripted session draws after its last swap, so that the swap's
+// cost on the frames that follow it is measured.
+constexpr int kFramesAfterSwap = 5;
 
 class Viewer {
  public:
@@ -256,6 +298,7 @@ class Viewer {
   void set_slider(const std::string& name, double value);
   double slider_value(const std::string& name) const;
   void request_tables();
+  void save_edited_planet(const std::string& path);
   FlightInput window_input();
   void panel();
   void loading_panel();
@@ -270,9 +313,11 @@ class Viewer {
   std::unique_ptr<Flight> flight_;
   GLFWwindow* window_ = nullptr;
   glm::dvec3 sun_{0, 0, 1};
+  std::optional<glm::dvec3> moon_of_date_;  // planet-centred m
   LookSettings look_;
   PlanetParams edited_;  // the planet the panel shows (the scene's, or one being computed)
   std::string planet_file_;
+  std::string save_file_;
   std::string message_;  // the last error or status, shown in the panel
   bool message_is_error_ = false;
   bool timed_ = true;
@@ -298,16 +343,20 @@ class Viewer {
 void Viewer::swap_scene(PlanetTables&& tables, int frame) {
   const double start = now_s();
   const double altitude = flight_ ? flight_->altitude_m(ground()) : 0.0;
-  // The new scene first: if it cannot be built the old one stays.
-  auto scene = std::make_unique<Scene>(tables, o_.globe, !o_.planet_albedo, o_.frames > 0);
-  scene_ = std::move(scene);
+  // The same ground keeps its globe (only a new pass); another ground needs
+  // a new scene, built first: if it cannot be built the old one stays.
+  const bool rebound = scene_->rebind(tables);
+  if (!rebound) {
+    auto scene = std::make_unique<Scene>(tables, o_.globe, !o_.planet_albedo, o_.frames > 0);
+    scene_ = std::move(scene);
+  }
   if (flight_) flight_->set_bottom_radius(scene_->bottom_radius_m(), altitude, ground());
   // The new scene's programs are compiled at its first draw: time it with
   // the swap (glFinish), which is what the frame that swaps costs.
   last_swap_ms_ = (now_s() - start) * 1e3;
   last_tables_s_ = tables.seconds;
-  std::printf("tables: %s in %.2f s; swapped in at frame %d (%.0f ms to build the scene)\n", tables.status.c_str(),
-              tables.seconds, frame, last_swap_ms_);
+  std::printf("tables: %s in %.2f s; swapped in at frame %d (%.0f ms to %s)\n", tables.status.c_str(),
+              tables.seconds, frame, last_swap_ms_, rebound ? "rebind the scene" : "build the scene");
   std::fflush(stdout);
 }
 
@@ -322,6 +371,19 @@ void Viewer::request_tables() {
     message_is_error_ = true;
     edited_ = scene_->params();
     std::fprintf(stderr, "atmos: error: %s (the tables on screen are kept)\n", e.what());
+  }
+}
+
+void Viewer::save_edited_planet(const std::string& path) {
+  try {
+    save_planet(edited_, path);
+    message_ = "saved the planet to " + path;
+    message_is_error_ = false;
+    std::printf("saved the planet: %s\n", path.c_str());
+  } catch (const std::exception& e) {
+    message_ = e.what();
+    message_is_error_ = true;
+    std::fprintf(stderr, "atmos: error: %s\n", e.what());
   }
 }
 
@@ -511,23 +573,29 @@ void Viewer::panel() {
       edited_.table_sizes = scene_->params().table_sizes;
       request_tables();
     }
+    char save_path[512];
+    std::snprintf(save_path, sizeof save_path, "%s", save_file_.c_str());
+    if (ImGui::InputText("save as", save_path, sizeof save_path)) save_file_ = save_path;
+    ImGui::SameLine();
+    if (ImGui::Button("save") && !save_file_.empty()) save_edited_planet(save_file_);
     // Each slider asks for new tables when it is released.
-    const auto slider = [this](const char* label, const char* name, float lo, float hi, const char* format,
-                               ImGuiSliderFlags flags) {
+    const auto slider = [this](const char* parameter, const char* name) {
       float v = float(slider_value(name));
-      if (ImGui::SliderFloat(label, &v, lo, hi, format, flags)) set_slider(name, double(v));
+      if (parameter_slider(parameter, v)) set_slider(name, double(v));
       if (ImGui::IsItemDeactivatedAfterEdit()) request_tables();
     };
+    const atmos::PlanetParameter& count = atmos::planet_parameter("wavelengths");
     int wavelengths = int(slider_value("wavelengths"));
-    if (ImGui::SliderInt("wavelengths", &wavelengths, 3, 48)) set_slider("wavelengths", double(wavelengths));
+    if (ImGui::SliderInt(count.label, &wavelengths, int(count.slider_min), int(count.slider_max)))
+      set_slider("wavelengths", double(wavelengths));
     if (ImGui::IsItemDeactivatedAfterEdit()) request_tables();
     int orders = edited_.orders;
     if (ImGui::SliderInt("scattering orders", &orders, 1, 12)) set_slider("orders", double(orders));
     if (ImGui::IsItemDeactivatedAfterEdit()) request_tables();
-    slider("density scale", "density_scale", 0.05f, 20.0f, "%.3f", ImGuiSliderFlags_Logarithmic);
-    slider("ground albedo", "ground_albedo", 0.0f, 1.0f, "%.3f", 0);
-    slider("ground radius", "bottom_radius_km", 1000.0f, 20000.0f, "%.1f km", ImGuiSliderFlags_Logarithmic);
-    slider("atmosphere thickness", "thickness_km", 10.0f, 1000.0f, "%.1f km", ImGuiSliderFlags_Logarithmic);
+    slider("density_scale", "density_scale");
+    slider("ground_albedo", "ground_albedo");
+    slider("bottom_radius", "bottom_radius_km");
+    slider("atmosphere_thickness", "thickness_km");
     constituents_panel();
     if (job_->progress().busy) {
       progress_bar();
@@ -564,16 +632,14 @@ void Viewer::constituents_panel() {
     if (ImGui::TreeNode("constituent", "constituent: %s", c.name.c_str())) {
       const ConstituentEdit now = current(i);
       float scattering = float(now.scattering_scale.value_or(1.0));
-      if (ImGui::SliderFloat("scattering x", &scattering, 0.01f, 100.0f, "%.3f", ImGuiSliderFlags_Logarithmic))
-        edit(i).scattering_scale = double(scattering);
+      if (parameter_slider("constituents[].scattering_scale", scattering)) edit(i).scattering_scale = double(scattering);
       if (ImGui::IsItemDeactivatedAfterEdit()) request_tables();
       float absorption = float(now.absorption_scale.value_or(1.0));
-      if (ImGui::SliderFloat("absorption x", &absorption, 0.01f, 100.0f, "%.3f", ImGuiSliderFlags_Logarithmic))
-        edit(i).absorption_scale = double(absorption);
+      if (parameter_slider("constituents[].absorption_scale", absorption)) edit(i).absorption_scale = double(absorption);
       if (ImGui::IsItemDeactivatedAfterEdit()) request_tables();
       if (c.density.kind == atmos::DensityProfile::Kind::exponential) {
         float height_km = float(now.scale_height_m.value_or(c.density.scale_height_m) * 1e-3);
-        if (ImGui::SliderFloat("scale height", &height_km, 0.1f, 100.0f, "%.2f km", ImGuiSliderFlags_Logarithmic))
+        if (parameter_slider("constituents[].density.scale_height", height_km))
           edit(i).scale_height_m = double(height_km) * 1e3;
         if (ImGui::IsItemDeactivatedAfterEdit()) request_tables();
       } else {
@@ -581,7 +647,7 @@ void Viewer::constituents_panel() {
       }
       if (c.phase.kind != atmos::PhaseFunction::Kind::rayleigh) {
         float g = float(now.phase_g.value_or(c.phase.g.at(550.0)));
-        if (ImGui::SliderFloat("phase g", &g, -0.95f, 0.95f, "%.3f")) edit(i).phase_g = double(g);
+        if (parameter_slider("constituents[].phase_function.g", g)) edit(i).phase_g = double(g);
         if (ImGui::IsItemDeactivatedAfterEdit()) request_tables();
       }
       ImGui::TreePop();
@@ -640,6 +706,7 @@ void Viewer::write_screenshot(const std::string& path, GLuint hdr, int width, in
 }
 
 int Viewer::run() {
+  const double run_start_s = now_s();
   std::optional<Script> script;
   if (!o_.script.empty()) script = Script::read(o_.script);
   // Bad parameters and planet files are reported before the window opens.
@@ -670,7 +737,7 @@ int Viewer::run() {
     PlanetTables flat = tables;
     flat.surface = atmos::PlanetSurface{};
     Scene scene(flat, o_.globe, regional, true);
-    sf.moons = place_moons(look_of_warm_frame(), sf.pose.position, sf.sun, scene.top_radius_m());
+    sf.moons = place_moons(look_of_warm_frame(), sf.pose.position, sf.sun, scene.top_radius_m(), moon_of_date_);
     (void)scene.render(sf);
     glFinish();
     std::printf("shaders of the new tables compiled in %.2f s\n", now_s() - start);
@@ -724,6 +791,9 @@ int Viewer::run() {
   flight_ = std::make_unique<Flight>(scene_->bottom_radius_m());
   flight_->place(o_.latitude_deg, o_.longitude_deg, o_.altitude_m, o_.heading_deg, o_.pitch_deg, ground());
   sun_ = sun_from_angles(flight_->position(), o_.sun_azimuth_deg, o_.sun_elevation_deg);
+  // The date's Moon seen from the starting ground point, where it stays.
+  if (o_.moon_of_date_m)
+    moon_of_date_ = glm::normalize(flight_->position()) * scene_->bottom_radius_m() + *o_.moon_of_date_m;
   record_.globe = o_.globe;
   record_.planet_albedo = o_.planet_albedo;
 
@@ -745,9 +815,10 @@ int Viewer::run() {
   const int frames = std::max(o_.frames, script ? script->length() + 1 : 0);
   constexpr double kMaxWaitForTablesS = 180.0;
   double waited_from = -1.0;
+  int settle_until = 0;  // a scripted session runs up to this frame after a swap
   for (int frame = 0; !glfwWindowShouldClose(window_); ++frame) {
     if (frames > 0 && frame >= frames) {
-      if (!script || !awaiting_tables_) break;
+      if (!script || (!awaiting_tables_ && frame >= settle_until)) break;
       if (waited_from < 0.0) waited_from = now_s();
       if (now_s() - waited_from > kMaxWaitForTablesS) break;
     }
@@ -772,6 +843,7 @@ int Viewer::run() {
       }
       swapped = true;
       awaiting_tables_ = job_->progress().busy;
+      settle_until = frame + 1 + kFramesAfterSwap;
     }
     if (std::optional<std::string> error = job_->take_error()) {
       awaiting_tables_ = job_->progress().busy;
@@ -796,6 +868,8 @@ int Viewer::run() {
           edited_.planet = e.planet;
           edited_.table_sizes = o_.planet.table_sizes;
           request_tables();
+        } else if (e.kind == ScriptEvent::Kind::save && frame == e.frame) {
+          save_edited_planet(e.save);
         }
       }
       dragging = script->dragging(frame);
@@ -819,7 +893,7 @@ int Viewer::run() {
       sf.height = height;
       sf.sun = sun_;
       sf.stars = look_.stars || glm::dot(sun_, glm::normalize(sf.pose.position)) < 0.0;
-      sf.moons = place_moons(look_, sf.pose.position, sun_, scene_->top_radius_m());
+      sf.moons = place_moons(look_, sf.pose.position, sun_, scene_->top_radius_m(), moon_of_date_);
       sf.timed = timed_;
       hdr = scene_->render(sf);
       {
@@ -841,7 +915,8 @@ int Viewer::run() {
       glViewport(0, 0, width, height);
       ImGui::Render();
       ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
-      const bool last = frames > 0 && frame >= frames - 1 && !(script && awaiting_tables_);
+      const bool last =
+          frames > 0 && frame >= frames - 1 && !(script && (awaiting_tables_ || frame + 1 < settle_until));
       if (last)
         for (const std::string& path : o_.screenshots) write_screenshot(path, hdr, width, height);
 
@@ -849,6 +924,7 @@ int Viewer::run() {
       fr.time_s = script ? frame * kScriptStepS : frame_start - start_s_;
       fr.pose = sf.pose;
       fr.sun = sun_;
+      fr.moon_of_date_m = moon_of_date_;
       fr.look = look_;
       fr.planet = scene_->params();
       record_.frames.push_back(fr);
@@ -863,6 +939,10 @@ int Viewer::run() {
     // the swap waits for it.
     glFinish();
     const double frame_ms = (now_s() - frame_start) * 1e3;
+    if (frame == 0) {
+      std::printf("first frame: %.2f s after the start\n", now_s() - run_start_s);
+      std::fflush(stdout);
+    }
     log_.add(frame_ms, dragging, swapped);
     if (recorded) record_.frames.back().frame_ms = frame_ms;
     plot_.push_back(float(frame_ms));
@@ -883,6 +963,12 @@ int Viewer::run() {
     }
   if (drag_frames > 0)
     std::printf("drag: %zu frames, max %.1f ms, max/median %.2f\n", drag_frames, drag_max, drag_max / med);
+  const std::vector<double> swaps = log_.around_swaps(kFramesAfterSwap);
+  if (!swaps.empty()) {
+    const double swap_max = *std::max_element(swaps.begin(), swaps.end());
+    std::printf("swap: %zu frames from the swaps on, max %.1f ms, swap max/median %.2f\n", swaps.size(), swap_max,
+                swap_max / med);
+  }
   const Flight::GroundHeight g = ground();
   std::printf("camera: altitude %.6g m, latitude %.6f, longitude %.6f, heading %.3f, pitch %.3f\n",
               flight_->altitude_m(g), flight_->latitude_deg(), flight_->longitude_deg(), flight_->heading_deg(),
@@ -927,7 +1013,7 @@ int run_replay(const ViewOptions& o) {
     sf.height = record.height;
     sf.sun = glm::normalize(f.sun);
     sf.stars = f.look.stars || glm::dot(sf.sun, glm::normalize(f.pose.position)) < 0.0;
-    sf.moons = place_moons(f.look, f.pose.position, sf.sun, scene->top_radius_m());
+    sf.moons = place_moons(f.look, f.pose.position, sf.sun, scene->top_radius_m(), f.moon_of_date_m);
     const GLuint hdr = scene->render(sf);
     char name[64];
     std::snprintf(name, sizeof name, "frame-%05zu", i);

@@ -2,6 +2,7 @@
 // panel) and the headless replay of its recorded flights. docs/viewer.md.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,9 @@ struct ViewOptions {
   double heading_deg = 90.0, pitch_deg = 0.0;
   double sun_elevation_deg = 30.0, sun_azimuth_deg = 180.0;  // at the starting ground point
   LookSettings look;
+  // The Moon of a date (atmos view --date): the vector from the starting
+  // ground point to its centre, m, planet frame (atmos::SkyBody::topocentric_m).
+  std::optional<glm::dvec3> moon_of_date_m;
   bool ui = true;          // the panel
   int frames = 0;          // > 0: draw this many frames, then exit
   // With frames: the last frame (.png: the window as shown; .exr: the linear image).
