@@ -204,12 +204,15 @@ TEST_F(OceanGpu, ReflectedUniformSkyIsTheSurfacesReflectance) {
   // Looking 50 degrees off the nadir: view angles at the sea up to grazing.
   const glm::dvec3 forward = glm::normalize(-up + 1.2 * glm::dvec3(1, 0, 0));
   const atmos::GlobeView view = view_from(camera, forward, up, width, height, glm::normalize(glm::dvec3(-1, 0.3, 1)));
-  const TermsGuard guard(planet::kOceanSky | planet::kOceanUniformSky);
+  const TermsGuard guard(planet::kOceanSky | planet::kOceanUniformSky | planet::kOceanDirectLight);
   const std::vector<float> sky = draw(ocean, view, target);
+  guard.set(planet::kOceanSky | planet::kOceanUniformSky);
+  const std::vector<float> mapped = draw(ocean, view, target);
   expect_finite(sky, "sky");
+  expect_finite(mapped, "sky from the reflectance map");
   const physics::WaterParams water = water_params(settings);
   int compared = 0;
-  double worst = 0.0, sum = 0.0;
+  double worst = 0.0, sum = 0.0, worst_mapped = 0.0;
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x) {
       const std::optional<glm::dvec3> p = sea_point(view, camera, radius, x, y);
@@ -228,14 +231,97 @@ TEST_F(OceanGpu, ReflectedUniformSkyIsTheSurfacesReflectance) {
         ++compared;
         sum += got;
         worst = std::max(worst, std::abs(got - expected[c]) / expected[c]);
+        worst_mapped = std::max(worst_mapped, double(std::abs(mapped[size_t(4 * (y * width + x) + c)] - expected[c]) / expected[c]));
         EXPECT_GT(got, 0.015);
         EXPECT_LE(got, 1.0);
       }
     }
   EXPECT_GT(compared, 600);
   EXPECT_LT(worst, 2e-3);
-  std::printf("uniform sky: %d channels, worst relative difference %.2e, mean reflectance %.4f\n", compared, worst,
-              sum / compared);
+  EXPECT_LT(worst_mapped, 0.01);
+  std::printf("uniform sky: %d channels, worst relative difference %.2e (the reflectance map's %.2e), mean reflectance %.4f\n",
+              compared, worst, worst_mapped, sum / compared);
+}
+
+// The light maps (ocean_light_maps.glsl) against the pass's functions
+// evaluated at every pixel (kOceanDirectLight), term by term: the reflected
+// sky, the sun's irradiance and the light from below (which carries the
+// sky's irradiance), from the deck at sunset looking towards the sun and
+// away from it, from 10 km by day, and from orbit over the terminator. The
+// sky's radiance is interpolated over the view's elevation, the sun's and
+// their azimuth, the irradiances over the sun's elevation, and the
+// reflectance (in the reflected sky) over the view's elevation and the
+// slopes' deviations; the maps also re-interpolate the tables' own linear
+// interpolation (these tests' small tables: 0.2-0.8 % on the sun's
+// irradiance). Relative errors are per pixel, against 1e-3 of the view's
+// brightest where the light has all but gone; over the terminator the
+// twilight's steep falloff with the sun's elevation leaves the largest.
+TEST_F(OceanGpu, LightMapsMatchThePassFunctions) {
+  atmos::OceanSettings settings;
+  settings.water.wind_speed_m_s = 7.0;
+  settings.bathymetry_texels = 32;
+  atmos::Ocean ocean(*earth_, flat_sea(0.0), *pass_, settings);
+  const int width = 64, height = 48;
+  GlobeTarget target(width, height);
+  const double radius = earth_->bottom_radius_m;
+  const glm::dvec3 up(0, 0, 1), east(1, 0, 0), north(0, 1, 0);
+  struct Case {
+    const char* name;
+    glm::dvec3 camera, forward, sun;
+    double tolerance[3];  // the sky, the sun's irradiance, the light from below
+  };
+  const Case cases[] = {
+      {"deck, sunset, towards the sun", up * (radius + 2.0), glm::normalize(east - 0.08 * up),
+       glm::normalize(east + 0.05 * up), {0.02, 0.01, 0.005}},
+      {"deck, sunset, away from the sun", up * (radius + 2.0), glm::normalize(-east - 0.08 * up),
+       glm::normalize(east + 0.05 * up), {0.02, 0.01, 0.005}},
+      {"10 km, by day", up * (radius + 10e3), glm::normalize(north - 0.6 * up),
+       glm::normalize(up + 0.8 * east + 0.3 * north), {0.025, 0.005, 0.005}},
+      {"orbit, terminator", up * (radius + 1500e3), -up, glm::normalize(east + 0.1 * up), {0.12, 0.05, 0.03}},
+  };
+  const unsigned terms[] = {planet::kOceanSky, planet::kOceanSunIrradiance, planet::kOceanBelow};
+  const char* term_names[] = {"sky", "sun irradiance", "below"};
+  const TermsGuard guard(planet::kOceanAllTerms);
+  double worst[3] = {0.0, 0.0, 0.0}, mean_error[3] = {0.0, 0.0, 0.0};
+  int counts[3] = {0, 0, 0};
+  for (const Case& c : cases) {
+    const atmos::GlobeView view = view_from(c.camera, c.forward, std::abs(c.forward.z) > 0.9 ? north : up, width,
+                                            height, c.sun);
+    for (int t = 0; t < 3; ++t) {
+      guard.set(terms[t]);
+      const std::vector<float> mapped = draw(ocean, view, target);
+      guard.set(terms[t] | planet::kOceanDirectLight);
+      const std::vector<float> direct = draw(ocean, view, target);
+      expect_finite(mapped, c.name);
+      float peak = 0.0f;
+      for (size_t i = 0; i < direct.size(); i += 4)
+        if (direct[i] != -1.0f) peak = std::max({peak, direct[i], direct[i + 1], direct[i + 2]});
+      ASSERT_GT(peak, 0.0f) << c.name << ", " << term_names[t];
+      double case_worst = 0.0;
+      for (size_t i = 0; i < direct.size(); i += 4) {
+        ASSERT_EQ(mapped[i] == -1.0f, direct[i] == -1.0f) << c.name << " texel " << i / 4;
+        if (direct[i] == -1.0f) continue;
+        for (int ch = 0; ch < 3; ++ch) {
+          // Relative to the pixel's value, or to 1e-3 of the view's
+          // brightest where the light has all but gone (the night side).
+          const double reference = std::max(double(direct[i + size_t(ch)]), 1e-3 * peak);
+          const double error = std::abs(mapped[i + size_t(ch)] - direct[i + size_t(ch)]) / reference;
+          case_worst = std::max(case_worst, error);
+          mean_error[t] += error;
+          ++counts[t];
+        }
+      }
+      worst[t] = std::max(worst[t], case_worst);
+      EXPECT_LT(case_worst, c.tolerance[t]) << c.name << ", " << term_names[t];
+      std::printf("light maps, %s, %s: worst %.2e\n", c.name, term_names[t], case_worst);
+    }
+  }
+  for (int t = 0; t < 3; ++t) mean_error[t] /= std::max(counts[t], 1);
+  EXPECT_LT(mean_error[0], 0.006);
+  EXPECT_LT(mean_error[1], 0.003);
+  EXPECT_LT(mean_error[2], 0.003);
+  std::printf("light maps: sky worst %.2e mean %.2e; sun irradiance worst %.2e mean %.2e; below worst %.2e mean %.2e\n",
+              worst[0], mean_error[0], worst[1], mean_error[1], worst[2], mean_error[2]);
 }
 
 // A dolly down towards the sea at 51 degrees below the horizon, from 20 km

@@ -20,6 +20,11 @@
 // direction, or the 16-node slope quadrature's 16), and the light leaving
 // the water (Lee et al. 1999's column over the seabed at the point's depth,
 // read from a cube map of the ground's height baked at construction). The
+// atmosphere's light at sea level (the sky's radiance, the sun's and the
+// sky's irradiance) and the rough surface's reflectance of the sky are read
+// from maps filled at construction from the pass's functions and the
+// water's (docs/water.md, "The fast path"), one filtered fetch each per
+// pixel; they are filled again when the pass's ground albedo changes. The
 // slopes are split between resolved waves — a sum of sine waves from a
 // Pierson & Moskowitz 1964 spectrum that tilt the normal — and the
 // unresolved rest, whose variance widens the BRDF, in proportions set by
@@ -28,10 +33,13 @@
 // radiance does not change where waves fade into the BRDF.
 //
 // Threading and GL state: as Globe (globe.hpp). draw() changes the bound
-// program and vertex array, texture units first_unit..first_unit+5, the
-// clip control (GL_LOWER_LEFT, GL_ZERO_TO_ONE), the depth function
+// program and vertex array, texture units first_unit..first_unit+8, the
+// viewport, the clip control (GL_LOWER_LEFT, GL_ZERO_TO_ONE), the depth function
 // (GL_GREATER), test (enabled) and mask (GL_TRUE), enables
-// GL_TEXTURE_CUBE_MAP_SEAMLESS, and disables blending and face culling.
+// GL_TEXTURE_CUBE_MAP_SEAMLESS, and disables blending and face culling;
+// filling the maps (at construction, and in draw() after a change of the
+// pass's ground albedo) also disables the scissor test and restores the
+// draw framebuffer binding and the viewport.
 #pragma once
 
 #include <glm/vec3.hpp>
@@ -62,12 +70,13 @@ struct OceanSettings {
   // relief about 4 s per million texels on two cores: 256 takes 1.5-2 s).
   int bathymetry_texels = 256;
   // The reflected sky: false, one sky lookup in the slope quadrature's
-  // mean reflected direction times the rough surface's reflectance; true,
-  // the 16-node quadrature itself, 16 sky lookups per pixel (8-10 times
-  // the cost: docs/water.md).
+  // mean reflected direction times the rough surface's reflectance (from
+  // its map); true, the 16-node quadrature itself, with 16 lookups of the
+  // sky's map per pixel.
   bool sky_quadrature = false;
   // The texture units of the atmosphere's GLSL library: first_unit..first_unit+4,
-  // and first_unit+5 the bathymetry.
+  // first_unit+5 the bathymetry, first_unit+6..first_unit+8 the sea's maps
+  // of the sky, the irradiances and the reflectance.
   int first_unit = 0;
 };
 

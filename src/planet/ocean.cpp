@@ -28,6 +28,9 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kGravity = 9.81;  // m s^-2, the waves' dispersion ω² = g k (deep water)
 constexpr int kMaxWaves = 32;      // OCEAN_MAX_WAVES of ocean.frag.glsl
+constexpr int kSkyMapSize = 64;    // OCEAN_SKY_MAP_SIZE of ocean_light_maps.glsl
+constexpr int kLightMapSize = 512; // OCEAN_LIGHT_MAP_SIZE
+constexpr int kReflectanceMapSize = 32;  // OCEAN_REFLECTANCE_MAP_SIZE
 
 // set_ocean_terms (ocean_internal.hpp).
 std::atomic<unsigned> terms_drawn{planet::kOceanAllTerms};
@@ -113,7 +116,8 @@ struct OceanProgram {
   GLint clip = -1, inverse = -1, viewport = -1, camera = -1, up = -1, radius = -1, height_term = -1,
         pixel_angle = -1, sun = -1, light = -1, refractive = -1, absorption = -1, backscattering = -1,
         diffuse = -1, slope_variance = -1, upwind = -1, wave_count = -1, wave_vector = -1, wave_phase = -1,
-        bathymetry = -1, sea_level = -1, seabed = -1, moon_count = -1, moon_spheres = -1, terms = -1;
+        bathymetry = -1, sky_map = -1, light_map = -1, reflectance_map = -1, sea_level = -1, seabed = -1, moon_count = -1,
+        moon_spheres = -1, terms = -1;
   void locate() {
     const auto at = [&](const char* name) { return glGetUniformLocation(id, name); };
     clip = at("clip_from_offset");
@@ -136,6 +140,9 @@ struct OceanProgram {
     wave_vector = at("wave_vector");
     wave_phase = at("wave_phase");
     bathymetry = at("bathymetry");
+    sky_map = at("sky_map");
+    light_map = at("light_map");
+    reflectance_map = at("reflectance_map");
     sea_level = at("sea_level");
     seabed = at("seabed_albedo");
     moon_count = at("moon_count");
@@ -171,27 +178,113 @@ struct Ocean::Impl {
   glm::dvec3 anchor{0.0}, upwind{0.0}, crosswind{0.0};
   OceanProgram program;            // the sky quadrature or the mean direction, as the settings say
   OceanProgram eclipse_program;    // linked at the first draw with moons that eclipse
+  // The tests' programs without the light maps (kOceanDirectLight), with and
+  // without the eclipse, linked at their first draw.
+  OceanProgram direct_program, direct_eclipse_program;
   GLuint vertex_array = 0, bathymetry = 0;
+  // The light maps (ocean_light_maps.glsl), the program that fills them and
+  // the pass's ground albedo they were filled with (the tables follow it).
+  GLuint sky_map = 0, light_map = 0, reflectance_map = 0, map_program = 0, map_framebuffer = 0;
+  glm::dvec3 maps_albedo{-1.0};
 
   ~Impl() {
     if (program.id != 0) glDeleteProgram(program.id);
-    if (eclipse_program.id != 0) glDeleteProgram(eclipse_program.id);
+    for (const OceanProgram* q : {&eclipse_program, &direct_program, &direct_eclipse_program})
+      if (q->id != 0) glDeleteProgram(q->id);
+    if (map_program != 0) glDeleteProgram(map_program);
+    if (map_framebuffer != 0) glDeleteFramebuffers(1, &map_framebuffer);
     if (vertex_array != 0) glDeleteVertexArrays(1, &vertex_array);
-    if (bathymetry != 0) glDeleteTextures(1, &bathymetry);
+    const GLuint textures[] = {bathymetry, sky_map, light_map, reflectance_map};
+    for (GLuint t : textures)
+      if (t != 0) glDeleteTextures(1, &t);
   }
 
-  OceanProgram link(bool eclipse) const {
+  OceanProgram link(bool eclipse, bool direct_light) const {
     std::string head = "#version 450 core\n";
     if (eclipse) head += "#define OCEAN_ECLIPSE 1\n";
+    if (direct_light) head += "#define OCEAN_DIRECT_LIGHT 1\n";
     if (!settings.sky_quadrature) head += "#define OCEAN_SKY_MEAN_DIRECTION 1\n";
     OceanProgram p;
     p.id = planet::link_program(
         "ocean", std::string("#version 450 core\n") + planet::shader_text("ocean", "src/planet/ocean.vert.glsl"),
         head + pass->glsl_library(settings.first_unit) + "\n" + planet::shader_text("ocean", "src/physics/water.glsl") +
-            "\n" + planet::shader_text("ocean", "src/planet/ocean.frag.glsl"));
+            "\n" + planet::shader_text("ocean", "src/planet/ocean_light_maps.glsl") + "\n" +
+            planet::shader_text("ocean", "src/planet/ocean.frag.glsl"));
     p.locate();
     glProgramUniform1i(p.id, p.bathymetry, settings.first_unit + 5);
+    glProgramUniform1i(p.id, p.sky_map, settings.first_unit + 6);
+    glProgramUniform1i(p.id, p.light_map, settings.first_unit + 7);
+    glProgramUniform1i(p.id, p.reflectance_map, settings.first_unit + 8);
     return p;
+  }
+
+  // Draws map `map` of the filling program (bound) into `texture`, `layers`
+  // layers of width x height (0: a 2D texture).
+  void fill_map(int map, GLuint texture, int width, int height, int layers) const {
+    glUniform1i(glGetUniformLocation(map_program, "map"), map);
+    const GLint layer = glGetUniformLocation(map_program, "layer");
+    glViewport(0, 0, width, height);
+    for (int z = 0; z < std::max(layers, 1); ++z) {
+      if (layers > 0)
+        glNamedFramebufferTextureLayer(map_framebuffer, GL_COLOR_ATTACHMENT0, texture, 0, z);
+      else
+        glNamedFramebufferTexture(map_framebuffer, GL_COLOR_ATTACHMENT0, texture, 0);
+      glUniform1i(layer, z);
+      glDrawArrays(GL_TRIANGLES, 0, 3);
+    }
+  }
+
+  // Fills the light maps from the pass's tables (ocean_light_maps.frag.glsl):
+  // 64 layers of 64 x 64 of the sky's radiance and 512 x 2 irradiances,
+  // 267,000 evaluations of the pass's functions, once (and again when the
+  // pass's ground albedo, hence its tables, changes). Restores the draw
+  // framebuffer binding and the viewport.
+  void fill_light_maps() {
+    maps_albedo = pass->ground_albedo();
+    const bool first = map_program == 0;
+    if (first) {
+      map_program = planet::link_program(
+          "ocean", std::string("#version 450 core\n") + planet::shader_text("ocean", "src/planet/ocean.vert.glsl"),
+          std::string("#version 450 core\n") + pass->glsl_library(settings.first_unit) + "\n" +
+              planet::shader_text("ocean", "src/physics/water.glsl") + "\n" +
+              planet::shader_text("ocean", "src/planet/ocean_light_maps.glsl") + "\n" +
+              planet::shader_text("ocean", "src/planet/ocean_light_maps.frag.glsl"));
+      glCreateTextures(GL_TEXTURE_3D, 1, &sky_map);
+      glTextureStorage3D(sky_map, 1, GL_RGBA32F, kSkyMapSize, kSkyMapSize, kSkyMapSize);
+      glCreateTextures(GL_TEXTURE_2D, 1, &light_map);
+      glTextureStorage2D(light_map, 1, GL_RGBA32F, kLightMapSize, 2);
+      glCreateTextures(GL_TEXTURE_3D, 1, &reflectance_map);
+      glTextureStorage3D(reflectance_map, 1, GL_RGBA32F, kReflectanceMapSize, kReflectanceMapSize,
+                         kReflectanceMapSize);
+      for (GLuint t : {sky_map, light_map, reflectance_map}) {
+        glTextureParameteri(t, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+        glTextureParameteri(t, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+        glTextureParameteri(t, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+        glTextureParameteri(t, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+        glTextureParameteri(t, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
+      }
+      glCreateFramebuffers(1, &map_framebuffer);
+    }
+    GLint framebuffer = 0, viewport[4] = {0, 0, 0, 0};
+    glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &framebuffer);
+    glGetIntegerv(GL_VIEWPORT, viewport);
+    glUseProgram(map_program);
+    glBindVertexArray(vertex_array);
+    pass->bind_textures(settings.first_unit);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, map_framebuffer);
+    glDisable(GL_DEPTH_TEST);
+    glDisable(GL_BLEND);
+    glDisable(GL_SCISSOR_TEST);
+    glUniform1f(glGetUniformLocation(map_program, "sea_radius"), float(sea_radius_m));
+    const glm::vec3 n(water.refractive_index);
+    glUniform3f(glGetUniformLocation(map_program, "sea_refractive_index"), n.x, n.y, n.z);
+    // The reflectance depends on the water alone: filled once.
+    if (first) fill_map(2, reflectance_map, kReflectanceMapSize, kReflectanceMapSize, kReflectanceMapSize);
+    fill_map(0, sky_map, kSkyMapSize, kSkyMapSize, kSkyMapSize);
+    fill_map(1, light_map, kLightMapSize, 2, 0);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, GLuint(framebuffer));
+    glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+    glBindVertexArray(0);
   }
 
   // The ground's height (r) and its least over the texel and its 8
@@ -277,9 +370,9 @@ Ocean::Ocean(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
   if (!std::isfinite(sea)) return;
   GLint units = 0;
   glGetIntegerv(GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS, &units);
-  if (settings.first_unit + 6 > units)
-    throw Error("ocean settings: first_unit + 5 (the bathymetry) is beyond the context's " + std::to_string(units) +
-                " texture units");
+  if (settings.first_unit + 9 > units)
+    throw Error("ocean settings: first_unit + 8 (the sea's light maps) is beyond the context's " +
+                std::to_string(units) + " texture units");
   p.has_sea = true;
   p.sea_level_m = sea;
   p.sea_radius_m = atmosphere.bottom_radius_m + sea;
@@ -290,7 +383,8 @@ Ocean::Ocean(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
   p.surface = std::make_unique<planet::Surface>(surface, atmosphere.bottom_radius_m);
   p.bake_bathymetry();
   glCreateVertexArrays(1, &p.vertex_array);
-  p.program = p.link(false);
+  p.program = p.link(false, false);
+  p.fill_light_maps();
 }
 
 Ocean::~Ocean() = default;
@@ -360,11 +454,12 @@ void Ocean::draw(const GlobeView& view, double time_s) {
     phases[i] = float(phase - 2.0 * kPi * std::floor(phase / (2.0 * kPi)));
   }
 
-  OceanProgram* program = &p.program;
-  if (eclipse) {
-    if (p.eclipse_program.id == 0) p.eclipse_program = p.link(true);
-    program = &p.eclipse_program;
-  }
+  const unsigned terms = terms_drawn.load(std::memory_order_relaxed);
+  const bool direct_light = (terms & planet::kOceanDirectLight) != 0;
+  OceanProgram* program = direct_light ? (eclipse ? &p.direct_eclipse_program : &p.direct_program)
+                                       : (eclipse ? &p.eclipse_program : &p.program);
+  if (program->id == 0) *program = p.link(eclipse, direct_light);
+  if (p.pass->ground_albedo() != p.maps_albedo) p.fill_light_maps();
   const OceanProgram& g = *program;
   glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
   glEnable(GL_DEPTH_TEST);
@@ -378,7 +473,10 @@ void Ocean::draw(const GlobeView& view, double time_s) {
   glBindVertexArray(p.vertex_array);
   p.pass->bind_textures(p.settings.first_unit);
   glBindTextureUnit(GLuint(p.settings.first_unit + 5), p.bathymetry);
-  glBindSampler(GLuint(p.settings.first_unit + 5), 0);
+  glBindTextureUnit(GLuint(p.settings.first_unit + 6), p.sky_map);
+  glBindTextureUnit(GLuint(p.settings.first_unit + 7), p.light_map);
+  glBindTextureUnit(GLuint(p.settings.first_unit + 8), p.reflectance_map);
+  for (int unit = 5; unit < 9; ++unit) glBindSampler(GLuint(p.settings.first_unit + unit), 0);
 
   const glm::mat4 clip_f(clip_from_offset), inverse_f(offset_from_clip);
   glUniformMatrix4fv(g.clip, 1, GL_FALSE, glm::value_ptr(clip_f));
@@ -414,7 +512,7 @@ void Ocean::draw(const GlobeView& view, double time_s) {
     glUniform1i(g.moon_count, int(view.moons.size()));
     glUniform4fv(g.moon_spheres, kMaxMoons, glm::value_ptr(spheres[0]));
   }
-  glUniform1i(g.terms, int(terms_drawn.load(std::memory_order_relaxed)));
+  glUniform1i(g.terms, int(terms));
   glDrawArrays(GL_TRIANGLES, 0, 3);
   glBindVertexArray(0);
 }

@@ -1,6 +1,6 @@
 // The sea's fragment shader (src/planet/ocean.cpp, include/atmos/ocean.hpp),
-// appended after "#version 450 core", AtmospherePass::glsl_library() and
-// physics/water.glsl. Each pixel intersects its view ray with the sea-level
+// appended after "#version 450 core", AtmospherePass::glsl_library(),
+// physics/water.glsl and ocean_light_maps.glsl. Each pixel intersects its view ray with the sea-level
 // sphere, shades the point with the water's physics lit by the
 // atmosphere's functions, and writes radiance / nits_per_unit and the
 // point's reversed-Z depth.
@@ -40,7 +40,12 @@
 // the bathymetry's depth. E_sun is the sun's irradiance normal to it at the
 // point (transmittance and the planet's shadow), E_sky the sky's on the
 // horizontal; with OCEAN_ECLIPSE the moons' factors dim the sun's part and
-// the sky's (atmos_eclipse), as for the terrain.
+// the sky's (atmos_eclipse), as for the terrain. The sky's radiance, E_sun
+// and E_sky are read from the light maps (ocean_light_maps.glsl), which
+// tabulate the pass's functions at sea level, and the rough surface's
+// reflectance of the sky from a map of water_sky_reflectance; with
+// OCEAN_DIRECT_LIGHT (a test's program) the shader evaluates those
+// functions instead.
 
 layout(location = 0) out vec4 colour;
 
@@ -68,12 +73,16 @@ uniform vec4 wave_vector[OCEAN_MAX_WAVES];  // xyz: k (rad/m, planet axes), w: a
 uniform float wave_phase[OCEAN_MAX_WAVES];  // k · camera + phase − ω t, modulo 2π
 
 uniform samplerCube bathymetry;  // r: the ground's height (m above the datum), g: its least over 3 x 3 texels
+uniform sampler3D sky_map;       // the sky's radiance at sea level (ocean_light_maps.glsl): azimuth, view, sun
+uniform sampler2D light_map;     // row 0: E_sun, row 1: E_sky on the horizontal, along the sun's parameter
+uniform sampler3D reflectance_map;  // the rough surface's reflectance of the sky (rgb) and its mean direction (a)
 uniform float sea_level;         // m above the datum
 uniform vec3 seabed_albedo;
 
 // Tests' switches (planet/ocean_internal.hpp): 1 the glint, 2 the sky, 4
 // the light from below, 8 the sun's irradiance instead, 16 a uniform sky
-// of radiance 1.
+// of radiance 1; 32 (a program of its own, OCEAN_DIRECT_LIGHT) the pass's
+// functions instead of the light maps.
 uniform int terms;
 
 #if defined(OCEAN_ECLIPSE)
@@ -99,11 +108,64 @@ const float kHeightTolerance = 0.01;  // m
 // at grazing views (rounded in float), may dip below the horizon, where
 // the tables' ray meets the ground and returns only the air in front of
 // it. The sea there would mirror other waves; the horizon's sky stands in.
+// From the sky's map: μ, μ_s and the azimuth φ between the view and the
+// sun about the zenith, cos φ = (ν − μ μ_s) / (sin θ sin θ_s).
 vec3 sky_seen_from_sea(vec3 point, vec3 n, vec3 direction, vec3 sun) {
   float below = dot(direction, n);
-  if (below < 1e-4) direction = normalize(direction + (1e-4 - below) * n);
+  if (below < kOceanLeastSkyCosine) direction = normalize(direction + (kOceanLeastSkyCosine - below) * n);
+#if defined(OCEAN_DIRECT_LIGHT)
   vec3 transmittance;
   return atmos_sky_radiance(point, direction, sun, transmittance);
+#else
+  float mu = dot(direction, n), mu_s = dot(sun, n);
+  float sines = sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 1e-12));
+  float phi = acos(clamp((dot(direction, sun) - mu * mu_s) / sines, -1.0, 1.0));
+  vec3 uvw = vec3(ocean_azimuth_parameter(phi), ocean_elevation_parameter(mu), ocean_sun_parameter(mu_s));
+  uvw = vec3(ocean_map_coordinate(uvw.x, OCEAN_SKY_MAP_SIZE), ocean_map_coordinate(uvw.y, OCEAN_SKY_MAP_SIZE),
+             ocean_map_coordinate(uvw.z, OCEAN_SKY_MAP_SIZE));
+  return exp(textureLod(sky_map, uvw, 0.0).rgb);
+#endif
+}
+
+// The rough surface's reflectance of the sky (water_sky_reflectance) and
+// the mean reflected direction, from the reflectance map: the slopes'
+// variances along and across the view's azimuth, without their covariance
+// (ocean_light_maps.glsl).
+vec3 sea_sky_reflectance(IN(WaterParams) water, vec3 normal, vec3 upwind, vec3 view, out vec3 mean_direction) {
+#if defined(OCEAN_DIRECT_LIGHT)
+  return water_sky_reflectance(water, normal, upwind, view, mean_direction);
+#else
+  float mu_v = dot(view, normal);
+  vec3 tangent = view - mu_v * normal;
+  float tangent_length = length(tangent);
+  vec3 along = tangent_length > 1e-6 ? tangent / tangent_length : upwind;
+  vec2 a = vec2(dot(along, upwind), dot(along, cross(normal, upwind)));
+  vec2 v = water.slope_variance;
+  float v_along = v.x * a.x * a.x + v.y * a.y * a.y, v_across = v.x * a.y * a.y + v.y * a.x * a.x;
+  vec3 uvw = vec3(ocean_elevation_parameter(mu_v), ocean_deviation_parameter(sqrt(v_along)),
+                  ocean_deviation_parameter(sqrt(v_across)));
+  uvw = vec3(ocean_map_coordinate(uvw.x, OCEAN_REFLECTANCE_MAP_SIZE),
+             ocean_map_coordinate(uvw.y, OCEAN_REFLECTANCE_MAP_SIZE),
+             ocean_map_coordinate(uvw.z, OCEAN_REFLECTANCE_MAP_SIZE));
+  vec4 texel = textureLod(reflectance_map, uvw, 0.0);
+  float mu = clamp(texel.a, -1.0, 1.0);
+  mean_direction = mu * normal - sqrt(1.0 - mu * mu) * along;
+  return texel.rgb;
+#endif
+}
+
+// E_sun (normal to the sun) and E_sky (on the horizontal) at sea point
+// `point` of zenith n.
+vec3 sun_and_sky_at_sea(vec3 point, vec3 n, vec3 sun, out vec3 sky_irradiance) {
+#if defined(OCEAN_DIRECT_LIGHT)
+  vec3 unused;
+  atmos_sun_and_sky_irradiance(point, n, sun, sky_irradiance);
+  return atmos_sun_and_sky_irradiance(point, sun, sun, unused);
+#else
+  float u = ocean_map_coordinate(ocean_sun_parameter(dot(sun, n)), OCEAN_LIGHT_MAP_SIZE);
+  sky_irradiance = exp(textureLod(light_map, vec2(u, 0.75), 0.0).rgb);
+  return exp(textureLod(light_map, vec2(u, 0.25), 0.0).rgb);
+#endif
 }
 
 void main() {
@@ -174,9 +236,8 @@ void main() {
 
   // The light at the point.
   vec3 sun = sun_direction;
-  vec3 sky_irradiance, unused;
-  atmos_sun_and_sky_irradiance(point, n, sun, sky_irradiance);
-  vec3 sun_irradiance = atmos_sun_and_sky_irradiance(point, sun, sun, unused);
+  vec3 sky_irradiance;
+  vec3 sun_irradiance = sun_and_sky_at_sea(point, n, sun, sky_irradiance);
   float sun_factor = 1.0, sky_factor = 1.0;
 #if defined(OCEAN_ECLIPSE)
   atmos_eclipse(point, sun, moon_count, moon_spheres, sun_factor, sky_factor);
@@ -188,7 +249,7 @@ void main() {
   vec3 sky = vec3(0.0);
 #if defined(OCEAN_SKY_MEAN_DIRECTION)
   vec3 mean_direction;
-  vec3 reflectance = water_sky_reflectance(water, normal, wave_upwind, view, mean_direction);
+  vec3 reflectance = sea_sky_reflectance(water, normal, wave_upwind, view, mean_direction);
   sky = reflectance * ((terms & 16) != 0 ? vec3(1.0) : sky_seen_from_sea(point, n, mean_direction, sun));
 #else
   WaterSkyQuadrature q = water_sky_quadrature(water, normal, wave_upwind, view);

@@ -18,6 +18,10 @@ enum OceanTerms : unsigned {
   // The sky replaced by a uniform sky of radiance 1 (the reflected sky is
   // then the rough surface's reflectance, unscaled).
   kOceanUniformSky = 16u,
+  // The sky's radiance and the irradiances from the pass's functions at
+  // every pixel instead of the sea's light maps (ocean_light_maps.glsl),
+  // to check the maps against them.
+  kOceanDirectLight = 32u,
 };
 void set_ocean_terms(unsigned mask);
 

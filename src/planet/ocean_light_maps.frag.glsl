@@ -1,0 +1,47 @@
+// Fills the sea's light maps (ocean_light_maps.glsl; src/planet/ocean.cpp),
+// appended after "#version 450 core", AtmospherePass::glsl_library(),
+// physics/water.glsl and ocean_light_maps.glsl. One draw per layer of the sky's map, one for the
+// irradiances; each pixel evaluates the pass's own functions at a point of
+// the sea-level sphere (the z axis here) for its texel's parameters.
+
+layout(location = 0) out vec4 colour;
+
+uniform int map;    // 0: the sky's radiance, 1: the irradiances, 2: the reflectance
+uniform int layer;  // the sun's texel (the sky's map), the across deviation's (the reflectance's)
+uniform float sea_radius;  // R, m
+uniform vec3 sea_refractive_index;
+
+void main() {
+  ivec2 texel = ivec2(gl_FragCoord.xy);
+  vec3 point = vec3(0.0, 0.0, sea_radius);
+  if (map == 0) {
+    float phi = ocean_azimuth(ocean_map_parameter(texel.x, OCEAN_SKY_MAP_SIZE));
+    float mu = max(ocean_elevation_cosine(ocean_map_parameter(texel.y, OCEAN_SKY_MAP_SIZE)), kOceanLeastSkyCosine);
+    float mu_s = ocean_sun_cosine(ocean_map_parameter(layer, OCEAN_SKY_MAP_SIZE));
+    float sin_v = sqrt(max(1.0 - mu * mu, 0.0));
+    vec3 view = vec3(sin_v * cos(phi), sin_v * sin(phi), mu);
+    vec3 sun = vec3(sqrt(max(1.0 - mu_s * mu_s, 0.0)), 0.0, mu_s);
+    vec3 transmittance;
+    colour = vec4(log(max(atmos_sky_radiance(point, view, sun, transmittance), vec3(kOceanLeastRadiance))), 1.0);
+  } else if (map == 2) {
+    float mu_v = ocean_elevation_cosine(ocean_map_parameter(texel.x, OCEAN_REFLECTANCE_MAP_SIZE));
+    float sigma_along = ocean_deviation(ocean_map_parameter(texel.y, OCEAN_REFLECTANCE_MAP_SIZE));
+    float sigma_across = ocean_deviation(ocean_map_parameter(layer, OCEAN_REFLECTANCE_MAP_SIZE));
+    WaterParams water;
+    water.refractive_index = sea_refractive_index;
+    water.absorption = vec3(0.0);
+    water.backscattering = vec3(0.0);
+    water.diffuse_reflectance = vec3(0.0);
+    water.slope_variance = vec2(sigma_along * sigma_along, sigma_across * sigma_across);
+    vec3 mean_direction;
+    vec3 reflectance = water_sky_reflectance(water, vec3(0.0, 0.0, 1.0), vec3(1.0, 0.0, 0.0),
+                                             vec3(sqrt(max(1.0 - mu_v * mu_v, 0.0)), 0.0, mu_v), mean_direction);
+    colour = vec4(reflectance, mean_direction.z);
+  } else {
+    float mu_s = ocean_sun_cosine(ocean_map_parameter(texel.x, OCEAN_LIGHT_MAP_SIZE));
+    vec3 sun = vec3(sqrt(max(1.0 - mu_s * mu_s, 0.0)), 0.0, mu_s);
+    vec3 sky_irradiance;
+    vec3 irradiance = atmos_sun_and_sky_irradiance(point, texel.y == 0 ? sun : vec3(0.0, 0.0, 1.0), sun, sky_irradiance);
+    colour = vec4(log(max(texel.y == 0 ? irradiance : sky_irradiance, vec3(kOceanLeastRadiance))), 1.0);
+  }
+}
