@@ -12,7 +12,7 @@ packages=(
   libepoxy-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev
   libeigen3-dev python3-matplotlib
   libgdal-dev libnetcdf-dev
-  xplanet-images xplanet gmt-gshhg-low
+  xplanet-images xplanet gmt-gshhg-low kstars-data
   libglfw3-dev libimgui-dev xvfb xauth
 )
 

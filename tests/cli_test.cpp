@@ -557,12 +557,16 @@ TEST(Cli, SampleRejectsBadMoons) {
 // Dallas: at 18:42:30 UTC the Moon covers the Sun and the sky is dark; an
 // hour earlier the eclipse is partial and the sky bright. The sun's place is
 // the trailing comment, as the library computes it.
-// The stars of --date come from a star catalogue: one that cannot be read
-// is a one-line error naming it; --star-catalogue and --procedural-stars need --date.
+// The stars of --date come from a star catalogue, their colours from
+// another: one that cannot be read is a one-line error naming it;
+// --star-catalogue, --star-colours and --procedural-stars need --date.
 TEST(Cli, StarCatalogueOfDate) {
   const std::string night = " --date 2025-01-29T20:30:00Z --latitude 48.21 --longitude 16.37";
   expect_runtime_error("render --surface sphere --size 8x8" + night + " --star-catalogue /no/such/BSC" + kSmall,
                        "cannot read the star catalogue /no/such/BSC");
+  expect_runtime_error("render --surface sphere --size 8x8" + night + " --star-colours /no/such/stars.dat" + kSmall,
+                       "cannot read the star catalogue /no/such/stars.dat");
+  expect_usage_error("render --star-colours none" + kSmall, "--star-colours requires --date");
   expect_usage_error("render --star-catalogue /no/such/BSC" + kSmall, "--star-catalogue requires --date");
   expect_usage_error("render --procedural-stars" + kSmall, "--procedural-stars requires --date");
 }

@@ -45,6 +45,7 @@ struct RenderOptions {
   bool stars = false;
   // The stars of --date: the catalogue's (this file) or the procedural field.
   std::string star_catalogue = atmos::kXplanetBrightStarCatalogue;
+  std::string star_colours = atmos::kKStarsStarCatalogue;  // "none": the Sun's B-V for all
   bool procedural_stars = false;
   // Camera-like PNG output (PostProcess): --tonemap, --bloom, --auto-exposure.
   std::string tonemap = "exp";
@@ -205,10 +206,13 @@ void check_options(const RenderOptions& o) {
 // The catalogue's stars in the sky of --date seen from --latitude,
 // --longitude, in the planet-centred (Earth-fixed) frame of the camera:
 // placed by the apparent sidereal time (atmos/star_catalogue.hpp), their
-// spectra blackbodies of their B-V's temperature (the Sun's B-V for a
-// catalogue without colours, as xplanet's).
+// spectra blackbodies of their B-V's temperature. xplanet's catalogue has
+// no B-V: each star takes that of the same star in --star-colours (KStars'
+// Hipparcos catalogue: the nearest within 1 arcminute and 0.5 magnitude),
+// the Sun's where none matches or with --star-colours none.
 std::vector<atmos::Star> stars_of_date(const RenderOptions& o) {
-  const std::vector<atmos::CatalogueStar> catalogue = atmos::load_bright_star_catalogue(o.star_catalogue);
+  std::vector<atmos::CatalogueStar> catalogue = atmos::load_bright_star_catalogue(o.star_catalogue);
+  if (o.star_colours != "none") (void)atmos::colour_from_catalogue(catalogue, atmos::load_kstars_catalogue(o.star_colours));
   const atmos::Instant instant = atmos::instant_of(atmos::parse_utc_time(o.date.date));
   std::vector<atmos::Star> stars;
   for (const atmos::SkyStar& s :
@@ -336,6 +340,13 @@ Command add_render_command(CLI::App& app) {
                   "With --date: the star catalogue whose stars are drawn, placed for the date and place (the Yale "
                   "Bright Star Catalogue in xplanet's layout: Dec RA Mag \"Name\" ...)")
       ->type_name("FILE")
+      ->needs("--date")
+      ->capture_default_str();
+  cmd->add_option("--star-colours", o->star_colours,
+                  "With --date: the catalogue the stars' B-V colours come from (KStars' Hipparcos catalogue, "
+                  "Debian's kstars-data; each star of --star-catalogue without a B-V takes that of the same star "
+                  "there), or none (every star the Sun's colour)")
+      ->type_name("FILE|none")
       ->needs("--date")
       ->capture_default_str();
   cmd->add_flag("--procedural-stars", o->procedural_stars,

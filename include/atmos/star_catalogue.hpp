@@ -8,8 +8,9 @@
 // (both to 4 decimals: 0.36″ in declination, 5.4″ cos δ in right
 // ascension), the V magnitude, a quoted name, and the Bright Star, Henry
 // Draper and SAO numbers; "#" starts a comment. That file has no colour
-// index and no proper motions: a star read from it has no B−V, and its
-// place is that of J2000 (the largest proper motion among its stars,
+// index and no proper motions: a star read from it has no B−V (the same
+// star in KStars' Hipparcos catalogue gives it one: colour_from_catalogue),
+// and its place is that of J2000 (the largest proper motion among its stars,
 // Groombridge 1830's 7″ a year, moves it by 3′ in a quarter century; the
 // bright stars' are mostly under 0.5″ a year).
 //
@@ -29,6 +30,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <cstddef>
 #include <iosfwd>
 #include <string>
 #include <vector>
@@ -49,6 +51,10 @@ struct CatalogueStar {
   std::string name;                  // as the catalogue spells it, e.g. " 9Alp CMa"
 };
 
+// Where Debian's kstars-data package installs KStars' star catalogue, the
+// source of the stars' colours.
+inline constexpr const char* kKStarsStarCatalogue = "/usr/share/kstars/stars.dat";
+
 // Reads a catalogue in xplanet's layout from `in`; `origin` names it in
 // messages. Throws atmos::Error naming the line of the first malformed
 // record (a missing or non-finite field, a declination outside [-90, 90], a
@@ -58,6 +64,29 @@ std::vector<CatalogueStar> parse_bright_star_catalogue(std::istream& in, const s
 
 // The same from a file (default: xplanet's); atmos::Error if it cannot be read.
 std::vector<CatalogueStar> load_bright_star_catalogue(const std::string& path = kXplanetBrightStarCatalogue);
+
+// Reads KStars' star catalogue (stars.dat of Debian's kstars-data: 125 982
+// stars of the Hipparcos and Tycho catalogues, ESA 1997, to V ≈ 9, J2000
+// places) from `in`: one star a line in fixed columns, "#" starts a comment,
+//   1-9 RA hhmmss.ss, 11-19 Dec ±ddmmss.s, 21-45 proper motions and
+//   parallax, 46-51 V, 52-56 B−V, 57- spectral type and names.
+// Throws atmos::Error naming the line of the first malformed record (short,
+// a field that is not a number, out of range as in
+// parse_bright_star_catalogue, or a B−V outside [-1, 6]: Hipparcos' reddest
+// reach 5.5) or an empty file. Seconds of 60.00, which the file has where
+// it rounded without carrying, are accepted.
+std::vector<CatalogueStar> parse_kstars_catalogue(std::istream& in, const std::string& origin);
+
+// The same from a file (default: kstars-data's); atmos::Error if it cannot be read.
+std::vector<CatalogueStar> load_kstars_catalogue(const std::string& path = kKStarsStarCatalogue);
+
+// Gives each star of `stars` that has no B−V the B−V of the star of
+// `coloured` nearest to it within `max_separation_deg`, if their V differ
+// by at most `max_magnitude_difference` (the same star in both
+// catalogues); returns how many stars got one. Throws atmos::Error for
+// limits that are not finite and positive.
+std::size_t colour_from_catalogue(std::vector<CatalogueStar>& stars, const std::vector<CatalogueStar>& coloured,
+                                  double max_separation_deg = 1.0 / 60.0, double max_magnitude_difference = 0.5);
 
 // A J2000 mean place precessed to the mean equator and equinox of the date
 // jd_tt (Meeus 1998 eqs. 21.2-21.4). Distance is kept.

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <istream>
 #include <limits>
@@ -95,6 +96,118 @@ std::vector<CatalogueStar> load_bright_star_catalogue(const std::string& path) {
     throw Error("cannot read the star catalogue " + path +
                 " (Debian's xplanet package installs the Yale Bright Star Catalogue there)");
   return parse_bright_star_catalogue(in, path);
+}
+
+namespace {
+
+// The number in columns [first, first + count) of `line` (1-based), or NaN
+// if there is none.
+double column_number(const std::string& line, size_t first, size_t count) {
+  if (line.size() < first - 1 + count) return std::numeric_limits<double>::quiet_NaN();
+  const std::string text = line.substr(first - 1, count);
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() || text.find_first_not_of(' ', size_t(end - text.c_str())) != std::string::npos)
+    return std::numeric_limits<double>::quiet_NaN();
+  return v;
+}
+
+// The unit vector of a right ascension and declination, degrees.
+glm::dvec3 unit_vector(double ra_deg, double dec_deg) {
+  const double a = ra_deg * kDegree, d = dec_deg * kDegree;
+  return {std::cos(d) * std::cos(a), std::cos(d) * std::sin(a), std::sin(d)};
+}
+
+}  // namespace
+
+std::vector<CatalogueStar> parse_kstars_catalogue(std::istream& in, const std::string& origin) {
+  std::vector<CatalogueStar> stars;
+  std::string line;
+  int number_of_line = 0;
+  while (std::getline(in, line)) {
+    ++number_of_line;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line[0] == '#') continue;
+    const std::string where = origin + ":" + std::to_string(number_of_line) + ": ";
+    if (line.size() < 56) throw Error(where + "expected at least 56 columns (RA, Dec, motions, parallax, V, B-V)");
+    // RA hhmmss.ss, Dec ±ddmmss.s: sexagesimal digits in fixed columns.
+    // Seconds of 60 (the file rounds 59.995 up without carrying) are
+    // taken as they are.
+    const double ra_h = column_number(line, 1, 2), ra_m = column_number(line, 3, 2), ra_s = column_number(line, 5, 5);
+    const double dec_d = column_number(line, 12, 2), dec_m = column_number(line, 14, 2),
+                 dec_s = column_number(line, 16, 4);
+    const char sign = line[10];
+    if (!(ra_h >= 0.0 && ra_h < 24.0 && ra_m >= 0.0 && ra_m < 60.0 && ra_s >= 0.0 && ra_s <= 60.0))
+      throw Error(where + "right ascension \"" + line.substr(0, 9) + "\" is not hhmmss.ss in [0, 24) hours");
+    if (!(sign == '+' || sign == '-') || !(dec_d >= 0.0 && dec_d <= 90.0 && dec_m >= 0.0 && dec_m < 60.0 &&
+                                           dec_s >= 0.0 && dec_s <= 60.0))
+      throw Error(where + "declination \"" + line.substr(10, 9) + "\" is not ±ddmmss.s");
+    const double dec = (sign == '-' ? -1.0 : 1.0) * (dec_d + dec_m / 60.0 + dec_s / 3600.0);
+    if (dec < -90.0 || dec > 90.0) throw Error(where + "declination " + number(dec) + " is outside [-90, 90] degrees");
+    const double v = column_number(line, 46, 6), bv = column_number(line, 52, 5);
+    if (!std::isfinite(v) || v < -2.0 || v > 16.0)
+      throw Error(where + "V magnitude \"" + line.substr(45, 6) + "\" is not a number in [-2, 16]");
+    if (!std::isfinite(bv) || bv < -1.0 || bv > 6.0)
+      throw Error(where + "B-V \"" + line.substr(51, 5) + "\" is not a number in [-1, 6]");
+    CatalogueStar s;
+    s.right_ascension_deg = 15.0 * (ra_h + ra_m / 60.0 + ra_s / 3600.0);
+    s.declination_deg = dec;
+    s.v_magnitude = v;
+    s.b_minus_v = bv;
+    const size_t comma = line.find(',', 56);
+    if (comma != std::string::npos) s.name = line.substr(comma + 1);
+    stars.push_back(std::move(s));
+  }
+  if (stars.empty()) throw Error(origin + ": no stars in the catalogue");
+  return stars;
+}
+
+std::vector<CatalogueStar> load_kstars_catalogue(const std::string& path) {
+  std::ifstream in(path);
+  if (!in)
+    throw Error("cannot read the star catalogue " + path +
+                " (Debian's kstars-data package installs KStars' catalogue there)");
+  return parse_kstars_catalogue(in, path);
+}
+
+std::size_t colour_from_catalogue(std::vector<CatalogueStar>& stars, const std::vector<CatalogueStar>& coloured,
+                                  double max_separation_deg, double max_magnitude_difference) {
+  if (!(std::isfinite(max_separation_deg) && max_separation_deg > 0.0 && max_separation_deg < 90.0) ||
+      !(std::isfinite(max_magnitude_difference) && max_magnitude_difference > 0.0))
+    throw Error("colour_from_catalogue: the separation must be in (0, 90) degrees and the magnitude difference > 0");
+  // The coloured stars in bands of declination as wide as the separation:
+  // a star's match lies in its own band or a neighbour.
+  const double band_width = max_separation_deg;
+  const int bands = int(std::ceil(180.0 / band_width)) + 1;
+  auto band_of = [&](double dec) { return std::clamp(int((dec + 90.0) / band_width), 0, bands - 1); };
+  std::vector<std::vector<size_t>> band(static_cast<size_t>(bands));
+  for (size_t i = 0; i < coloured.size(); ++i)
+    if (std::isfinite(coloured[i].b_minus_v)) band[size_t(band_of(coloured[i].declination_deg))].push_back(i);
+  const double cos_max = std::cos(max_separation_deg * kDegree);
+  size_t matched = 0;
+  for (CatalogueStar& s : stars) {
+    if (std::isfinite(s.b_minus_v)) continue;
+    const glm::dvec3 u = unit_vector(s.right_ascension_deg, s.declination_deg);
+    const int b = band_of(s.declination_deg);
+    double best = cos_max;
+    const CatalogueStar* match = nullptr;
+    for (int k = std::max(b - 1, 0); k <= std::min(b + 1, bands - 1); ++k) {
+      for (size_t i : band[size_t(k)]) {
+        const CatalogueStar& c = coloured[i];
+        if (std::abs(c.v_magnitude - s.v_magnitude) > max_magnitude_difference) continue;
+        const double cosine = glm::dot(u, unit_vector(c.right_ascension_deg, c.declination_deg));
+        if (cosine >= best) {
+          best = cosine;
+          match = &c;
+        }
+      }
+    }
+    if (match != nullptr) {
+      s.b_minus_v = match->b_minus_v;
+      ++matched;
+    }
+  }
+  return matched;
 }
 
 EquatorialPosition precess_from_j2000(const EquatorialPosition& p, double jd_tt) {
