@@ -5,7 +5,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <string>
+
+#include <unistd.h>
 
 namespace atmos_cli {
 
@@ -74,8 +77,18 @@ void view_bench(const std::string& planet, const std::function<void(const atmos_
     sink({std::string("view.") + surface + ".median_frame", median, "ms"});
     sink({std::string("view.") + surface + ".fps", 1e3 / median, "fps"});
   }
+  // The first frame as a session starts: a script of one frame that does
+  // nothing, so that the globe streams its tiles as it does for a user
+  // (--frames would build every tile the first frame needs before it).
+  const std::filesystem::path script =
+      std::filesystem::temp_directory_path() / ("atmos-view-bench-" + std::to_string(getpid()) + ".json");
+  {
+    std::ofstream(script) << R"({"events": [{"frame": 0, "mouse": [0, 0]}]})";
+  }
   bool ok = true;
-  const std::string out = output_of("MESA_SHADER_CACHE_DISABLE=true " + view + "--frames 1", ok);
+  const std::string out =
+      output_of("MESA_SHADER_CACHE_DISABLE=true " + view + "--script " + shell_word(script.string()), ok);
+  std::filesystem::remove(script, error);
   const double first = figure_after(out, "first frame: ");
   if (!ok || !std::isfinite(first)) {
     std::fprintf(stderr, "atmos bench: atmos view with a cold shader cache failed: no view.first_frame line\n");

@@ -16,7 +16,8 @@ namespace atmos_cli {
 //    and over the terrain globe (its tiles complete, the panel shown);
 //  - view.first_frame.cold_shader_cache (s): from the viewer's start to its
 //    first frame of the planet with Mesa's shader cache disabled
-//    (MESA_SHADER_CACHE_DISABLE), the tables already cached.
+//    (MESA_SHADER_CACHE_DISABLE), the tables already cached, the globe's
+//    tiles streamed as in an interactive session.
 // Without a display and without xvfb-run, or without the viewer, prints
 // why on stderr and hands over nothing.
 void view_bench(const std::string& planet, const std::function<void(const atmos_bench::Figure&)>& sink);
