@@ -472,6 +472,24 @@ TEST(StarCatalogueColours, TheBrightStarsGetTheirBMinusVFromKStars) {
   EXPECT_THROW(atmos::load_kstars_catalogue("/no/such/stars.dat"), atmos::Error);
 }
 
+// A star's irradiance in the channels of spectral tables (linear sRGB over
+// 683 lm/W, weighted over the working wavelengths like the sun's light)
+// against its CIE-weighted irradiance at 1 nm (star_srgb_irradiance): within
+// 1 % per channel with 15 wavelengths, for blue, solar and red stars.
+TEST(StarCatalogueBins, SpectralChannelsCarryTheStarsColour) {
+  const std::vector<double> wavelengths = atmos::spectral_wavelengths(15);
+  for (double b_minus_v : {-0.3, 0.65, 1.5}) {
+    const atmos::Star star = star_of({0, 0, 1}, 2.0, atmos::temperature_from_b_minus_v(b_minus_v));
+    const glm::dvec3 channels =
+        glm::dvec3(atmos::gpu::star_channel_irradiance(star, wavelengths)) * atmos::kMaxLuminousEfficacy;
+    const glm::dvec3 own = atmos::star_srgb_irradiance(2.0, b_minus_v);
+    std::printf("B-V %+.2f: spectral channels x 683 / CIE-weighted = (%.4f, %.4f, %.4f)\n", b_minus_v,
+                channels.x / own.x, channels.y / own.y, channels.z / own.z);
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(channels[c] / own[c], 1.0, 0.01) << "B-V " << b_minus_v << " channel " << c;
+  }
+}
+
 // The bins (gpu/star_catalogue_bins.cpp) against brute force: every star
 // within the bins' radius of a direction is in the list of that
 // direction's cell, for random directions over the whole sphere and a
