@@ -119,8 +119,8 @@ vec3 sky_seen_from_sea(vec3 point, vec3 n, vec3 direction, vec3 sun) {
 #else
   float mu = dot(direction, n), mu_s = dot(sun, n);
   float sines = sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 1e-12));
-  float phi = acos(clamp((dot(direction, sun) - mu * mu_s) / sines, -1.0, 1.0));
-  vec3 uvw = vec3(ocean_azimuth_parameter(phi), ocean_elevation_parameter(mu), ocean_sun_parameter(mu_s));
+  float cos_phi = (dot(direction, sun) - mu * mu_s) / sines;
+  vec3 uvw = vec3(ocean_azimuth_parameter(cos_phi), ocean_elevation_parameter(mu), ocean_sun_parameter(mu_s));
   uvw = vec3(ocean_map_coordinate(uvw.x, OCEAN_SKY_MAP_SIZE), ocean_map_coordinate(uvw.y, OCEAN_SKY_MAP_SIZE),
              ocean_map_coordinate(uvw.z, OCEAN_SKY_MAP_SIZE));
   return exp(textureLod(sky_map, uvw, 0.0).rgb);

@@ -21,7 +21,8 @@
 // texels where the light changes fastest:
 //   the view's elevation:  u = √μ          (μ ≥ 0; the horizon's haze and glow),
 //   the sun's:             u = ½ + ½ sgn(μ_s) √|μ_s|  (sunrise, sunset, twilight),
-//   the azimuth:           u = √(φ / π)    (the aerosols' forward peak about the sun).
+//   the azimuth:           u = sin(φ / 2) = √((1 − cos φ) / 2)
+//                          (even about the sun, for the aerosols' forward peak; no arccosine).
 // The maps of the atmosphere's light hold its logarithm: in the twilight the
 // sky darkens by orders of magnitude as the sun sinks, about exponentially
 // (the light's path through the air lengthens), which interpolating the
@@ -44,8 +45,8 @@ float ocean_sun_cosine(float u) {
   float x = 2.0 * u - 1.0;
   return sign(x) * x * x;
 }
-float ocean_azimuth_parameter(float phi) { return sqrt(clamp(phi / PI, 0.0, 1.0)); }
-float ocean_azimuth(float u) { return PI * u * u; }
+float ocean_azimuth_parameter(float cos_phi) { return sqrt(clamp(0.5 - 0.5 * cos_phi, 0.0, 1.0)); }
+float ocean_azimuth(float u) { return 2.0 * asin(clamp(u, 0.0, 1.0)); }
 
 // The reflectance map. water_sky_reflectance depends on the view's cosine
 // μ_v to the normal and on the slopes' covariance in the frame of the
