@@ -187,6 +187,47 @@ void time_plugin(const atmos::Atmosphere& atmosphere, const atmos::Tables& table
   }
 }
 
+void time_instant(const atmos::Atmosphere& atmosphere, int width, int height, const FigureSink& sink) {
+  using Clock = std::chrono::steady_clock;
+  const auto seconds_of = [](const atmos::Atmosphere& a) {
+    std::vector<double> times;
+    for (int i = 0; i < 3; ++i) {
+      const auto t0 = Clock::now();
+      (void)atmos::compute_instant_tables(a);
+      times.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+    }
+    return median(times);
+  };
+  sink({"precompute.instant", seconds_of(atmosphere), "s"});
+  atmos::Atmosphere spectral = atmosphere;
+  spectral.wavelengths_nm = atmos::spectral_wavelengths(15);
+  sink({"precompute.instant.spectral15", seconds_of(spectral), "s"});
+  const atmos::InstantTables tables = atmos::compute_instant_tables(atmosphere);
+  const PluginScene scene(atmosphere, width, height);
+  const auto t0 = Clock::now();
+  atmos::AtmospherePass pass(atmosphere, tables, atmos::PlanetFrame{});
+  glFinish();
+  sink({"plugin.instant.create", std::chrono::duration<double, std::milli>(Clock::now() - t0).count(), "ms"});
+  for (const auto& [name, sun_elevation] : {std::pair{"plugin.instant", 35.0}, std::pair{"plugin.instant.sunset", 4.0}}) {
+    const atmos::FrameInput input = scene.input(sun_elevation, false);
+    pass.render(input);  // warm-up: compiles this variant
+    std::vector<double> total, sky_view, volume, composite;
+    for (int i = 0; i < 5; ++i) {
+      pass.render(input);
+      const atmos::PassTimings& t = pass.last_timings();
+      total.push_back(t.total_ms());
+      sky_view.push_back(t.sky_view_ms);
+      volume.push_back(t.volume_ms);
+      composite.push_back(t.composite_ms);
+    }
+    const std::string n = name;
+    sink({n + size_suffix(width, height), median(total), "ms"});
+    sink({n + ".sky_view", median(sky_view), "ms"});
+    sink({n + ".volume", median(volume), "ms"});
+    sink({n + ".composite", median(composite), "ms"});
+  }
+}
+
 void time_ground_albedo(const atmos::Atmosphere& atmosphere, const atmos::PrecomputeOptions& options,
                         const FigureSink& sink) {
   using Clock = std::chrono::steady_clock;
@@ -461,6 +502,7 @@ void run_all(const atmos::Atmosphere& atmosphere, const atmos::PrecomputeOptions
   time_frames(spectral_renderer, camera, atmos::direction_from_azimuth_elevation(150.0, -3.0), 3,
               "render.spectral15.twilight", sink);
   time_plugin(atmosphere, tables, width, height, sink);
+  time_instant(atmosphere, width, height, sink);
   time_ground_albedo(atmosphere, options, sink);
   time_post(renderer, camera, sink);
   time_globe(atmosphere, tables, width, height, sink);

@@ -103,6 +103,14 @@ class PluginScene {
 void time_plugin(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, int width, int height,
                  const FigureSink& sink);
 
+// The instant approximate mode (InstantTables): precompute.instant (s,
+// compute_instant_tables of `atmosphere` at the default sizes, median of 3),
+// precompute.instant.spectral15 (the same at 15 wavelengths),
+// plugin.instant.create (ms, the pass's construction: the upload and the
+// compilation of its first variants) and the plugin over PluginScene by day
+// and at sunset as time_plugin (`plugin.instant.*`, `plugin.instant.sunset.*`).
+void time_instant(const atmos::Atmosphere& atmosphere, int width, int height, const FigureSink& sink);
+
 // The post-processing chain over a frame of `renderer` (sun 12° up): the
 // filmic operator, bloom (strength 0.05) and auto exposure, each pass's GPU
 // time the median of 5 frames (`post.bloom.<W>x<H>`, `post.exposure.*`,

@@ -40,9 +40,10 @@ Command add_bench_command(CLI::App& app) {
       "Time the library and print name<TAB>value<TAB>unit lines: each precomputation step of the tables "
       "(precompute.*, s; always computed, never from the cache), 15-wavelength tables with 6 orders, and the GPU "
       "times (ms, medians after a warm-up) of the renderer's frames (by day, in a total eclipse, at twilight with "
-      "the spectral tables), of the engine plugin (by day, at sunset, in a total eclipse), of the "
-      "post-processing passes, and of the terrain globe under the plugin (globe.*: the frame, the terrain, the "
-      "CPU selection, triangles and tiles from 2 m, 10 km, 400 km and 2.5 planet radii; the longest over the "
+      "the spectral tables), of the engine plugin (by day, at sunset, in a total eclipse) and of its instant "
+      "approximate mode (plugin.instant.*; its tables: precompute.instant.*), of the post-processing passes, and of "
+      "the terrain globe under the plugin (globe.*: the frame, the terrain, the CPU selection, triangles and "
+      "tiles from 2 m, 10 km, 400 km and 2.5 planet radii; the longest over the "
       "median frame of a streamed descent) and of the sea over it (water.*: the sea's draw and the frame with and "
       "without it from 2 m, 1 km and 400 km), and of the viewer at 1280x720 (view.*: its median frame over the "
       "analytic sphere and the globe, its first frame with a cold shader cache)");

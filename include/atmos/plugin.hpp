@@ -187,6 +187,19 @@ class AtmospherePass {
   // context (4.5 core). Throws atmos::Error on mismatched tables, a missing
   // or too old context, compile errors, or an invalid frame.
   AtmospherePass(const Atmosphere& atmosphere, const Tables& tables, const PlanetFrame& frame);
+  // The instant approximate mode (Hillaire 2020; docs/instant.md): the same
+  // pass from InstantTables (compute_instant_tables, tens of milliseconds),
+  // without any 4D table. Each frame integrates its sky-view table and
+  // aerial-perspective volume along the view rays through the
+  // multiple-scattering table (for cameras in the atmosphere; from above it
+  // every pixel's ray is integrated), then composites as the exact mode
+  // does. A few per cent off the exact mode by day (docs/instant.md gives
+  // the measured error). Not in this mode: eclipses (render() throws with
+  // moons that hide part of the sun), glsl_library() and bind_textures()
+  // (they read the 4D tables) and set_ground_albedo() (no ground response:
+  // compute the instant tables of an atmosphere with the new albedo, they
+  // take tens of milliseconds).
+  AtmospherePass(const Atmosphere& atmosphere, const InstantTables& tables, const PlanetFrame& frame);
   ~AtmospherePass();
   AtmospherePass(const AtmospherePass&) = delete;
   AtmospherePass& operator=(const AtmospherePass&) = delete;
@@ -241,6 +254,9 @@ class AtmospherePass {
   // previous catalogue is kept).
   void set_star_catalogue(const std::vector<Star>& stars);
   const std::vector<Star>& star_catalogue() const;
+
+  // Whether the pass was made from InstantTables (the instant approximate mode).
+  bool instant() const;
 
   const PlanetFrame& frame() const;
   // The radius of the atmosphere's ground (its bottom_radius), m: the

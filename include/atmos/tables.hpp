@@ -152,6 +152,46 @@ struct Tables {
 // Computes all tables on the CPU with all cores (TBB).
 Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& options);
 
+// The tables of the instant approximate mode (Hillaire 2020): no 4D table.
+// The sky and the aerial perspective are integrated along the view rays every
+// frame from the transmittance and a small 2D table of multiple scattering,
+// the light scattered twice or more taken as isotropic at each point
+// (docs/instant.md). For a view within a frame of a parameter change while
+// the exact tables are computed, and for small GPUs: about 0.5 MB at the
+// default sizes instead of tens of megabytes, and no precomputation to speak
+// of (compute_instant_tables). Less exact than Tables: docs/instant.md gives
+// its error against the reference.
+struct InstantTables {
+  TableSizes sizes;                    // transmittance_* and irradiance_* are used
+  std::vector<double> wavelengths_nm;  // the N working wavelengths
+  // As Tables::spectral_optical_depth: (transmittance_mu * 2 ceil(N / 3)) x
+  // transmittance_r texels, the true medium's tiles then the delta-M scaled ones.
+  std::vector<glm::vec3> spectral_optical_depth;
+  // Ψ_ms, the isotropic radiance of the light scattered two or more times
+  // per unit scattering coefficient and solar irradiance (sr^-1), over
+  // (mu_s, altitude) at every wavelength triple: (multiple_scattering_mu_s
+  // ceil(N / 3)) x multiple_scattering_r texels (physics/instant_atmosphere.glsl).
+  int multiple_scattering_mu_s = 32;
+  int multiple_scattering_r = 32;
+  std::vector<glm::vec3> multiple_scattering;
+  // The sky irradiance on a horizontal surface, as TableSet::indirect_irradiance
+  // (irradiance_mu_s x irradiance_r, W m^-2 nm^-1 in the tables' channels).
+  std::vector<glm::vec3> indirect_irradiance;
+  std::vector<StepTiming> timings;  // transmittance, multiple_scattering, sky_irradiance
+
+  int spectral_sets() const { return int((wavelengths_nm.size() + 2) / 3); }
+  int transmittance_tiles() const { return 2 * spectral_sets(); }
+};
+
+// Computes the instant mode's tables on the CPU with all cores (TBB), at
+// `sizes`' transmittance and irradiance sizes (the others are unused).
+// Throws Error on an invalid atmosphere or sizes.
+InstantTables compute_instant_tables(const Atmosphere& atmosphere, const TableSizes& sizes = {});
+
+// Throws Error unless `tables` were computed for the wavelengths of
+// `atmosphere` and hold as many texels as their sizes say.
+void check_tables_match(const Atmosphere& atmosphere, const InstantTables& tables);
+
 // The render tables over a Lambertian ground of albedo `albedo` per channel
 // (dimensionless, in [0, 1]; the three working wavelengths' in
 // three-wavelength mode, linear sRGB in spectral mode): Tables::set with its

@@ -17,6 +17,7 @@
 #include "atmos/plugin.hpp"
 #include "gpu/atmosphere_pass.hpp"
 #include "gpu/gl_util.hpp"
+#include "gpu/instant.hpp"
 #include "gpu/shader_source.hpp"
 #include "gpu/star_catalogue_bins.hpp"
 #include "physics/parameters.hpp"
@@ -38,6 +39,7 @@ constexpr GLuint kNormalUnit = 10;
 constexpr GLuint kShadowUnit = 11;
 constexpr GLuint kVolumeUnit = 12;  // 12..15: the aerial-perspective volume
 constexpr GLuint kSpaceRegularColumnsUnit = 16;  // the space volume's regular columns
+constexpr GLuint kInstantSpaceMultipleScatteringUnit = 17;  // instant mode, cameras above the atmosphere
 
 // gpu::set_stencil_export (gpu/atmosphere_pass.hpp).
 std::atomic<bool> stencil_export_enabled{true};
@@ -150,6 +152,10 @@ struct AtmospherePass::Impl {
   double own_sun_lux = 0.0;   // the atmosphere's sun illuminance
   bool stencil_export = false;  // GL_ARB_shader_stencil_export: one classifying draw
   PassTimings timings;
+  // The instant mode (InstantTables): its volume's programs, without and
+  // with the low-sun transmittance.
+  bool instant = false;
+  GLuint instant_volume_programs[2] = {0, 0};
   // The star catalogue (none: the procedural field), its irradiance in the
   // channels of the tables' wavelengths.
   std::vector<double> wavelengths_nm;
@@ -161,6 +167,10 @@ struct AtmospherePass::Impl {
       program = 0;
     }
     for (GLuint& program : volume_programs) {
+      if (program != 0) glDeleteProgram(program);
+      program = 0;
+    }
+    for (GLuint& program : instant_volume_programs) {
       if (program != 0) glDeleteProgram(program);
       program = 0;
     }
@@ -188,12 +198,91 @@ struct AtmospherePass::Impl {
   }
 };
 
-AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const Tables& tables, const PlanetFrame& frame)
-    : impl_(std::make_unique<Impl>()) {
+namespace {
+
+// What both modes' constructors do once the tables are on the GPU: the
+// pass's own objects, and a first frame of the common variants.
+void create_pass_objects(AtmospherePass& pass, AtmospherePass::Impl& p, const Atmosphere& atmosphere,
+                         const PlanetFrame& frame) {
+  p.timer = std::make_unique<gpu::GpuTimer>();
+  p.stencil_export = epoxy_has_gl_extension("GL_ARB_shader_stencil_export");
+  p.own_sun_lux = gpu::own_sun_illuminance(p.tables->params(), p.tables->radiance_to_srgb());
+  glCreateVertexArrays(1, &p.vertex_array);
+  glCreateFramebuffers(1, &p.framebuffer);
+  glCreateTextures(GL_TEXTURE_3D, 4, p.volume);
+  for (GLuint texture : p.volume) {
+    glTextureStorage3D(texture, 1, GL_RGBA32F, AP_WIDTH, AP_HEIGHT, AP_SLICES);
+    gpu::set_table_sampling(texture);
+  }
+  glCreateTextures(GL_TEXTURE_3D, 4, p.space_volume);
+  for (GLuint texture : p.space_volume) {
+    glTextureStorage3D(texture, 1, GL_RGBA32F, SPACE_VOLUME_WIDTH, SPACE_VOLUME_HEIGHT, SPACE_VOLUME_SLICES);
+    gpu::set_table_sampling(texture);
+  }
+  glCreateTextures(GL_TEXTURE_2D, 1, &p.space_regular_columns);
+  glTextureStorage2D(p.space_regular_columns, 1, GL_RGBA32F, SPACE_VOLUME_WIDTH, SPACE_VOLUME_HEIGHT);
+  gpu::set_table_sampling(p.space_regular_columns);
+  glCreateBuffers(1, &p.space_columns);
+  glNamedBufferStorage(p.space_columns, GLsizeiptr(sizeof(GLint)) * SPACE_VOLUME_WIDTH * SPACE_VOLUME_HEIGHT,
+                       nullptr, GL_DYNAMIC_STORAGE_BIT);
+  glCreateSamplers(1, &p.depth_sampler);
+  glSamplerParameteri(p.depth_sampler, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glSamplerParameteri(p.depth_sampler, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glSamplerParameteri(p.depth_sampler, GL_TEXTURE_COMPARE_MODE, GL_NONE);
+  glCreateSamplers(1, &p.shadow_sampler);
+  // Percentage-closer filtering by the texture unit (composite.glsl:
+  // shadow_visibility); CLAMP_TO_EDGE as the CPU twin's texture().
+  glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+  glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+  gpu::check_gl("while creating the atmosphere pass");
+
+  // Drivers (llvmpipe's JIT in particular) compile shaders at their first
+  // draw: draw the common variants once (lit colour, sun high, camera in
+  // and above the atmosphere) over a 1x1 sky, so that the engine's first
+  // frames and the timings measure frames, not compilation. The other
+  // variants compile at their first use.
+  GLuint warm_up_textures[2] = {0, 0};
+  glCreateTextures(GL_TEXTURE_2D, 2, warm_up_textures);
+  glTextureStorage2D(warm_up_textures[0], 1, GL_R32F, 1, 1);
+  glTextureStorage2D(warm_up_textures[1], 1, GL_RGBA32F, 1, 1);
+  const float sky_depth[4] = {1.0f, 0.0f, 0.0f, 0.0f};
+  glTextureSubImage2D(warm_up_textures[0], 0, 0, 0, 1, 1, GL_RED, GL_FLOAT, sky_depth);
+  glTextureSubImage2D(warm_up_textures[1], 0, 0, 0, 1, 1, GL_RGBA, GL_FLOAT, sky_depth);
+  try {
+    FrameInput warm_up;
+    warm_up.depth = warm_up_textures[0];
+    warm_up.colour = warm_up_textures[1];
+    warm_up.width = warm_up.height = 1;
+    warm_up.projection = glm::perspective(1.0, 1.0, 1.0, 100.0);
+    for (double altitude : {10.0, 1e7}) {
+      warm_up.view = glm::translate(glm::dmat4(1.0), -(frame.centre + glm::dvec3(0.0, 0.0, 1.0) *
+                                                       (atmosphere.bottom_radius_m + altitude) * frame.units_per_metre));
+      pass.render(warm_up);
+    }
+  } catch (...) {
+    glDeleteTextures(2, warm_up_textures);
+    throw;
+  }
+  glDeleteTextures(2, warm_up_textures);
+  p.timings = PassTimings{};
+}
+
+void check_planet_frame(const PlanetFrame& frame) {
   if (!is_finite(frame.centre))
     throw Error("invalid planet frame: centre is not finite");
   if (!(frame.units_per_metre > 0.0 && std::isfinite(frame.units_per_metre)))
     throw Error("invalid planet frame: units_per_metre " + number(frame.units_per_metre) + " must be > 0");
+}
+
+}  // namespace
+
+AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const Tables& tables, const PlanetFrame& frame)
+    : impl_(std::make_unique<Impl>()) {
+  check_planet_frame(frame);
   check_tables_match(atmosphere, tables);
   gpu::require_gl_context("the engine plugin (atmos::AtmospherePass)");
   Impl& p = *impl_;
@@ -208,76 +297,35 @@ AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const Tables& table
       p.ground_response = std::make_unique<Tables>(tables);
       p.ground_albedo = glm::dvec3(tables.ground_response.planet_albedo);
     }
-    p.timer = std::make_unique<gpu::GpuTimer>();
-    p.stencil_export = epoxy_has_gl_extension("GL_ARB_shader_stencil_export");
-    p.own_sun_lux = gpu::own_sun_illuminance(p.tables->params(), p.tables->radiance_to_srgb());
-    glCreateVertexArrays(1, &p.vertex_array);
-    glCreateFramebuffers(1, &p.framebuffer);
-    glCreateTextures(GL_TEXTURE_3D, 4, p.volume);
-    for (GLuint texture : p.volume) {
-      glTextureStorage3D(texture, 1, GL_RGBA32F, AP_WIDTH, AP_HEIGHT, AP_SLICES);
-      gpu::set_table_sampling(texture);
-    }
-    glCreateTextures(GL_TEXTURE_3D, 4, p.space_volume);
-    for (GLuint texture : p.space_volume) {
-      glTextureStorage3D(texture, 1, GL_RGBA32F, SPACE_VOLUME_WIDTH, SPACE_VOLUME_HEIGHT, SPACE_VOLUME_SLICES);
-      gpu::set_table_sampling(texture);
-    }
-    glCreateTextures(GL_TEXTURE_2D, 1, &p.space_regular_columns);
-    glTextureStorage2D(p.space_regular_columns, 1, GL_RGBA32F, SPACE_VOLUME_WIDTH, SPACE_VOLUME_HEIGHT);
-    gpu::set_table_sampling(p.space_regular_columns);
-    glCreateBuffers(1, &p.space_columns);
-    glNamedBufferStorage(p.space_columns, GLsizeiptr(sizeof(GLint)) * SPACE_VOLUME_WIDTH * SPACE_VOLUME_HEIGHT,
-                         nullptr, GL_DYNAMIC_STORAGE_BIT);
-    glCreateSamplers(1, &p.depth_sampler);
-    glSamplerParameteri(p.depth_sampler, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glSamplerParameteri(p.depth_sampler, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glSamplerParameteri(p.depth_sampler, GL_TEXTURE_COMPARE_MODE, GL_NONE);
-    glCreateSamplers(1, &p.shadow_sampler);
-    // Percentage-closer filtering by the texture unit (composite.glsl:
-    // shadow_visibility); CLAMP_TO_EDGE as the CPU twin's texture().
-    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
-    glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
-    gpu::check_gl("while creating the atmosphere pass");
-
-    // Drivers (llvmpipe's JIT in particular) compile shaders at their first
-    // draw: draw the common variants once (lit colour, sun high, camera in
-    // and above the atmosphere) over a 1x1 sky, so that the engine's first
-    // frames and the timings measure frames, not compilation. The other
-    // variants compile at their first use.
-    GLuint warm_up_textures[2] = {0, 0};
-    glCreateTextures(GL_TEXTURE_2D, 2, warm_up_textures);
-    glTextureStorage2D(warm_up_textures[0], 1, GL_R32F, 1, 1);
-    glTextureStorage2D(warm_up_textures[1], 1, GL_RGBA32F, 1, 1);
-    const float sky_depth[4] = {1.0f, 0.0f, 0.0f, 0.0f};
-    glTextureSubImage2D(warm_up_textures[0], 0, 0, 0, 1, 1, GL_RED, GL_FLOAT, sky_depth);
-    glTextureSubImage2D(warm_up_textures[1], 0, 0, 0, 1, 1, GL_RGBA, GL_FLOAT, sky_depth);
-    try {
-      FrameInput warm_up;
-      warm_up.depth = warm_up_textures[0];
-      warm_up.colour = warm_up_textures[1];
-      warm_up.width = warm_up.height = 1;
-      warm_up.projection = glm::perspective(1.0, 1.0, 1.0, 100.0);
-      for (double altitude : {10.0, 1e7}) {
-        warm_up.view = glm::translate(glm::dmat4(1.0), -(frame.centre + glm::dvec3(0.0, 0.0, 1.0) *
-                                                         (atmosphere.bottom_radius_m + altitude) * frame.units_per_metre));
-        render(warm_up);
-      }
-    } catch (...) {
-      glDeleteTextures(2, warm_up_textures);
-      throw;
-    }
-    glDeleteTextures(2, warm_up_textures);
-    p.timings = PassTimings{};
+    create_pass_objects(*this, p, atmosphere, frame);
   } catch (...) {
     p.release();
     throw;
   }
 }
+
+AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const InstantTables& tables, const PlanetFrame& frame)
+    : impl_(std::make_unique<Impl>()) {
+  check_planet_frame(frame);
+  check_tables_match(atmosphere, tables);
+  gpu::require_gl_context("the engine plugin (atmos::AtmospherePass)");
+  Impl& p = *impl_;
+  p.frame = frame;
+  p.bottom_radius_m = atmosphere.bottom_radius_m;
+  p.wavelengths_nm = tables.wavelengths_nm;
+  p.instant = true;
+  gpu::clear_gl_errors();
+  try {
+    p.tables = std::make_unique<gpu::GpuTables>(atmosphere, tables);
+    p.ground_albedo = glm::dvec3(p.tables->params().ground_albedo);
+    create_pass_objects(*this, p, atmosphere, frame);
+  } catch (...) {
+    p.release();
+    throw;
+  }
+}
+
+bool AtmospherePass::instant() const { return impl_->instant; }
 
 AtmospherePass::~AtmospherePass() {
   // With no current context the objects die with the engine's context.
@@ -288,6 +336,9 @@ const PassTimings& AtmospherePass::last_timings() const { return impl_->timings;
 
 void AtmospherePass::set_ground_albedo(const glm::dvec3& albedo) {
   Impl& p = *impl_;
+  if (p.instant)
+    throw Error("AtmospherePass::set_ground_albedo: the instant mode has no ground albedo response (compute the "
+                "instant tables of the atmosphere with that albedo)");
   if (!p.ground_response)
     throw Error("AtmospherePass::set_ground_albedo: the tables have no ground albedo response (precompute them "
                 "with PrecomputeOptions::ground_albedo_response)");
@@ -318,6 +369,8 @@ double AtmospherePass::bottom_radius_m() const { return impl_->bottom_radius_m; 
 double AtmospherePass::sun_illuminance_lux() const { return impl_->own_sun_lux; }
 
 std::string AtmospherePass::glsl_library(int first_unit) const {
+  if (impl_->instant)
+    throw Error("glsl_library: the instant mode has no 4D tables for the library to read (use Tables)");
   GLint units = 0;
   glGetIntegerv(GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS, &units);
   if (first_unit < 0 || (units > 0 && first_unit + 5 > units))
@@ -328,6 +381,8 @@ std::string AtmospherePass::glsl_library(int first_unit) const {
 }
 
 void AtmospherePass::bind_textures(int first_unit) const {
+  if (impl_->instant)
+    throw Error("bind_textures: the instant mode has no 4D tables to bind (use Tables)");
   for (int i = 0; i < 5; ++i) {
     glBindTextureUnit(GLuint(first_unit + i), impl_->tables->texture(i));
     glBindSampler(GLuint(first_unit + i), 0);
@@ -379,6 +434,12 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     const TextureInfo shadow = texture_info(input.shadow_map, "shadow map");
     gpu::set_shadow_depth_bias(input, shadow.width, shadow.height, frame);
   }
+  if (p.instant) {
+    if (frame.moons.count > 0)
+      throw Error("plugin input: the instant mode draws no eclipses, and a moon hides part of the sun from the "
+                  "atmosphere (use Tables)");
+    gpu::make_instant_frame(p.tables->params(), frame);
+  }
   const glm::vec3 camera_f = frame.camera;
   const glm::vec3 sun_f = frame.sun_direction;
 
@@ -408,7 +469,9 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   glDisable(GL_FRAMEBUFFER_SRGB);
   glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
 
-  const bool low_sun = frame.low_sun;
+  // The composite's low-sun integration (none in the instant mode, whose
+  // sky-view table and volume integrate every ray).
+  const bool low_sun = frame.low_sun && !p.instant;
   // With moons (make_pass_frame: physics::make_moons, once per frame): the
   // eclipse variants, which read them from the uniforms (set_moons_uniforms).
   const bool eclipse = frame.moons.count > 0;
@@ -424,7 +487,28 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
 
   // Pass 2: this frame's aerial-perspective volume, for cameras low in the
   // atmosphere.
-  if (frame.volume) {
+  if (frame.volume && p.instant) {
+    GLuint& volume_program = p.instant_volume_programs[frame.low_sun ? 1 : 0];
+    if (volume_program == 0)
+      volume_program = gpu::link_compute_program(gpu::instant_aerial_perspective_compute_shader_source(
+          p.tables->params(), p.tables->spectral(), frame.low_sun));
+    glUseProgram(volume_program);
+    glProgramUniform3f(volume_program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
+    glProgramUniform3f(volume_program, 1, frame.sun_direction.x, frame.sun_direction.y, frame.sun_direction.z);
+    glProgramUniform1f(volume_program, 24, frame.ap_t_far);
+    glProgramUniform1f(volume_program, 25, frame.ap_t_min);
+    gpu::set_sky_view_frame_uniforms(volume_program, frame.sky_view);
+    glBindTextureUnit(0, p.tables->texture(0));
+    glBindSampler(0, 0);
+    glBindTextureUnit(gpu::kInstantMultipleScatteringUnit, p.tables->instant_multiple_scattering_texture());
+    glBindSampler(gpu::kInstantMultipleScatteringUnit, 0);
+    for (GLuint i = 0; i < 4; ++i) glBindImageTexture(i, p.volume[i], 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    if (input.timed) p.timer->begin();
+    glDispatchCompute((AP_WIDTH + 7) / 8, (AP_HEIGHT + 7) / 8, 1);
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
+    if (input.timed) timings.volume_ms = p.timer->end_ms();
+    for (GLuint i = 0; i < 4; ++i) glBindImageTexture(i, 0, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+  } else if (frame.volume) {
     GLuint& volume_program = p.volume_programs[eclipse ? 2 : low_sun ? 1 : 0];
     if (volume_program == 0)
       volume_program = gpu::link_compute_program(gpu::aerial_perspective_compute_shader_source(
@@ -525,7 +609,10 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   // sky-view table (the variant's low_sun changes nothing there).
   const bool classify_low_sun = low_sun && !eclipse && !(frame.volume && !variant.blend && sky_view_camera);
   // The sky beside the atmosphere, for cameras above it.
-  const bool classify_space = !sky_view_camera;
+  const bool classify_space = !sky_view_camera && !p.instant;
+  // The instant mode's pixels of a camera above the atmosphere: one draw
+  // over all of them (instant_composite.glsl: instant_space_pixel).
+  const bool instant_space = p.instant && !sky_view_camera;
   const auto program_of = [&](gpu::PassVariant::Pixels pixels, bool pixel_low_sun) {
     // The classifying programs read the frame's geometry alone: one program
     // each.
@@ -559,7 +646,19 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   };
   std::vector<Draw> draws;
   const bool export_stencil = p.stencil_export && stencil_export_enabled.load(std::memory_order_relaxed);
-  if (export_stencil) {
+  if (instant_space) {
+    gpu::PassVariant v = variant;
+    v.pixels = gpu::PassVariant::Pixels::instant_space;
+    v.low_sun = frame.low_sun;
+    v.shadows = false;
+    v.volume = false;
+    GLuint& program = p.programs[v.index()];
+    if (program == 0)
+      program = gpu::link_program(gpu::atmosphere_pass_vertex_shader_source(),
+                                  gpu::atmosphere_pass_fragment_shader_source(p.tables->params(),
+                                                                              p.tables->spectral(), v));
+    draws.push_back({program, false, 0, false, 0});
+  } else if (export_stencil) {
     gpu::PassVariant v;
     v.pixels = gpu::PassVariant::Pixels::classify_all;
     v.low_sun = classify_low_sun;
@@ -614,7 +713,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
                                                                                 p.tables->spectral(), v));
       draws.push_back({program, false, kLowSunBit | kNightBit});
     }
-  } else {
+  } else if (!instant_space) {
     draws.push_back({program_of(gpu::PassVariant::Pixels::sky, low_sun), false, kSkyBit});
     draws.push_back({program_of(gpu::PassVariant::Pixels::surface, low_sun), false, 0});
   }
@@ -669,6 +768,10 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     glBindSampler(kVolumeUnit + i, 0);
   }
   glBindTextureUnit(kSpaceRegularColumnsUnit, p.space_regular_columns);
+  if (p.instant) {
+    glBindTextureUnit(kInstantSpaceMultipleScatteringUnit, p.tables->instant_multiple_scattering_texture());
+    glBindSampler(kInstantSpaceMultipleScatteringUnit, 0);
+  }
   glBindSampler(kSpaceRegularColumnsUnit, 0);
   glBindVertexArray(p.vertex_array);
   glBindFramebuffer(GL_FRAMEBUFFER, p.framebuffer);

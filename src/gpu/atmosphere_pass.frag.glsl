@@ -52,6 +52,7 @@
 #define PIXELS_CLASSIFY_SPACE 5
 #define PIXELS_CLASSIFY_SPACE_VOLUME 6
 #define PIXELS_CLASSIFY_ALL 7
+#define PIXELS_INSTANT_SPACE 8
 
 // The engine's textures (texelFetch: one texel per pixel). Colour and albedo
 // share a unit: a surface mode reads one of them.
@@ -172,6 +173,35 @@ void main() {
   if (!depth_is_sky(depth, depth_encoding) || !sky_ray_misses_atmosphere(ATMOSPHERE, frame, ray)) discard;
 #endif
   frag_color = vec4(0.0);
+}
+
+#elif VARIANT_PIXELS == PIXELS_INSTANT_SPACE
+
+// The instant mode's multiple-scattering table (gpu/gl_util.hpp:
+// kInstantMultipleScatteringUnit is 8 in its own programs; here 8 is the
+// engine's depth).
+layout(binding = 17) uniform sampler2D instant_multiple_scattering_texture;
+
+void main() {
+  ivec2 pixel = ivec2(gl_FragCoord.xy);
+  PassFrame frame = pass_frame_from_uniforms();
+  PixelRay ray;
+  ray.world = ray_world;
+  ray.view_z = ray_view_z;
+  float depth = texelFetch(engine_depth, pixel, 0).r;
+  vec3 colour = vec3(0.0);
+  vec3 albedo = vec3(0.0);
+  vec3 normal = vec3(0.0, 0.0, 1.0);
+#if VARIANT_SURFACE_MODE == SURFACE_GBUFFER
+  albedo = texelFetch(engine_albedo, pixel, 0).rgb;
+  normal = texelFetch(engine_normal, pixel, 0).rgb;
+#else
+  colour = texelFetch(engine_colour, pixel, 0).rgb;
+#endif
+  frag_color = vec4(instant_space_pixel(ATMOSPHERE, SPECTRAL, spectral_transmittance_texture,
+                                        instant_multiple_scattering_texture, irradiance_texture, frame, ray, depth,
+                                        colour, albedo, normal),
+                    1.0);
 }
 
 #elif VARIANT_PIXELS == PIXELS_CLASSIFY_ALL

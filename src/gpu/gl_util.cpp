@@ -323,6 +323,50 @@ double GpuTimer::end_ms() {
 
 // --- The tables on the GPU -------------------------------------------------
 
+// The sky-view table: recomputed every frame, read with GL_LINEAR +
+// CLAMP_TO_EDGE like the precomputed tables.
+void GpuTables::create_sky_view_target() {
+  glCreateTextures(GL_TEXTURE_2D, 3, sky_view_textures_);
+  glCreateFramebuffers(1, &sky_view_framebuffer_);
+  for (int i = 0; i < 3; ++i) {
+    glTextureStorage2D(sky_view_textures_[i], 1, GL_RGBA32F, SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT);
+    set_table_sampling(sky_view_textures_[i]);
+    glNamedFramebufferTexture(sky_view_framebuffer_, GLenum(GL_COLOR_ATTACHMENT0 + i), sky_view_textures_[i], 0);
+  }
+  const GLenum attachments[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+  glNamedFramebufferDrawBuffers(sky_view_framebuffer_, 3, attachments);
+  check_gl("while creating the sky-view table");
+  if (glCheckNamedFramebufferStatus(sky_view_framebuffer_, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw Error("the RGBA32F sky-view target is not supported by this OpenGL driver");
+  // Core profile draws need a vertex array object, even an empty one.
+  glCreateVertexArrays(1, &vertex_array_);
+}
+
+GpuTables::GpuTables(const Atmosphere& atmosphere, const InstantTables& tables) {
+  check_tables_match(atmosphere, tables);
+  params_ = std::make_unique<physics::AtmosphereParams>(physics::make_render_params(atmosphere, tables.sizes));
+  spectral_ = physics::make_spectral_sets(atmosphere, tables.sizes);
+  radiance_to_srgb_ = physics::channels_to_srgb_matrix(tables.wavelengths_nm);
+  clear_gl_errors();
+  try {
+    create_sky_view_target();
+    const TableSizes& s = tables.sizes;
+    sizes_ = s;
+    format_ = GL_RGB32F;
+    srgb_channels_ = physics::srgb_channels(tables.wavelengths_nm);
+    textures_[0] = make_texture_2d(s.transmittance_mu * tables.transmittance_tiles(), s.transmittance_r,
+                                   tables.spectral_optical_depth, GL_RGB32F, false);
+    textures_[3] = make_texture_2d(s.irradiance_mu_s, s.irradiance_r, tables.indirect_irradiance, GL_RGB32F, false);
+    instant_multiple_scattering_ =
+        make_texture_2d(tables.multiple_scattering_mu_s * tables.spectral_sets(), tables.multiple_scattering_r,
+                        tables.multiple_scattering, GL_RGB32F, false);
+    check_gl("while uploading the instant tables");
+  } catch (...) {
+    release();
+    throw;
+  }
+}
+
 GpuTables::GpuTables(const Atmosphere& atmosphere, const Tables& tables, TexturePrecision precision) {
   check_tables_match(atmosphere, tables);
   params_ = std::make_unique<physics::AtmosphereParams>(physics::make_render_params(atmosphere, tables.sizes));
@@ -330,22 +374,7 @@ GpuTables::GpuTables(const Atmosphere& atmosphere, const Tables& tables, Texture
   radiance_to_srgb_ = physics::channels_to_srgb_matrix(tables.wavelengths_nm);
   clear_gl_errors();
   try {
-    // The sky-view table: recomputed every frame, read with GL_LINEAR +
-    // CLAMP_TO_EDGE like the precomputed tables.
-    glCreateTextures(GL_TEXTURE_2D, 3, sky_view_textures_);
-    glCreateFramebuffers(1, &sky_view_framebuffer_);
-    for (int i = 0; i < 3; ++i) {
-      glTextureStorage2D(sky_view_textures_[i], 1, GL_RGBA32F, SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT);
-      set_table_sampling(sky_view_textures_[i]);
-      glNamedFramebufferTexture(sky_view_framebuffer_, GLenum(GL_COLOR_ATTACHMENT0 + i), sky_view_textures_[i], 0);
-    }
-    const GLenum attachments[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
-    glNamedFramebufferDrawBuffers(sky_view_framebuffer_, 3, attachments);
-    check_gl("while creating the sky-view table");
-    if (glCheckNamedFramebufferStatus(sky_view_framebuffer_, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-      throw Error("the RGBA32F sky-view target is not supported by this OpenGL driver");
-    // Core profile draws need a vertex array object, even an empty one.
-    glCreateVertexArrays(1, &vertex_array_);
+    create_sky_view_target();
 
     const TableSizes& s = tables.sizes;
     const TableSet& t = tables.set;
@@ -394,6 +423,12 @@ void GpuTables::release() {
     if (program != 0) glDeleteProgram(program);
     program = 0;
   }
+  for (GLuint& program : instant_sky_view_programs_) {
+    if (program != 0) glDeleteProgram(program);
+    program = 0;
+  }
+  if (instant_multiple_scattering_ != 0) glDeleteTextures(1, &instant_multiple_scattering_);
+  instant_multiple_scattering_ = 0;
   if (sky_view_framebuffer_ != 0) glDeleteFramebuffers(1, &sky_view_framebuffer_);
   if (vertex_array_ != 0) glDeleteVertexArrays(1, &vertex_array_);
   glDeleteTextures(3, sky_view_textures_);
@@ -430,12 +465,15 @@ void set_moons_uniforms(GLuint program, const physics::Moons& moons) {
 double GpuTables::update_sky_view(const glm::vec3& camera, const glm::vec3& sun, const physics::SkyViewFrame& frame,
                                   GpuTimer* timer, const physics::Moons& moons) {
   const bool eclipse = moons.count > 0;
+  if (instant() && eclipse) throw Error("the instant mode's sky-view table has no eclipses");
   const bool low_sun = eclipse || physics::sun_may_be_low_on_view_rays(*params_, camera, sun);
-  GLuint& program = sky_view_programs_[eclipse ? 2 : low_sun ? 1 : 0];
+  GLuint& program = instant() ? instant_sky_view_programs_[low_sun ? 1 : 0]
+                              : sky_view_programs_[eclipse ? 2 : low_sun ? 1 : 0];
   if (program == 0) {
     AssembledSource vertex;
     vertex.append("vertex shader", fullscreen_vertex_shader_source());
-    program = link_program(vertex, sky_view_fragment_shader_source(*params_, *spectral_, low_sun, eclipse));
+    program = link_program(vertex, instant() ? instant_sky_view_fragment_shader_source(*params_, *spectral_, low_sun)
+                                             : sky_view_fragment_shader_source(*params_, *spectral_, low_sun, eclipse));
   }
   glUseProgram(program);
   glProgramUniform3f(program, 0, camera.x, camera.y, camera.z);
@@ -445,6 +483,10 @@ double GpuTables::update_sky_view(const glm::vec3& camera, const glm::vec3& sun,
   for (GLuint unit = 0; unit < 5; ++unit) {
     glBindTextureUnit(unit, textures_[unit]);
     glBindSampler(unit, 0);
+  }
+  if (instant()) {
+    glBindTextureUnit(kInstantMultipleScatteringUnit, instant_multiple_scattering_);
+    glBindSampler(kInstantMultipleScatteringUnit, 0);
   }
   // The table's own textures must not be bound for reading while drawn to.
   for (GLuint unit : {kSkyViewRayleighUnit, kSkyViewAerosolUnit, kSkyViewSurfaceUnit}) glBindTextureUnit(unit, 0);

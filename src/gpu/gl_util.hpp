@@ -104,6 +104,10 @@ enum TableUnit : GLuint {
   kTableUnitCount = 8,
 };
 
+// The texture unit of the instant mode's multiple-scattering table in its
+// sky-view and volume programs (instant_sky_view.frag.glsl).
+constexpr GLuint kInstantMultipleScatteringUnit = 8;
+
 // Uniform locations of the sky-view table's frame (table_bindings.glsl:
 // uniform_sky_view_frame), the same in every program that reads the table.
 constexpr GLint kSkyViewFrameLocation = 40;  // 40..44
@@ -122,6 +126,11 @@ void set_moons_uniforms(GLuint program, const physics::Moons& moons);
 class GpuTables {
  public:
   GpuTables(const Atmosphere& atmosphere, const Tables& tables, TexturePrecision precision);
+  // The instant mode's tables (InstantTables): the optical depth on unit 0,
+  // the sky irradiance on unit 3, no 4D table (units 1, 2 and 4 unbound),
+  // and its multiple-scattering table, which update_sky_view reads on
+  // kInstantMultipleScatteringUnit.
+  GpuTables(const Atmosphere& atmosphere, const InstantTables& tables);
   ~GpuTables();  // needs the context current
   GpuTables(const GpuTables&) = delete;
   GpuTables& operator=(const GpuTables&) = delete;
@@ -135,6 +144,9 @@ class GpuTables {
   // to first_unit + 5..7 (see TableUnit).
   void bind(GLuint first_unit = 0) const;
   GLuint texture(int index) const { return textures_[index]; }
+  // Whether these are the instant mode's tables, and their multiple-scattering table.
+  bool instant() const { return instant_multiple_scattering_ != 0; }
+  GLuint instant_multiple_scattering_texture() const { return instant_multiple_scattering_; }
   GLuint sky_view_texture(int index) const { return sky_view_textures_[index]; }
 
   // Replaces the tables that depend on the ground's albedo (sky
@@ -153,12 +165,14 @@ class GpuTables {
   // direction `sun`, in the frame `frame` (sky_view_frame); returns its GPU
   // time in ms (0 without a timer). Leaves the sky-view framebuffer bound and
   // the tables bound to units 0..4. With moons, the eclipsed table (the
-  // frame must then have full_azimuth).
+  // frame must then have full_azimuth). The instant mode's tables compute
+  // the instant mode's table (without moons).
   double update_sky_view(const glm::vec3& camera, const glm::vec3& sun, const physics::SkyViewFrame& frame,
                          GpuTimer* timer, const physics::Moons& moons = physics::no_moons());
 
  private:
   void release();
+  void create_sky_view_target();
   std::unique_ptr<physics::AtmosphereParams> params_;
   std::unique_ptr<physics::SpectralSets> spectral_;
   glm::mat3 radiance_to_srgb_{1.0f};
@@ -172,6 +186,10 @@ class GpuTables {
   // Single Rayleigh + multiple / P_R, single aerosol, the ray's end (RGBA32F).
   GLuint sky_view_textures_[3] = {0, 0, 0};
   GLuint vertex_array_ = 0;
+  // The instant mode: its multiple-scattering table, and its sky-view
+  // programs without and with the low-sun transmittance.
+  GLuint instant_multiple_scattering_ = 0;
+  GLuint instant_sky_view_programs_[2] = {0, 0};
 };
 
 }  // namespace atmos::gpu

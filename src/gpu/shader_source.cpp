@@ -181,6 +181,15 @@ const std::vector<const char*> kCompositePhysics = {
     "stars.glsl", "eclipse.glsl", "ray_geometry.glsl", "medium.glsl", "table_coordinates.glsl", "table_lookups.glsl",
     "ray_integration.glsl", "view_ray_scattering.glsl", "sky_view_table.glsl", "radiance_to_camera.glsl",
     "aerial_perspective.glsl"};
+// The instant mode's sky-view table and volume (instant_sky_view.frag.glsl,
+// instant_aerial_perspective.comp.glsl): the same and the instant mode's march.
+const std::vector<const char*> kInstantSkyViewPhysics = {
+    "eclipse.glsl", "ray_geometry.glsl", "medium.glsl", "table_coordinates.glsl", "table_lookups.glsl",
+    "ray_integration.glsl", "view_ray_scattering.glsl", "sky_view_table.glsl", "instant_atmosphere.glsl"};
+const std::vector<const char*> kInstantCompositePhysics = {
+    "stars.glsl", "eclipse.glsl", "ray_geometry.glsl", "medium.glsl", "table_coordinates.glsl", "table_lookups.glsl",
+    "ray_integration.glsl", "view_ray_scattering.glsl", "sky_view_table.glsl", "radiance_to_camera.glsl",
+    "aerial_perspective.glsl", "instant_atmosphere.glsl"};
 // The GLSL library for engines (engine_library.glsl): the sky along a ray,
 // the aerial perspective, the irradiance of surfaces, the eclipse factors.
 const std::vector<const char*> kEngineLibraryPhysics = {
@@ -239,8 +248,9 @@ AssembledSource atmosphere_pass_fragment_shader_source(const physics::Atmosphere
   // The classifying program of all classes at once exports its stencil
   // value (an extension's directive precedes every other token).
   const bool export_stencil = variant.pixels == PassVariant::Pixels::classify_all;
+  const bool instant = variant.pixels == PassVariant::Pixels::instant_space;
   AssembledSource s = physics_shader_source(
-      params, spectral, kCompositePhysics,
+      params, spectral, instant ? kInstantCompositePhysics : kCompositePhysics,
       export_stencil ? "#version 450 core\n#extension GL_ARB_shader_stencil_export : require\n"
                      : "#version 450 core\n");
   auto flag = [](bool b) { return b ? "true" : "false"; };
@@ -255,6 +265,7 @@ AssembledSource atmosphere_pass_fragment_shader_source(const physics::Atmosphere
                           "\n#define VARIANT_STARS " + flag(variant.stars) +
                           "\n#define VARIANT_ECLIPSE " + (variant.eclipse ? "1" : "0") + "\n");
   append_composite(s);
+  if (instant) s.append("instant_composite.glsl", embedded("src/gpu/instant_composite.glsl"));
   s.append("atmosphere_pass.frag.glsl", embedded("src/gpu/atmosphere_pass.frag.glsl"));
   return s;
 }
@@ -277,6 +288,26 @@ AssembledSource aerial_perspective_compute_shader_source(const physics::Atmosphe
                           (space ? "1" : "0") + "\n#define VARIANT_SPLIT " + (split ? "true" : "false") + "\n");
   append_composite(s);
   s.append("aerial_perspective.comp.glsl", embedded("src/gpu/aerial_perspective.comp.glsl"));
+  return s;
+}
+
+AssembledSource instant_sky_view_fragment_shader_source(const physics::AtmosphereParams& params,
+                                                        const physics::SpectralSets& spectral, bool low_sun) {
+  AssembledSource s = physics_shader_source(params, spectral, kInstantSkyViewPhysics);
+  s.append("variant", std::string("#define INSTANT_LOW_SUN ") + (low_sun ? "true" : "false") + "\n");
+  s.append("table_bindings.glsl", embedded("src/gpu/table_bindings.glsl"));
+  s.append("instant_sky_view.frag.glsl", embedded("src/gpu/instant_sky_view.frag.glsl"));
+  return s;
+}
+
+AssembledSource instant_aerial_perspective_compute_shader_source(const physics::AtmosphereParams& params,
+                                                                const physics::SpectralSets& spectral,
+                                                                bool low_sun) {
+  AssembledSource s = physics_shader_source(params, spectral, kInstantCompositePhysics);
+  s.append("variant", std::string("#define VARIANT_LOW_SUN ") + (low_sun ? "true" : "false") + "\n");
+  append_composite(s);
+  s.append("instant_composite.glsl", embedded("src/gpu/instant_composite.glsl"));
+  s.append("instant_aerial_perspective.comp.glsl", embedded("src/gpu/instant_aerial_perspective.comp.glsl"));
   return s;
 }
 

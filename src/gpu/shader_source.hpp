@@ -75,7 +75,10 @@ struct PassVariant {
     classify_low_sun = 4,
     classify_space = 5,
     classify_space_volume = 6,
-    classify_all = 7
+    classify_all = 7,
+    // The instant mode's pixels of a camera above the atmosphere, every one
+    // (instant_composite.glsl: instant_space_pixel).
+    instant_space = 8
   };
   Pixels pixels = Pixels::sky;
   bool sky_view_camera = true;  // camera in the atmosphere: reads the sky-view table
@@ -88,7 +91,7 @@ struct PassVariant {
   bool eclipse = false;         // the frame has moons (needs low_sun): the uniforms of uniform_moons()
   bool space_volume = false;    // surfaces read the volume of cameras above the atmosphere
   bool night = false;           // surfaces in the planet's shadow: no single scattering (PassFrame::night)
-  static constexpr int kCount = 8 * 1024;
+  static constexpr int kCount = 9 * 1024;
   int index() const {
     return int(pixels) * 1024 + ((sky_view_camera ? 1 : 0) | (low_sun ? 2 : 0) | (shadows ? 4 : 0) |
                                  (gbuffer ? 8 : 0) | (volume ? 16 : 0) | (blend ? 32 : 0) | (stars ? 64 : 0) |
@@ -116,6 +119,17 @@ AssembledSource atmosphere_pass_vertex_shader_source();
 AssembledSource aerial_perspective_compute_shader_source(const physics::AtmosphereParams& params,
                                                         const physics::SpectralSets& spectral, bool low_sun,
                                                         bool eclipse, bool space, bool split);
+
+// The instant mode's sky-view pass (instant_sky_view.frag.glsl: the view
+// rays marched through the multiple-scattering table; `low_sun` as
+// sky_view_fragment_shader_source's) and aerial-perspective volume
+// (instant_aerial_perspective.comp.glsl; `low_sun`: the transmittance to the
+// sun over the disc with the planet's shadow).
+AssembledSource instant_sky_view_fragment_shader_source(const physics::AtmosphereParams& params,
+                                                        const physics::SpectralSets& spectral, bool low_sun);
+AssembledSource instant_aerial_perspective_compute_shader_source(const physics::AtmosphereParams& params,
+                                                                const physics::SpectralSets& spectral,
+                                                                bool low_sun);
 
 // The GLSL library for engines' own shaders (AtmospherePass::glsl_library):
 // the definitions and the physics up to view_ray_scattering.glsl and

@@ -1,0 +1,352 @@
+// The instant approximate mode (InstantTables, AtmospherePass from them;
+// physics/instant_atmosphere.glsl): its tables for every preset and in the
+// spectral mode, bad input, and the pass against its CPU twin on the GPU
+// (its error against the reference: tests/instant_accuracy.cpp).
+//
+// The GPU tests FAIL (never skip) without an OpenGL 4.5 context.
+#include <gtest/gtest.h>
+
+#include <epoxy/gl.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "atmos/colour.hpp"
+#include "atmos/planet_file.hpp"
+#include "atmos/plugin.hpp"
+#include "atmos/renderer.hpp"
+#include "atmos/sky.hpp"
+#include "atmos/tables.hpp"
+#include "figures.hpp"
+#include "gpu/instant.hpp"
+#include "physics/parameters.hpp"
+#include "table_sizes.hpp"
+
+namespace {
+
+bool finite_and_non_negative(const std::vector<glm::vec3>& texels) {
+  return std::all_of(texels.begin(), texels.end(), [](const glm::vec3& c) {
+    return std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z) && c.x >= 0.0f && c.y >= 0.0f &&
+           c.z >= 0.0f;
+  });
+}
+
+double seconds(const atmos::InstantTables& tables) {
+  double sum = 0.0;
+  for (const atmos::StepTiming& t : tables.timings) sum += t.seconds;
+  return sum;
+}
+
+// Every preset's instant tables: finite, non-negative, the multiple
+// scattering positive where the sun is up (Ψ_ms > 0 at mu_s = 1 at every
+// altitude), the sky irradiance positive at the ground under a high sun. The
+// time is printed (atmos bench measures it).
+TEST(InstantTables, EveryPresetGivesFiniteNonNegativeTables) {
+  for (const char* name : {"earth", "mars", "mars-thesis", "venus", "titan"}) {
+    const atmos::Atmosphere atmosphere = atmos::load_atmosphere(name);
+    const atmos::InstantTables tables = atmos::compute_instant_tables(atmosphere);
+    ASSERT_NO_THROW(atmos::check_tables_match(atmosphere, tables)) << name;
+    EXPECT_TRUE(finite_and_non_negative(tables.multiple_scattering)) << name;
+    EXPECT_TRUE(finite_and_non_negative(tables.indirect_irradiance)) << name;
+    const int width = tables.multiple_scattering_mu_s * tables.spectral_sets();
+    for (int y = 0; y < tables.multiple_scattering_r; ++y) {
+      const glm::vec3 overhead = tables.multiple_scattering[size_t(y) * size_t(width) + size_t(width - 1)];
+      EXPECT_GT(std::min({overhead.x, overhead.y, overhead.z}), 0.0f) << name << " row " << y;
+    }
+    // Irradiance texel at the ground (row 0) with the sun overhead (last column).
+    const glm::vec3 sky = tables.indirect_irradiance[size_t(tables.sizes.irradiance_mu_s - 1)];
+    EXPECT_GT(std::min({sky.x, sky.y, sky.z}), 0.0f) << name;
+    std::printf("%-12s %2zu wavelengths: instant tables in %.3f s (", name, atmosphere.wavelengths_nm.size(),
+                seconds(tables));
+    for (const atmos::StepTiming& t : tables.timings) std::printf(" %s %.3f", t.name.c_str(), t.seconds);
+    std::printf(" )\n");
+  }
+}
+
+TEST(InstantTables, BadInputIsAnError) {
+  const atmos::Atmosphere earth = atmos::load_atmosphere("earth");
+  atmos::TableSizes odd;
+  odd.scattering_mu = 31;
+  EXPECT_THROW(atmos::compute_instant_tables(earth, odd), atmos::Error);
+  atmos::InstantTables tables = atmos::compute_instant_tables(earth, atmos_test::small_gpu_sizes());
+  atmos::Atmosphere other = earth;
+  other.wavelengths_nm = {700.0, 550.0, 450.0};
+  EXPECT_THROW(atmos::check_tables_match(other, tables), atmos::Error);
+  tables.multiple_scattering.pop_back();
+  EXPECT_THROW(atmos::check_tables_match(earth, tables), atmos::Error);
+}
+
+// The spectral mode (15 wavelengths, three wavelength triples) gives the
+// same sky as three wavelengths within the difference of the two modes'
+// colour (a few per cent in luminance), and both are finite.
+TEST(InstantTables, SpectralModeMatchesThreeWavelengths) {
+  atmos::Atmosphere earth = atmos::load_atmosphere("earth");
+  const atmos::InstantTables three = atmos::compute_instant_tables(earth);
+  atmos::Atmosphere spectral = earth;
+  spectral.wavelengths_nm = atmos::spectral_wavelengths(15);
+  const atmos::InstantTables fifteen = atmos::compute_instant_tables(spectral);
+  EXPECT_TRUE(finite_and_non_negative(fifteen.multiple_scattering));
+  const glm::dvec3 camera = atmos::observer_position(earth, 2.0);
+  const glm::dvec3 sun = atmos::direction_from_azimuth_elevation(200.0, 30.0);
+  std::vector<glm::dvec3> views;
+  for (double elevation : {5.0, 30.0, 80.0})
+    for (double azimuth : {0.0, 90.0, 180.0}) views.push_back(atmos::direction_from_azimuth_elevation(azimuth, elevation));
+  const std::vector<glm::dvec3> a = atmos::gpu::instant_sky_radiance_cpu(earth, three, camera, sun, views);
+  const std::vector<glm::dvec3> b = atmos::gpu::instant_sky_radiance_cpu(spectral, fifteen, camera, sun, views);
+  const glm::dmat3 to_srgb_three(atmos::physics::channels_to_srgb_matrix(earth.wavelengths_nm));
+  const glm::dmat3 to_srgb_fifteen(atmos::physics::channels_to_srgb_matrix(spectral.wavelengths_nm));
+  for (size_t i = 0; i < views.size(); ++i) {
+    const double la = atmos::srgb_luminance(to_srgb_three * a[i]);
+    const double lb = atmos::srgb_luminance(to_srgb_fifteen * b[i]);
+    ASSERT_TRUE(std::isfinite(lb));
+    EXPECT_NEAR(lb / la, 1.0, 0.08) << "view " << i;
+  }
+}
+
+// --- The pass on the GPU ------------------------------------------------------
+
+constexpr double kEarthRadius = 6371e3;
+
+atmos::PlanetFrame engine_frame() {
+  atmos::PlanetFrame f;
+  f.centre = {1200.0, -6000.0, 300.0};
+  f.units_per_metre = 1e-3;  // kilometres
+  return f;
+}
+
+// A synthetic engine frame: a camera, the ground sphere 2 m above the
+// planet's and a round mountain, cast in double on the CPU into depth and
+// lit colour (or a G-buffer), as tests/plugin_test.cpp does.
+struct Shot {
+  glm::dvec3 camera{0.0};
+  glm::dvec3 forward{0.0, 1.0, 0.0};
+  glm::dvec3 up{0.0, 0.0, 1.0};
+  double fov_deg = 60.0;
+  int width = 48;
+  int height = 32;
+  atmos::SurfaceMode surfaces = atmos::SurfaceMode::lit_colour;
+  glm::dvec3 sun{0.0, 0.0, 1.0};
+  glm::dvec3 mountain_centre{0.0};
+  double mountain_radius_m = 0.0;
+};
+
+struct EngineFrame {
+  atmos::FrameInput input;
+  atmos::gpu::CpuEngineBuffers buffers;
+};
+
+double hit_sphere(const glm::dvec3& origin, const glm::dvec3& dir, const glm::dvec3& centre, double radius) {
+  const glm::dvec3 oc = origin - centre;
+  const double b = glm::dot(oc, dir);
+  const double h = b * b - (glm::dot(oc, oc) - radius * radius);
+  if (h < 0.0) return -1.0;
+  const double s = std::sqrt(h);
+  if (-b - s > 0.0) return -b - s;
+  if (-b + s > 0.0) return -b + s;
+  return -1.0;
+}
+
+EngineFrame make_engine_frame(const Shot& shot) {
+  const atmos::PlanetFrame f = engine_frame();
+  EngineFrame e;
+  atmos::FrameInput& in = e.input;
+  in.width = shot.width;
+  in.height = shot.height;
+  in.surfaces = shot.surfaces;
+  in.sun_direction = shot.sun;
+  const glm::dvec3 eye = f.centre + shot.camera * f.units_per_metre;
+  in.view = glm::lookAt(eye, eye + shot.forward, shot.up);
+  in.projection = glm::perspective(glm::radians(shot.fov_deg), double(shot.width) / double(shot.height), 1e-4, 1e5);
+  const size_t n = size_t(shot.width) * size_t(shot.height);
+  e.buffers.depth.assign(n, 1.0f);
+  e.buffers.colour.assign(n, glm::vec3(0.0f));
+  e.buffers.albedo.assign(n, glm::vec3(0.0f));
+  e.buffers.normal.assign(n, glm::vec3(0.0f, 0.0f, 1.0f));
+  const glm::dmat4 inverse_view_projection = glm::inverse(in.projection * in.view);
+  for (int y = 0; y < shot.height; ++y)
+    for (int x = 0; x < shot.width; ++x) {
+      const glm::dvec2 ndc((x + 0.5) / shot.width * 2.0 - 1.0, (y + 0.5) / shot.height * 2.0 - 1.0);
+      const glm::dvec4 p = inverse_view_projection * glm::dvec4(ndc, -1.0, 1.0);
+      const glm::dvec3 dir = glm::normalize(glm::dvec3(p) / p.w - eye);
+      double t = hit_sphere(shot.camera, dir, glm::dvec3(0.0), kEarthRadius + 2.0);
+      glm::dvec3 centre(0.0);
+      if (shot.mountain_radius_m > 0.0) {
+        const double tm = hit_sphere(shot.camera, dir, shot.mountain_centre, shot.mountain_radius_m);
+        if (tm > 0.0 && (t < 0.0 || tm < t)) {
+          t = tm;
+          centre = shot.mountain_centre;
+        }
+      }
+      if (t < 0.0) continue;
+      const glm::dvec3 hit = shot.camera + dir * t;
+      const glm::dvec4 clip = in.projection * in.view * glm::dvec4(f.centre + hit * f.units_per_metre, 1.0);
+      const size_t i = size_t(y) * size_t(shot.width) + size_t(x);
+      e.buffers.depth[i] = float(0.5 * clip.z / clip.w + 0.5);
+      const glm::dvec3 normal = glm::normalize(hit - centre);
+      e.buffers.normal[i] = glm::vec3(normal);
+      e.buffers.albedo[i] = glm::vec3(0.15f, 0.2f, 0.1f);
+      const double lambert = std::max(glm::dot(normal, glm::normalize(shot.sun)), 0.0);
+      e.buffers.colour[i] = glm::vec3(float(300.0 * lambert + 20.0), float(350.0 * lambert + 25.0),
+                                      float(250.0 * lambert + 30.0));
+    }
+  return e;
+}
+
+GLuint upload(GLenum format, int w, int h, GLenum pixel_format, const void* data) {
+  GLuint t = 0;
+  glCreateTextures(GL_TEXTURE_2D, 1, &t);
+  glTextureStorage2D(t, 1, format, w, h);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTextureSubImage2D(t, 0, 0, 0, w, h, pixel_format, GL_FLOAT, data);
+  return t;
+}
+
+std::vector<glm::vec3> run(atmos::AtmospherePass& pass, EngineFrame& e) {
+  const int w = e.input.width, h = e.input.height;
+  std::vector<GLuint> textures;
+  e.input.depth = upload(GL_R32F, w, h, GL_RED, e.buffers.depth.data());
+  textures.push_back(e.input.depth);
+  if (e.input.surfaces == atmos::SurfaceMode::lit_colour) {
+    e.input.colour = upload(GL_RGBA32F, w, h, GL_RGB, e.buffers.colour.data());
+    textures.push_back(e.input.colour);
+  } else {
+    e.input.albedo = upload(GL_RGBA32F, w, h, GL_RGB, e.buffers.albedo.data());
+    e.input.normal = upload(GL_RGBA32F, w, h, GL_RGB, e.buffers.normal.data());
+    textures.push_back(e.input.albedo);
+    textures.push_back(e.input.normal);
+  }
+  const GLuint out = pass.render(e.input);
+  std::vector<float> rgba(size_t(w) * size_t(h) * 4);
+  glGetTextureImage(out, 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)), rgba.data());
+  glDeleteTextures(GLsizei(textures.size()), textures.data());
+  std::vector<glm::vec3> rgb(size_t(w) * size_t(h));
+  for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = {rgba[4 * i], rgba[4 * i + 1], rgba[4 * i + 2]};
+  return rgb;
+}
+
+double luminance(const glm::vec3& c) { return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z; }
+
+class InstantGpu : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    earth_ = std::make_unique<atmos::Atmosphere>(atmos::load_atmosphere("earth"));
+    tables_ = std::make_unique<atmos::InstantTables>(
+        atmos::compute_instant_tables(*earth_, atmos_test::small_gpu_sizes()));
+    try {
+      context_ = atmos::GlContext::create_headless();
+      pass_ = std::make_unique<atmos::AtmospherePass>(*earth_, *tables_, engine_frame());
+    } catch (const atmos::Error& e) {
+      error_ = e.what();
+    }
+  }
+  static void TearDownTestSuite() {
+    pass_.reset();
+    context_.reset();
+    tables_.reset();
+    earth_.reset();
+  }
+  void SetUp() override { ASSERT_TRUE(pass_ != nullptr) << error_; }
+
+  static inline std::unique_ptr<atmos::Atmosphere> earth_;
+  static inline std::unique_ptr<atmos::InstantTables> tables_;
+  static inline std::unique_ptr<atmos::GlContext> context_;
+  static inline std::unique_ptr<atmos::AtmospherePass> pass_;
+  static inline std::string error_;
+};
+
+// The pass against its CPU twin (gpu/instant.cpp: the same sky-view table,
+// volume and composite, or the per-pixel integration from orbit): on the
+// ground at noon and at sunset, at 10 km, from orbit (400 km) and lit from a
+// G-buffer. Tolerances of the exact mode's twin test (tests/plugin_test.cpp:
+// the GPU's own transcendental functions), measured here and recorded.
+TEST_F(InstantGpu, MatchesCpuTwin) {
+  EXPECT_TRUE(pass_->instant());
+  const glm::dvec3 site = glm::normalize(glm::dvec3(0.3, 0.2, 0.93));
+  const glm::dvec3 up = site;
+  const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0.0, 0.0, 1.0), up));
+  const glm::dvec3 north = glm::cross(up, east);
+  const auto direction = [&](double azimuth, double elevation) {
+    const double a = glm::radians(azimuth), e = glm::radians(elevation);
+    return glm::normalize(north * (std::cos(e) * std::cos(a)) + east * (std::cos(e) * std::sin(a)) +
+                          up * std::sin(e));
+  };
+  const auto at = [&](double altitude) { return site * (kEarthRadius + altitude); };
+  std::vector<std::pair<std::string, Shot>> shots;
+  Shot ground;
+  ground.camera = at(10.0);
+  ground.forward = direction(20.0, -3.0);
+  ground.up = up;
+  ground.sun = direction(140.0, 35.0);
+  ground.mountain_centre = at(-2000.0) + direction(25.0, 0.0) * 30e3;
+  ground.mountain_radius_m = 4000.0;
+  shots.push_back({"ground_noon", ground});
+  Shot sunset = ground;
+  sunset.sun = direction(30.0, 2.0);
+  shots.push_back({"sunset", sunset});
+  Shot high = ground;
+  high.camera = at(10e3);
+  high.forward = direction(10.0, -20.0);
+  shots.push_back({"altitude_10km", high});
+  Shot orbit = ground;
+  orbit.camera = at(400e3);
+  orbit.forward = direction(0.0, -60.0);
+  orbit.fov_deg = 90.0;
+  shots.push_back({"orbit_400km", orbit});
+  Shot gbuffer = ground;
+  gbuffer.surfaces = atmos::SurfaceMode::gbuffer;
+  shots.push_back({"gbuffer", gbuffer});
+  for (auto& [name, shot] : shots) {
+    EngineFrame e = make_engine_frame(shot);
+    const std::vector<glm::vec3> gpu = run(*pass_, e);
+    std::vector<glm::ivec2> pixels;
+    for (int y = 0; y < shot.height; y += 2)
+      for (int x = (y / 2) % 2; x < shot.width; x += 2) pixels.push_back({x, y});
+    const std::vector<glm::vec3> cpu =
+        atmos::gpu::composite_instant_cpu(*earth_, *tables_, engine_frame(), e.input, e.buffers, pixels);
+    double max_relative = 0.0, sum_squares = 0.0;
+    int surfaces = 0;
+    for (size_t k = 0; k < pixels.size(); ++k) {
+      const size_t i = size_t(pixels[k].y) * size_t(shot.width) + size_t(pixels[k].x);
+      ASSERT_TRUE(std::isfinite(luminance(gpu[i])) && std::isfinite(luminance(cpu[k]))) << name;
+      EXPECT_GE(std::min({gpu[i].x, gpu[i].y, gpu[i].z}), 0.0f) << name;
+      const double reference = std::max(luminance(cpu[k]), 1e-3);
+      const double difference = glm::length(glm::dvec3(gpu[i]) - glm::dvec3(cpu[k])) / reference;
+      max_relative = std::max(max_relative, difference);
+      sum_squares += difference * difference;
+      surfaces += e.buffers.depth[i] < 1.0f ? 1 : 0;
+    }
+    const double rms = std::sqrt(sum_squares / double(pixels.size()));
+    std::printf("%-14s %zu pixels (%d surface): max %.3e, RMS %.3e\n", name.c_str(), pixels.size(), surfaces,
+                max_relative, rms);
+    atmos_test::record_figure("instant " + name + ": max relative difference", max_relative, "", "<= 1e-2");
+    atmos_test::record_figure("instant " + name + ": RMS relative difference", rms, "", "<= 3e-3");
+    EXPECT_LE(max_relative, 1e-2) << name;
+    EXPECT_LE(rms, 3e-3) << name;
+    EXPECT_GT(surfaces, 0) << name;
+  }
+}
+
+// What the instant mode does not do is refused with a clear error, not
+// drawn wrongly: eclipses, the GLSL library (4D tables), the ground albedo
+// response.
+TEST_F(InstantGpu, UnsupportedFeaturesAreErrors) {
+  EXPECT_THROW(pass_->glsl_library(0), atmos::Error);
+  EXPECT_THROW(pass_->bind_textures(0), atmos::Error);
+  EXPECT_THROW(pass_->set_ground_albedo(glm::dvec3(0.2)), atmos::Error);
+  Shot shot;
+  const glm::dvec3 site(0.0, 0.0, 1.0);
+  shot.camera = site * (kEarthRadius + 10.0);
+  shot.forward = glm::dvec3(0.0, 1.0, 0.0);
+  shot.sun = glm::normalize(glm::dvec3(0.0, 1.0, 1.0));
+  EngineFrame e = make_engine_frame(shot);
+  e.input.moons = {atmos::moon_in_sky(shot.camera, shot.sun, glm::radians(0.28))};
+  EXPECT_THROW(run(*pass_, e), atmos::Error);
+}
+
+}  // namespace
