@@ -20,11 +20,17 @@
 
 namespace {
 
-// The default Earth tables and an OpenGL context, built at the first use.
+// The headless OpenGL context of every benchmark, created at the first use.
+atmos::GlContext& gl_context() {
+  static const std::unique_ptr<atmos::GlContext> context = atmos::GlContext::create_headless();
+  return *context;
+}
+
+// The default Earth tables and the OpenGL context, built at the first use.
 struct Scene {
   atmos::Atmosphere atmosphere = atmos::load_atmosphere("earth");
   atmos::Tables tables = atmos::precompute_tables(atmosphere, atmos::PrecomputeOptions{});
-  std::unique_ptr<atmos::GlContext> context = atmos::GlContext::create_headless();
+  atmos::GlContext& context = gl_context();
 };
 
 Scene& scene() {
@@ -73,6 +79,18 @@ void BM_PluginFrame(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_PluginFrame)->Args({1920, 1080})->Unit(benchmark::kMillisecond)->UseManualTime();
+
+// `atmos bench`'s figures of the instant approximate mode (harness.hpp:
+// time_instant) over Earth, arguments width and height, each as a counter
+// (s for the tables, ms for the pass).
+void BM_InstantMode(benchmark::State& state) {
+  const atmos::Atmosphere earth = atmos::load_atmosphere("earth");
+  gl_context();
+  for (auto _ : state)
+    atmos_bench::time_instant(earth, int(state.range(0)), int(state.range(1)),
+                              [&](const atmos_bench::Figure& f) { state.counters[f.name] = f.value; });
+}
+BENCHMARK(BM_InstantMode)->Args({1920, 1080})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
 // The globe's tile selection on the CPU (src/planet/tile_selection.hpp):
 // Earth (6360 km, heights -430..8848 m, no per-tile height ranges), error

@@ -134,6 +134,7 @@ struct Shot {
   glm::dvec3 sun{0.0, 0.0, 1.0};
   glm::dvec3 mountain_centre{0.0};
   double mountain_radius_m = 0.0;
+  double planet_radius_m = kEarthRadius;  // the engine's ground: this sphere raised by 2 m
 };
 
 struct EngineFrame {
@@ -174,7 +175,7 @@ EngineFrame make_engine_frame(const Shot& shot) {
       const glm::dvec2 ndc((x + 0.5) / shot.width * 2.0 - 1.0, (y + 0.5) / shot.height * 2.0 - 1.0);
       const glm::dvec4 p = inverse_view_projection * glm::dvec4(ndc, -1.0, 1.0);
       const glm::dvec3 dir = glm::normalize(glm::dvec3(p) / p.w - eye);
-      double t = hit_sphere(shot.camera, dir, glm::dvec3(0.0), kEarthRadius + 2.0);
+      double t = hit_sphere(shot.camera, dir, glm::dvec3(0.0), shot.planet_radius_m + 2.0);
       glm::dvec3 centre(0.0);
       if (shot.mountain_radius_m > 0.0) {
         const double tm = hit_sphere(shot.camera, dir, shot.mountain_centre, shot.mountain_radius_m);
@@ -231,6 +232,37 @@ std::vector<glm::vec3> run(atmos::AtmospherePass& pass, EngineFrame& e) {
 }
 
 double luminance(const glm::vec3& c) { return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z; }
+
+// Every preset through the pass's CPU twin (the functions the GPU runs), on
+// the ground looking at the horizon with the sun 20° and 3° up, and from
+// orbit: every pixel finite and non-negative, the sky brighter than nothing.
+TEST(InstantTables, EveryPresetRendersFiniteNonNegative) {
+  for (const char* name : {"earth", "mars", "venus", "titan"}) {
+    const atmos::Atmosphere atmosphere = atmos::load_atmosphere(name);
+    const atmos::InstantTables tables = atmos::compute_instant_tables(atmosphere, atmos_test::small_gpu_sizes());
+    const glm::dvec3 up(0.0, 0.0, 1.0), north(0.0, 1.0, 0.0);
+    for (const auto& [altitude, sun_elevation] : {std::pair{2.0, 20.0}, std::pair{2.0, 3.0}, std::pair{400e3, 20.0}}) {
+      Shot shot;
+      shot.planet_radius_m = atmosphere.bottom_radius_m;
+      shot.camera = up * (atmosphere.bottom_radius_m + altitude);
+      shot.forward = glm::normalize(north + up * (altitude > 1e3 ? -1.0 : 0.05));
+      shot.width = 16;
+      shot.height = 12;
+      const double e = glm::radians(sun_elevation);
+      shot.sun = glm::normalize(north * std::cos(e) + up * std::sin(e) + glm::dvec3(0.3, 0.0, 0.0));
+      EngineFrame frame = make_engine_frame(shot);
+      std::vector<glm::ivec2> pixels;
+      for (int y = 0; y < shot.height; ++y)
+        for (int x = 0; x < shot.width; ++x) pixels.push_back({x, y});
+      const std::vector<glm::vec3> rgb =
+          atmos::gpu::composite_instant_cpu(atmosphere, tables, engine_frame(), frame.input, frame.buffers, pixels);
+      EXPECT_TRUE(finite_and_non_negative(rgb)) << name << " " << altitude << " m, sun " << sun_elevation;
+      double brightest = 0.0;
+      for (const glm::vec3& c : rgb) brightest = std::max(brightest, double(c.y));
+      EXPECT_GT(brightest, 0.0) << name << " " << altitude << " m, sun " << sun_elevation;
+    }
+  }
+}
 
 class InstantGpu : public ::testing::Test {
  protected:

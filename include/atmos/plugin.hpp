@@ -188,7 +188,8 @@ class AtmospherePass {
   // or too old context, compile errors, or an invalid frame.
   AtmospherePass(const Atmosphere& atmosphere, const Tables& tables, const PlanetFrame& frame);
   // The instant approximate mode (Hillaire 2020; docs/instant.md): the same
-  // pass from InstantTables (compute_instant_tables, tens of milliseconds),
+  // pass from InstantTables (compute_instant_tables: about a second or less
+  // for three wavelengths on 2 cores),
   // without any 4D table. Each frame integrates its sky-view table and
   // aerial-perspective volume along the view rays through the
   // multiple-scattering table (for cameras in the atmosphere; from above it
@@ -197,8 +198,7 @@ class AtmospherePass {
   // the measured error). Not in this mode: eclipses (render() throws with
   // moons that hide part of the sun), glsl_library() and bind_textures()
   // (they read the 4D tables) and set_ground_albedo() (no ground response:
-  // compute the instant tables of an atmosphere with the new albedo, they
-  // take tens of milliseconds).
+  // compute the instant tables of an atmosphere with the new albedo).
   AtmospherePass(const Atmosphere& atmosphere, const InstantTables& tables, const PlanetFrame& frame);
   ~AtmospherePass();
   AtmospherePass(const AtmospherePass&) = delete;

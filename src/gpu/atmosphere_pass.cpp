@@ -214,17 +214,20 @@ void create_pass_objects(AtmospherePass& pass, AtmospherePass::Impl& p, const At
     glTextureStorage3D(texture, 1, GL_RGBA32F, AP_WIDTH, AP_HEIGHT, AP_SLICES);
     gpu::set_table_sampling(texture);
   }
-  glCreateTextures(GL_TEXTURE_3D, 4, p.space_volume);
-  for (GLuint texture : p.space_volume) {
-    glTextureStorage3D(texture, 1, GL_RGBA32F, SPACE_VOLUME_WIDTH, SPACE_VOLUME_HEIGHT, SPACE_VOLUME_SLICES);
-    gpu::set_table_sampling(texture);
+  // The space volume (9 MB), which the instant mode never reads.
+  if (!p.instant) {
+    glCreateTextures(GL_TEXTURE_3D, 4, p.space_volume);
+    for (GLuint texture : p.space_volume) {
+      glTextureStorage3D(texture, 1, GL_RGBA32F, SPACE_VOLUME_WIDTH, SPACE_VOLUME_HEIGHT, SPACE_VOLUME_SLICES);
+      gpu::set_table_sampling(texture);
+    }
+    glCreateTextures(GL_TEXTURE_2D, 1, &p.space_regular_columns);
+    glTextureStorage2D(p.space_regular_columns, 1, GL_RGBA32F, SPACE_VOLUME_WIDTH, SPACE_VOLUME_HEIGHT);
+    gpu::set_table_sampling(p.space_regular_columns);
+    glCreateBuffers(1, &p.space_columns);
+    glNamedBufferStorage(p.space_columns, GLsizeiptr(sizeof(GLint)) * SPACE_VOLUME_WIDTH * SPACE_VOLUME_HEIGHT,
+                         nullptr, GL_DYNAMIC_STORAGE_BIT);
   }
-  glCreateTextures(GL_TEXTURE_2D, 1, &p.space_regular_columns);
-  glTextureStorage2D(p.space_regular_columns, 1, GL_RGBA32F, SPACE_VOLUME_WIDTH, SPACE_VOLUME_HEIGHT);
-  gpu::set_table_sampling(p.space_regular_columns);
-  glCreateBuffers(1, &p.space_columns);
-  glNamedBufferStorage(p.space_columns, GLsizeiptr(sizeof(GLint)) * SPACE_VOLUME_WIDTH * SPACE_VOLUME_HEIGHT,
-                       nullptr, GL_DYNAMIC_STORAGE_BIT);
   glCreateSamplers(1, &p.depth_sampler);
   glSamplerParameteri(p.depth_sampler, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glSamplerParameteri(p.depth_sampler, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
