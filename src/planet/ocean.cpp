@@ -115,7 +115,8 @@ struct OceanProgram {
   GLuint id = 0;
   GLint clip = -1, inverse = -1, viewport = -1, camera = -1, up = -1, radius = -1, height_term = -1,
         pixel_angle = -1, sun = -1, light = -1, refractive = -1, absorption = -1, backscattering = -1,
-        diffuse = -1, slope_variance = -1, upwind = -1, wave_count = -1, wave_vector = -1, wave_phase = -1,
+        diffuse = -1, slope_variance = -1, upwind = -1, wave_count = -1, wave_vector = -1, wave_in_wind = -1,
+        wave_phase = -1,
         bathymetry = -1, sky_map = -1, light_map = -1, reflectance_map = -1, sea_level = -1, seabed = -1, moon_count = -1,
         moon_spheres = -1, terms = -1;
   void locate() {
@@ -138,6 +139,7 @@ struct OceanProgram {
     upwind = at("wind_upwind");
     wave_count = at("wave_count");
     wave_vector = at("wave_vector");
+    wave_in_wind = at("wave_in_wind");
     wave_phase = at("wave_phase");
     bathymetry = at("bathymetry");
     sky_map = at("sky_map");
@@ -444,12 +446,14 @@ void Ocean::draw(const GlobeView& view, double time_s) {
   // The waves: world wave vectors in the anchor's wind frame, and their
   // phases at the camera, k · camera + φ − ω t, reduced in double.
   p.anchor_at(up);
-  std::array<glm::vec4, kMaxWaves> vectors{};
+  std::array<glm::vec4, kMaxWaves> vectors{}, in_wind{};
   std::array<float, kMaxWaves> phases{};
   for (size_t i = 0; i < p.waves.size(); ++i) {
     const Wave& w = p.waves[i];
     const glm::dvec3 k = w.k * (std::cos(w.angle) * p.upwind + std::sin(w.angle) * p.crosswind);
     vectors[i] = glm::vec4(glm::vec3(k), float(w.amplitude));
+    in_wind[i] = glm::vec4(float(w.k * std::cos(w.angle)), float(w.k * std::sin(w.angle)), float(w.k),
+                           float(w.amplitude));
     const double phase = glm::dot(k, camera) + w.phase - w.omega * time_s;
     phases[i] = float(phase - 2.0 * kPi * std::floor(phase / (2.0 * kPi)));
   }
@@ -501,6 +505,7 @@ void Ocean::draw(const GlobeView& view, double time_s) {
   glUniform3f(g.upwind, float(p.upwind.x), float(p.upwind.y), float(p.upwind.z));
   glUniform1i(g.wave_count, int(p.waves.size()));
   glUniform4fv(g.wave_vector, kMaxWaves, glm::value_ptr(vectors[0]));
+  glUniform4fv(g.wave_in_wind, kMaxWaves, glm::value_ptr(in_wind[0]));
   glUniform1fv(g.wave_phase, kMaxWaves, phases.data());
   glUniform1f(g.sea_level, float(p.sea_level_m));
   glUniform3f(g.seabed, float(p.settings.seabed_albedo.x), float(p.settings.seabed_albedo.y),

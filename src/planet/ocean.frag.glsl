@@ -70,6 +70,7 @@ uniform vec3 wind_upwind;  // unit, tangent at the waves' anchor
 #define OCEAN_MAX_WAVES 32
 uniform int wave_count;
 uniform vec4 wave_vector[OCEAN_MAX_WAVES];  // xyz: k (rad/m, planet axes), w: amplitude (m)
+uniform vec4 wave_in_wind[OCEAN_MAX_WAVES]; // xy: k along upwind and crosswind at the anchor, z: |k|, w: amplitude
 uniform float wave_phase[OCEAN_MAX_WAVES];  // k · camera + phase − ω t, modulo 2π
 
 uniform samplerCube bathymetry;  // r: the ground's height (m above the datum), g: its least over 3 x 3 texels
@@ -201,23 +202,25 @@ void main() {
   float footprint = t * pixel_angle;
   vec2 slope = vec2(0.0);
   vec2 resolved = vec2(0.0);
+  // The wave vectors' components on the local upwind and crosswind axes
+  // are those at the waves' anchor (wave_in_wind, from the CPU): they
+  // differ by the square of the arc from it, 1e-4 within its 0.5 degrees,
+  // and farther, where the sea is seen from higher, the waves are filtered
+  // out. The view's azimuth on the same axes gives the footprint's phase
+  // changes.
+  vec2 along_wind = vec2(dot(along, upwind), dot(along, crosswind));
+  vec2 across_wind = vec2(-along_wind.y, along_wind.x);
   for (int i = 0; i < wave_count; ++i) {
-    vec3 k = wave_vector[i].xyz;
-    float a = wave_vector[i].w;
-    vec3 kt = k - dot(k, n) * n;
-    float ka = dot(kt, along) / mu_v, kb = dot(kt, across);
-    float phase_change = footprint * sqrt(ka * ka + kb * kb);
+    vec4 wave = wave_in_wind[i];
     // The waves come in increasing wavenumber, and the phase change is at
-    // least the footprint times |k_t|: once that filters a wave out, it
-    // filters out the shorter ones (|k_t| = |k| to 1e-4 within the 0.5
-    // degrees of the anchor; farther, a shorter wave left out is counted in
-    // the BRDF, which keeps the total variance).
-    if (footprint * length(kt) >= 0.5 * PI) break;
-    float w = 1.0 - smoothstep(0.25 * PI, 0.5 * PI, phase_change);
-    if (w <= 0.0) continue;
-    vec2 k_wind = vec2(dot(kt, upwind), dot(kt, crosswind));
-    slope += (w * a * cos(wave_phase[i] + dot(k, offset))) * k_wind;
-    resolved += (w * w * 0.5 * a * a) * k_wind * k_wind;
+    // least the footprint times |k|: once that filters a wave out, it
+    // filters out the shorter ones.
+    if (footprint * wave.z >= 0.5 * PI) break;
+    float ka = dot(wave.xy, along_wind) / mu_v, kb = dot(wave.xy, across_wind);
+    float w = 1.0 - smoothstep(0.25 * PI, 0.5 * PI, footprint * sqrt(ka * ka + kb * kb));
+    float a = wave.w;
+    slope += (w * a * cos(wave_phase[i] + dot(wave_vector[i].xyz, offset))) * wave.xy;
+    resolved += (w * w * 0.5 * a * a) * wave.xy * wave.xy;
   }
   WaterParams water;
   water.refractive_index = sea_refractive_index;
