@@ -31,15 +31,22 @@ Scene::Scene(const PlanetTables& t, bool globe, bool regional_albedo, bool compl
   glCreateQueries(GL_TIME_ELAPSED, kQueries, queries_.data());
 }
 
-bool Scene::rebind(const PlanetTables& t) {
+bool Scene::prepare_rebind(const PlanetTables& t) {
   if (!globe_ || !(t.surface == surface_) || t.planet.bottom_radius_m != planet_.bottom_radius_m) return false;
-  auto pass = std::make_unique<atmos::AtmospherePass>(t.air, t.tables, atmos::PlanetFrame{});
-  globe_->rebind(t.planet, *pass);
-  pass_ = std::move(pass);
-  params_ = t.params;
-  planet_ = t.planet;
-  regional_albedo_ = regional_albedo_requested_ && !t.tables.ground_response.empty();
+  next_pass_ = std::make_unique<atmos::AtmospherePass>(t.air, t.tables, atmos::PlanetFrame{});
+  next_params_ = t.params;
+  next_planet_ = t.planet;
+  next_regional_albedo_ = regional_albedo_requested_ && !t.tables.ground_response.empty();
   return true;
+}
+
+void Scene::finish_rebind() {
+  std::unique_ptr<atmos::AtmospherePass> pass = std::move(next_pass_);
+  globe_->rebind(next_planet_, *pass);
+  pass_ = std::move(pass);
+  params_ = next_params_;
+  planet_ = next_planet_;
+  regional_albedo_ = next_regional_albedo_;
 }
 
 Scene::~Scene() {

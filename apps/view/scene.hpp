@@ -5,8 +5,8 @@
 // stars and the moons. Only the public API of include/atmos is used.
 //
 // A Scene holds one set of tables; new tables (computed on another
-// thread, tables_job.hpp) are swapped in by rebind() over the same ground,
-// else by a new Scene. Construct, use and destroy it with the viewer's
+// thread, tables_job.hpp) are swapped in by prepare_rebind() and
+// finish_rebind() over the same ground, else by a new Scene. Construct, use and destroy it with the viewer's
 // OpenGL 4.5 context current.
 #pragma once
 
@@ -65,12 +65,17 @@ class Scene {
   Scene(const Scene&) = delete;
   Scene& operator=(const Scene&) = delete;
 
-  // Takes new tables of the same ground (the same surface on the same
-  // datum radius) without a new globe: a new pass, the globe rebound to it
-  // (atmos::Globe::rebind) with its tiles kept. False, with the scene
-  // unchanged, when the ground differs or the scene has no globe (build a
-  // new Scene then); atmos::Error as the constructor.
-  bool rebind(const PlanetTables& tables);
+  // New tables of the same ground (the same surface on the same datum
+  // radius) are taken without a new globe, in two steps on two frames so
+  // that no frame pays for both: prepare_rebind builds their pass (the
+  // scene still draws with the old one), finish_rebind binds the globe to it
+  // (atmos::Globe::rebind, its tiles kept) and the scene draws with it from
+  // then on. prepare_rebind returns false, with the scene unchanged, when
+  // the ground differs or the scene has no globe (build a new Scene then);
+  // both throw atmos::Error as the constructor, leaving the old tables.
+  bool prepare_rebind(const PlanetTables& tables);
+  bool rebind_pending() const { return next_pass_ != nullptr; }
+  void finish_rebind();
 
   // Draws the frame; returns the composited HDR texture (RGBA32F, valid
   // until the next render or the scene's destruction).
@@ -98,6 +103,11 @@ class Scene {
   atmos::Atmosphere planet_;
   atmos::PlanetSurface surface_;
   std::unique_ptr<atmos::AtmospherePass> pass_;
+  // A prepared rebind: the new tables' pass and what goes with it.
+  std::unique_ptr<atmos::AtmospherePass> next_pass_;
+  PlanetParams next_params_;
+  atmos::Atmosphere next_planet_;
+  bool next_regional_albedo_ = false;
   std::unique_ptr<atmos::Globe> globe_;
   bool regional_albedo_requested_ = false, regional_albedo_ = false;
   int width_ = 0, height_ = 0;

@@ -295,6 +295,7 @@ class Viewer {
     return [this](const glm::dvec3& p) { return scene_->ground_height_m(p); };
   }
   void swap_scene(PlanetTables&& tables, int frame);
+  void finish_swap(int frame);
   void set_slider(const std::string& name, double value);
   double slider_value(const std::string& name) const;
   void request_tables();
@@ -323,6 +324,8 @@ class Viewer {
   bool timed_ = true;
   bool awaiting_tables_ = false;  // requested tables not swapped in yet
   double last_swap_ms_ = 0.0, last_tables_s_ = 0.0;
+  double pending_pass_ms_ = 0.0;  // a rebind prepared the frame before (Scene::prepare_rebind)
+  std::string pending_status_;
   std::vector<float> plot_;
   FrameLog log_;
   FlightRecord record_;
@@ -342,21 +345,33 @@ class Viewer {
 
 void Viewer::swap_scene(PlanetTables&& tables, int frame) {
   const double start = now_s();
-  const double altitude = flight_ ? flight_->altitude_m(ground()) : 0.0;
-  // The same ground keeps its globe (only a new pass); another ground needs
-  // a new scene, built first: if it cannot be built the old one stays.
-  const bool rebound = scene_->rebind(tables);
-  if (!rebound) {
-    auto scene = std::make_unique<Scene>(tables, o_.globe, !o_.planet_albedo, o_.frames > 0);
-    scene_ = std::move(scene);
-  }
-  if (flight_) flight_->set_bottom_radius(scene_->bottom_radius_m(), altitude, ground());
-  // The new scene's programs are compiled at its first draw: time it with
-  // the swap (glFinish), which is what the frame that swaps costs.
-  last_swap_ms_ = (now_s() - start) * 1e3;
   last_tables_s_ = tables.seconds;
-  std::printf("tables: %s in %.2f s; swapped in at frame %d (%.0f ms to %s)\n", tables.status.c_str(),
-              tables.seconds, frame, last_swap_ms_, rebound ? "rebind the scene" : "build the scene");
+  // The same ground keeps its globe: the new pass now, the globe bound to
+  // it on the next frame (finish_swap). Another ground needs a new scene,
+  // built first: if it cannot be built the old one stays.
+  if (scene_->prepare_rebind(tables)) {
+    pending_pass_ms_ = (now_s() - start) * 1e3;
+    pending_status_ = tables.status;
+    return;
+  }
+  const double altitude = flight_ ? flight_->altitude_m(ground()) : 0.0;
+  auto scene = std::make_unique<Scene>(tables, o_.globe, !o_.planet_albedo, o_.frames > 0);
+  scene_ = std::move(scene);
+  if (flight_) flight_->set_bottom_radius(scene_->bottom_radius_m(), altitude, ground());
+  last_swap_ms_ = (now_s() - start) * 1e3;
+  std::printf("tables: %s in %.2f s; swapped in at frame %d (%.0f ms to build the scene)\n", tables.status.c_str(),
+              tables.seconds, frame, last_swap_ms_);
+  std::fflush(stdout);
+}
+
+void Viewer::finish_swap(int frame) {
+  const double start = now_s();
+  scene_->finish_rebind();
+  const double rebind_ms = (now_s() - start) * 1e3;
+  last_swap_ms_ = pending_pass_ms_ + rebind_ms;
+  std::printf("tables: %s in %.2f s; swapped in at frame %d (%.0f ms for their pass the frame before, %.0f ms to "
+              "rebind the scene)\n",
+              pending_status_.c_str(), last_tables_s_, frame, pending_pass_ms_, rebind_ms);
   std::fflush(stdout);
 }
 
@@ -832,7 +847,17 @@ int Viewer::run() {
 
     // New tables: swapped in on this thread, the GL context's.
     bool swapped = false;
-    if (std::optional<PlanetTables> t = job_->take_result()) {
+    if (scene_->rebind_pending()) {
+      try {
+        finish_swap(frame);
+      } catch (const std::exception& e) {
+        message_ = e.what();
+        message_is_error_ = true;
+        edited_ = scene_->params();
+      }
+      swapped = true;
+      settle_until = frame + 1 + kFramesAfterSwap;
+    } else if (std::optional<PlanetTables> t = job_->take_result()) {
       try {
         swap_scene(std::move(*t), frame);
         message_.clear();
@@ -843,7 +868,7 @@ int Viewer::run() {
       }
       swapped = true;
       awaiting_tables_ = job_->progress().busy;
-      settle_until = frame + 1 + kFramesAfterSwap;
+      settle_until = frame + 2 + kFramesAfterSwap;
     }
     if (std::optional<std::string> error = job_->take_error()) {
       awaiting_tables_ = job_->progress().busy;
