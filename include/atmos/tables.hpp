@@ -159,8 +159,8 @@ Tables precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& 
 // (docs/instant.md). For a view within a frame of a parameter change while
 // the exact tables are computed, and for small GPUs: 0.4 MB of tables at the
 // default sizes instead of 38 MB (AtmospherePass's per-frame sky-view table
-// and volume, 14 MB, are the same in both modes), and about a second or less of
-// precomputation for three wavelengths instead of tens of seconds
+// and volume, 14 MB, are the same in both modes), and 0.2 s of precomputation
+// for three wavelengths on 2 cores instead of tens of seconds
 // (compute_instant_tables). Less exact than Tables: docs/instant.md gives its
 // error against the reference.
 struct InstantTables {
