@@ -700,6 +700,65 @@ TEST(Cli, GlobeGroundFromTwoMetres) {
 // space. The pass would draw its own sphere where the globe drew nothing;
 // the globe's disc shows the continents' edges (Africa and the Atlantic),
 // the sphere's is smooth.
+// Mars's globe from 2.5 radii: its lowlands and basins lie kilometres below
+// the datum (Hellas, the northern plains), so the pass draws the air
+// continued down to the lowest ground (atmos::extend_below_datum) while the
+// globe keeps the datum; the planet fills its disc.
+TEST(Cli, GlobeOfMarsReachesBelowItsDatum) {
+  const double radius = 3389.5e3;
+  const atmos::Image mars =
+      render("--planet mars --position " + std::to_string(2.5 * radius) +
+                 ",0,0 --look 0,-90 --fov 60 --size 48x48 --sun-azimuth 90 --sun-elevation 60 --exposure 12",
+             "globe-mars-orbit");
+  const double radius_px = 24.0 / std::tan(30.0 * M_PI / 180.0) * std::tan(std::asin(1.0 / 2.5));
+  int lit = 0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 48; ++x) lit += pixel(mars, x, y).luminance() > 10.0;
+  std::printf("Mars's globe from 2.5 radii: %d lit pixels, disc %.0f\n", lit, M_PI * radius_px * radius_px);
+  EXPECT_GT(lit, 0.8 * M_PI * radius_px * radius_px);
+}
+
+// --stereo: each eye through its own off-axis frustum, the eyes' images side
+// by side (twice the width) or as a red-cyan anaglyph (red from the left
+// eye, green and blue from the right: atmos/stereo.hpp). Looking at the sun
+// 20° up with a 64 mm baseline converged at 1 m, the sun's disc (at
+// infinity) lies ipd / convergence = 0.064 of the image plane further right
+// in the right eye than in the left: 35.1 px in a 10° field 96 px tall
+// (bound 0.5 px: the disc is 5 px wide, its centroid sampled at pixel
+// centres).
+TEST(Cli, StereoRendersEachEyeThroughItsOwnFrustum) {
+  const std::string view = "--altitude 2 --sun-elevation 20 --sun-azimuth 180 --look 180,20 --fov 10 --size 96x96";
+  const atmos::Image pair = render(view + " --stereo side-by-side --ipd 0.064 --convergence 1", "stereo-pair");
+  ASSERT_EQ(pair.width, 192);
+  ASSERT_EQ(pair.height, 96);
+  auto sun_x = [&](int x0) {
+    double sum = 0.0, sx = 0.0;
+    for (int y = 0; y < 96; ++y)
+      for (int x = 0; x < 96; ++x) {
+        const double l = pixel(pair, x0 + x, y).luminance();
+        if (l < 1e8) continue;  // the disc: ~1e9 cd/m², the sky ~1e4
+        sum += l;
+        sx += l * (x + 0.5);
+      }
+    return sum > 0.0 ? sx / sum : -1.0;
+  };
+  const double left = sun_x(0), right = sun_x(96);
+  const double expected = 0.064 / 1.0 * 96.0 / (2.0 * std::tan(5.0 * M_PI / 180.0));
+  std::printf("stereo pair: the sun at x = %.2f (left eye), %.2f (right eye): disparity %.2f px, expected %.2f\n",
+              left, right, right - left, expected);
+  EXPECT_NEAR(right - left, expected, 0.5);
+  const atmos::Image red_cyan = render(view + " --stereo anaglyph --ipd 0.064 --convergence 1", "stereo-anaglyph");
+  ASSERT_EQ(red_cyan.width, 96);
+  for (int y = 0; y < 96; y += 7)
+    for (int x = 0; x < 96; x += 5) {
+      EXPECT_DOUBLE_EQ(pixel(red_cyan, x, y).r, pixel(pair, x, y).r);
+      EXPECT_DOUBLE_EQ(pixel(red_cyan, x, y).b, pixel(pair, 96 + x, y).b);
+    }
+  expect_usage_error("render --stereo anaglyph --projection fisheye" + kSmall, "--stereo needs the perspective");
+  expect_usage_error("render --stereo anaglyph --ipd 0" + kSmall, "--ipd must be in (0, 1e7] metres");
+  expect_usage_error("render --stereo anaglyph --convergence -1" + kSmall, "--convergence must be > 0 metres");
+}
+
 TEST(Cli, GlobeFromOrbitShowsThePlanet) {
   const std::string view = "--position " + std::to_string(2.5 * 6371e3) +
                            ",0,0 --look 0,-90 --fov 60 --size 96x96 --sun-azimuth 90 --sun-elevation 60";

@@ -665,7 +665,7 @@ TEST(CameraModel, ProjectionConventions) {
   const glm::vec2 size(200.0f, 100.0f);
   bool valid = false;
   auto ray = [&](float x, float y, float fov, int projection) {
-    return camera_view_ray(glm::vec2(x, y), size, right, up, forward, fov, projection, valid);
+    return camera_view_ray(glm::vec2(x, y), size, right, up, forward, fov, glm::vec2(0.0f), projection, valid);
   };
   // Perspective: the centre looks forward, the top edge fov/2 up, square pixels.
   EXPECT_LT(angle_between(ray(100, 50, 60, PROJECTION_PERSPECTIVE), forward), 1e-6f);

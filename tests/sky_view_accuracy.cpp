@@ -61,7 +61,7 @@ TEST(SkyView, TableMatchesPerRayEvaluation) {
           const glm::vec3 ray = atmos::physics::camera_view_ray(
               glm::vec2(float(x) + 0.5f, float(y) + 0.5f), glm::vec2(float(camera.width), float(camera.height)),
               glm::vec3(1.0f, 0.0f, 0.0f), glm::vec3(0.0f, 0.0f, 1.0f), glm::vec3(0.0f, 1.0f, 0.0f), 0.0f,
-              PROJECTION_EQUIRECT, valid);
+              glm::vec2(0.0f), PROJECTION_EQUIRECT, valid);
           ASSERT_TRUE(valid);
           const size_t i = size_t(y) * size_t(camera.width) + size_t(x);
           const float* rgb = &image.rgb[3 * i];

@@ -13,6 +13,7 @@
 
 #include "atmos/globe.hpp"
 #include "atmos/plugin.hpp"
+#include "atmos/stereo.hpp"
 
 namespace atmos_cli {
 
@@ -32,6 +33,7 @@ struct PinholeView {
   glm::dvec3 position{0.0};
   glm::dvec3 right{1, 0, 0}, up{0, 0, 1}, forward{0, 1, 0};
   double fov_y_rad = 1.0;
+  glm::dvec2 lens_shift{0.0};  // atmos::Camera::lens_shift: an off-axis frustum
   int width = 1, height = 1;
 };
 
@@ -107,6 +109,7 @@ struct Targets {
 }  // namespace
 
 struct GlobeRenderer::Impl {
+  atmos::Atmosphere air;  // the pass's: the planet's continued below the datum
   atmos::AtmospherePass pass;
   atmos::Globe globe;
   bool regional_albedo = false;  // tables with a ground response: the air over the globe's regional albedo
@@ -119,7 +122,8 @@ struct GlobeRenderer::Impl {
   }
 
   Impl(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, const atmos::PlanetSurface& surface)
-      : pass(atmosphere, tables, atmos::PlanetFrame{}),
+      : air(atmos::extend_below_datum(atmosphere, surface)),
+        pass(air, tables, atmos::PlanetFrame{}),
         globe(atmosphere, surface, pass, settings()),
         regional_albedo(!tables.ground_response.empty()) {}
 
@@ -137,7 +141,12 @@ struct GlobeRenderer::Impl {
     Targets& t = targets_of(v.width, v.height);
     atmos::GlobeView view;
     view.view = glm::lookAt(v.position, v.position + v.forward, v.up);
-    view.projection = atmos::reversed_z_projection(v.fov_y_rad, double(v.width) / double(v.height), kNearM);
+    // The frustum's four sides (atmos/stereo.hpp), off-axis by the lens shift.
+    const double half = std::tan(0.5 * v.fov_y_rad), aspect = double(v.width) / double(v.height);
+    const atmos::FieldOfView fov{std::atan(-aspect * half + v.lens_shift.x),
+                                 std::atan(aspect * half + v.lens_shift.x), std::atan(half + v.lens_shift.y),
+                                 std::atan(-half + v.lens_shift.y)};
+    view.projection = atmos::reversed_z_projection(fov, kNearM);
     view.width = v.width;
     view.height = v.height;
     view.sun_direction = sun;
@@ -288,6 +297,7 @@ atmos::Image GlobeRenderer::render(const atmos::Camera& camera, const glm::dvec3
   v.position = camera.position;
   camera_basis(camera, v.right, v.up, v.forward);
   v.fov_y_rad = camera.fov_deg * M_PI / 180.0;
+  v.lens_shift = camera.lens_shift;
   v.width = camera.width;
   v.height = camera.height;
   return impl_->draw(v, sun_direction, stars, moons);

@@ -30,6 +30,9 @@ class GlobeRenderer {
   // atmosphere's constant. Every tile a view
   // needs is generated before it is drawn
   // (GlobeSettings::complete_every_frame): stills have no next frame.
+  // `atmosphere` is the planet's, at its datum; `tables` those of
+  // atmos::extend_below_datum(atmosphere, surface), the air the pass draws
+  // (continued down to the lowest ground).
   GlobeRenderer(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, const atmos::PlanetSurface& surface);
   ~GlobeRenderer();
   GlobeRenderer(const GlobeRenderer&) = delete;

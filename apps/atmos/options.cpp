@@ -182,8 +182,13 @@ void CacheOptions::add(CLI::App& app) {
 
 LoadedTables load_tables(const PlanetOptions& planet, const TableOptions& tables, const CacheOptions& cache,
                          bool progress, bool ground_albedo_response) {
+  return load_tables(planet.atmosphere(), tables, cache, progress, ground_albedo_response);
+}
+
+LoadedTables load_tables(const atmos::Atmosphere& atmosphere, const TableOptions& tables, const CacheOptions& cache,
+                         bool progress, bool ground_albedo_response) {
   LoadedTables out;
-  out.atmosphere = planet.atmosphere();
+  out.atmosphere = atmosphere;
   atmos::PrecomputeOptions options = tables.precompute_options();
   options.ground_albedo_response = ground_albedo_response;
   if (progress) attach_progress(options);

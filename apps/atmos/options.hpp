@@ -96,6 +96,10 @@ struct LoadedTables {
 // (the globe's regional albedo, PrecomputeOptions::ground_albedo_response).
 LoadedTables load_tables(const PlanetOptions& planet, const TableOptions& tables, const CacheOptions& cache,
                          bool progress, bool ground_albedo_response = false);
+// The same for an atmosphere already loaded (e.g. the globe's, continued
+// below the datum: atmos::extend_below_datum).
+LoadedTables load_tables(const atmos::Atmosphere& atmosphere, const TableOptions& tables, const CacheOptions& cache,
+                         bool progress, bool ground_albedo_response = false);
 
 // Where the camera (render) or the observer (sample) is, and its local frame:
 // the columns of `local` are east, north and up at the point of the ground

@@ -3,6 +3,7 @@
 // is the terrain globe under the engine plugin (globe_render.hpp), or with
 // --surface sphere the renderer's analytic sphere.
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -11,10 +12,12 @@
 #include <string>
 #include <vector>
 
+#include "atmos/globe.hpp"
 #include "atmos/image.hpp"
 #include "atmos/planet_file.hpp"
 #include "atmos/post.hpp"
 #include "atmos/renderer.hpp"
+#include "atmos/stereo.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/star_catalogue.hpp"
 #include "commands.hpp"
@@ -52,6 +55,11 @@ struct RenderOptions {
   double bloom = 0.0;
   bool auto_exposure = false;
   bool post = false;     // one of them given
+  // Stereo (atmos/stereo.hpp): none, side-by-side or anaglyph, the eyes'
+  // distance and the distance of zero disparity, metres.
+  std::string stereo = "none";
+  double ipd = 0.064;
+  double convergence = 10.0;
   bool gallery = false;  // no option but the planet, table, cache, --surface, --precision and --cpu ones
 };
 
@@ -201,6 +209,11 @@ void check_options(const RenderOptions& o) {
   if (o.surface.globe(o.cpu, o.precision == "half") && o.precision == "half")
     throw UsageError("--precision half applies to --surface sphere: the globe's atmosphere pass samples "
                      "full-precision textures");
+  finite(o.ipd, "--ipd");
+  if (!(o.ipd > 0.0 && o.ipd <= 1e7)) throw UsageError("--ipd must be in (0, 1e7] metres, got " + quote(o.ipd));
+  if (!(o.convergence > 0.0)) throw UsageError("--convergence must be > 0 metres, got " + quote(o.convergence));
+  if (o.stereo != "none" && o.projection != "perspective")
+    throw UsageError("--stereo needs the perspective projection, got --projection " + o.projection);
 }
 
 // The catalogue's stars in the sky of --date seen from --latitude,
@@ -232,9 +245,13 @@ int run_render(const RenderOptions& o) {
   // errors come first.
   const atmos::PlanetSurface surface =
       o.surface.globe(o.cpu, o.precision == "half") ? atmos::load_surface(o.planet.planet) : atmos::PlanetSurface{};
+  // The globe's pass draws the air continued down to the lowest ground
+  // (Mars's lowlands lie kilometres below its datum); the globe keeps the
+  // datum.
   const LoadedTables loaded =
-      load_tables(o.planet, o.tables, o.cache, true,
-                  o.surface.globe(o.cpu, o.precision == "half") && !o.surface.planet_albedo);
+      load_tables(o.surface.globe(o.cpu, o.precision == "half") ? atmos::extend_below_datum(atmosphere, surface)
+                                                                 : atmosphere,
+                  o.tables, o.cache, true, o.surface.globe(o.cpu, o.precision == "half") && !o.surface.planet_albedo);
   const atmos::Atmosphere& a = loaded.atmosphere;
 
   // The context outlives every GL object below (declared first, destroyed last).
@@ -243,7 +260,7 @@ int run_render(const RenderOptions& o) {
   std::unique_ptr<atmos::Renderer> renderer;
   std::unique_ptr<GlobeRenderer> globe;
   if (o.surface.globe(o.cpu, o.precision == "half"))
-    globe = std::make_unique<GlobeRenderer>(a, loaded.tables, surface);
+    globe = std::make_unique<GlobeRenderer>(atmosphere, loaded.tables, surface);
   else if (!o.cpu)
     renderer = std::make_unique<atmos::Renderer>(
         a, loaded.tables, o.precision == "half" ? atmos::TexturePrecision::half : atmos::TexturePrecision::full);
@@ -262,16 +279,23 @@ int run_render(const RenderOptions& o) {
       renderer->set_stars(stars);
       renderer->set_moons(shot.moons);
     }
+    auto render = [&](const atmos::Camera& camera) {
+      if (o.cpu) return atmos::render_cpu(a, loaded.tables, camera, shot.sun, stars, shot.moons, catalogue_stars);
+      if (globe) return globe->render(camera, shot.sun, stars, shot.moons);
+      return renderer->render(camera, shot.sun);
+    };
+    atmos::Camera camera = shot.camera;
+    // The viewpoint's altitude is above the terrain under it.
+    if (globe) camera.position = globe->above_terrain(camera.position);
     atmos::Image image;
-    if (o.cpu) {
-      image = atmos::render_cpu(a, loaded.tables, shot.camera, shot.sun, stars, shot.moons, catalogue_stars);
-    } else if (globe) {
-      // The viewpoint's altitude is above the terrain under it.
-      atmos::Camera camera = shot.camera;
-      camera.position = globe->above_terrain(camera.position);
-      image = globe->render(camera, shot.sun, stars, shot.moons);
+    if (o.stereo == "none") {
+      image = render(camera);
     } else {
-      image = renderer->render(shot.camera, shot.sun);
+      // Each eye through its own off-axis frustum, the head at the viewpoint.
+      const std::array<atmos::Eye, 2> eyes = atmos::stereo_eyes(camera, {o.ipd, o.convergence});
+      const atmos::Image left = render(atmos::eye_camera(eyes[0], camera.width, camera.height));
+      const atmos::Image right = render(atmos::eye_camera(eyes[1], camera.width, camera.height));
+      image = o.stereo == "anaglyph" ? atmos::anaglyph(left, right) : atmos::side_by_side(left, right);
     }
     if (o.gallery) {
       write_outputs(image, {shot.name + ".png", shot.name + ".exr"}, shot.exposure);
@@ -367,6 +391,22 @@ Command add_render_command(CLI::App& app) {
   auto* auto_exposure = cmd->add_flag("--auto-exposure", o->auto_exposure,
                                       "Expose the PNG outputs from the image's log-average luminance (Collienne "
                                       "2013, eq. 4.28) instead of --exposure");
+  cmd->add_option("--stereo", o->stereo,
+                  "Render both eyes (perspective only), each through its own off-axis frustum, and combine "
+                  "them: side-by-side (left eye on the left, twice the width) or anaglyph (red-cyan: red from "
+                  "the left eye, green and blue from the right)")
+      ->type_name("none|side-by-side|anaglyph")
+      ->check(CLI::IsMember({"none", "side-by-side", "anaglyph"}).description(""))
+      ->capture_default_str();
+  cmd->add_option("--ipd", o->ipd, "With --stereo: the distance between the eyes, metres, in (0, 1e7] (wider than a person's "
+                  "for distant relief: hyperstereo)")
+      ->type_name("M")
+      ->capture_default_str();
+  cmd->add_option("--convergence", o->convergence,
+                  "With --stereo: the distance at which the eyes' images coincide (the screen's plane), "
+                  "metres, > 0 (inf: the sky at zero disparity)")
+      ->type_name("M")
+      ->capture_default_str();
   return {cmd, [o, cmd, fov, tonemap, bloom, auto_exposure] {
             o->fov_given = fov->count() > 0;
             o->post = tonemap->count() > 0 || bloom->count() > 0 || auto_exposure->count() > 0;

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <glm/mat3x3.hpp>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include <cstdint>
@@ -56,6 +57,11 @@ struct Camera {
   Projection projection = Projection::perspective;
   int width = 640;               // pixels, 1..16384
   int height = 360;
+  // Perspective only: an off-axis frustum, as a stereo eye's
+  // (atmos/stereo.hpp). The image plane at distance 1 moves by lens_shift
+  // (right, up), dimensionless (tangents): the image centre looks along
+  // forward + right lens_shift.x + up lens_shift.y. Finite, |each| <= 100.
+  glm::dvec2 lens_shift{0.0};
 };
 
 // A star of a catalogue, as the renderers draw it instead of the procedural

@@ -14,9 +14,13 @@
 // centre of the top-left pixel and `image_size` the bottom-right corner.
 // `right`, `up`, `forward` are the orthonormal camera basis (planet frame);
 // `fov_deg` is the vertical field of view (perspective) or the full field of
-// the fisheye circle. `valid` is false for fisheye pixels outside the circle.
+// the fisheye circle. `lens_shift` (perspective only) moves the image plane
+// in its own plane, in units of the forward distance: the image centre looks
+// along forward + right lens_shift.x + up lens_shift.y, an off-axis frustum
+// (a stereo eye's: atmos/stereo.hpp). `valid` is false for fisheye pixels
+// outside the circle.
 INLINE vec3 camera_view_ray(vec2 pixel, vec2 image_size, vec3 right, vec3 up, vec3 forward, float fov_deg,
-                            int projection, OUT(bool) valid) {
+                            vec2 lens_shift, int projection, OUT(bool) valid) {
   valid = true;
   if (projection == PROJECTION_EQUIRECT) {
     // Azimuth -180..180° left to right (0 = forward, +90° = right), elevation
@@ -45,7 +49,7 @@ INLINE vec3 camera_view_ray(vec2 pixel, vec2 image_size, vec3 right, vec3 up, ve
     return normalize(forward * cos(theta) + right * (x * s) + up * (y * s));
   }
   // Perspective (pinhole): the image plane at distance 1 spans
-  // tan(fov / 2) from the centre to the top edge; square pixels.
+  // tan(fov / 2) from its centre to the top edge; square pixels.
   float scale = tan(radians(fov_deg) * 0.5f) / (0.5f * image_size.y);
-  return normalize(forward + right * (x * scale) + up * (y * scale));
+  return normalize(forward + right * (x * scale + lens_shift.x) + up * (y * scale + lens_shift.y));
 }

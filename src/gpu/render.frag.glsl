@@ -26,6 +26,8 @@ layout(location = 9) uniform mat3 radiance_to_srgb;
 // The star field (stars.glsl): on or off, and the width of a star's image.
 layout(location = 12) uniform bool stars_enabled;
 layout(location = 13) uniform float star_sigma;
+// The perspective's lens shift (camera.glsl: an off-axis frustum).
+layout(location = 14) uniform vec2 lens_shift;
 // A star catalogue instead of the procedural field: stars.glsl's uniforms
 // (locations 60-63) and buffers.
 // The moons (eclipse.glsl): uniform_moons() of table_bindings.glsl in the
@@ -42,8 +44,8 @@ void main() {
   // to match). Exact in float: integers plus 0.5, far below 2^24.
   vec2 pixel = vec2(tile_origin.x + gl_FragCoord.x, tile_origin.y - gl_FragCoord.y);
   bool valid;
-  vec3 view_ray = camera_view_ray(pixel, image_size, camera_right, camera_up, camera_forward, fov_deg, projection,
-                                  valid);
+  vec3 view_ray = camera_view_ray(pixel, image_size, camera_right, camera_up, camera_forward, fov_deg, lens_shift,
+                                  projection, valid);
   if (!valid) {
     frag_color = vec4(0.0, 0.0, 0.0, 1.0);
     return;

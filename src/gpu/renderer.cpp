@@ -57,6 +57,12 @@ std::string to_string(double x) {
   return buffer;
 }
 
+std::string to_string(const glm::dvec2& v) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "(%g, %g)", v.x, v.y);
+  return buffer;
+}
+
 // The camera as both renderers see it: float position and orthonormal basis
 // (computed in double, then rounded once), pixel grid and projection.
 struct CameraFrame {
@@ -66,6 +72,7 @@ struct CameraFrame {
   glm::vec3 forward;
   glm::vec2 image_size;
   float fov_deg;
+  glm::vec2 lens_shift;
   int projection;
 };
 
@@ -81,6 +88,7 @@ CameraFrame camera_frame(const Camera& camera) {
   frame.forward = glm::vec3(forward);
   frame.image_size = glm::vec2(float(camera.width), float(camera.height));
   frame.fov_deg = float(camera.fov_deg);
+  frame.lens_shift = glm::vec2(camera.lens_shift);
   switch (camera.projection) {
     case Projection::perspective: frame.projection = PROJECTION_PERSPECTIVE; break;
     case Projection::fisheye: frame.projection = PROJECTION_FISHEYE; break;
@@ -126,6 +134,10 @@ void validate_camera(const Camera& camera) {
     case Projection::equirect: break;  // always the whole sphere
     default: throw Error("invalid camera: unknown projection");
   }
+  if (!(std::abs(camera.lens_shift.x) <= 100.0 && std::abs(camera.lens_shift.y) <= 100.0))
+    throw Error("invalid camera: lens_shift " + to_string(camera.lens_shift) + " is not finite or beyond 100");
+  if (camera.projection != Projection::perspective && camera.lens_shift != glm::dvec2(0.0))
+    throw Error("invalid camera: lens_shift " + to_string(camera.lens_shift) + " needs the perspective projection");
 }
 
 // --- GPU ------------------------------------------------------------------
@@ -297,6 +309,7 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   glProgramUniform3f(program, 2, frame.up.x, frame.up.y, frame.up.z);
   glProgramUniform3f(program, 3, frame.forward.x, frame.forward.y, frame.forward.z);
   glProgramUniform1f(program, 4, frame.fov_deg);
+  glProgramUniform2f(program, 14, frame.lens_shift.x, frame.lens_shift.y);
   glProgramUniform1i(program, 5, frame.projection);
   glProgramUniform2f(program, 6, frame.image_size.x, frame.image_size.y);
   glProgramUniform3f(program, 7, sun.x, sun.y, sun.z);
@@ -416,7 +429,8 @@ Image render_cpu(const Atmosphere& atmosphere, const Tables& tables, const Camer
         const glm::vec2 pixel(float(x) + 0.5f, float(y) + 0.5f);
         bool valid = true;
         const glm::vec3 view_ray = physics::camera_view_ray(pixel, frame.image_size, frame.right, frame.up,
-                                                            frame.forward, frame.fov_deg, frame.projection, valid);
+                                                            frame.forward, frame.fov_deg, frame.lens_shift,
+                                                            frame.projection, valid);
         glm::vec3 rgb(0.0f);
         if (valid) {
           const glm::vec3 radiance = physics::radiance_along_view_ray(
