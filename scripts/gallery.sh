@@ -88,4 +88,18 @@ mkdir -p "$out/globe/earth" "$out/globe/earth-noon" "$out/globe/earth-terminator
 "$globe" --planet mars-thesis --descent 2 --from-radii 1 --to 100 --latitude -1.38 --longitude 138.27 \
   --heading 280 --sun-elevation 2.5 --sun-azimuth 250 --exposure 10 --shadow-distance 150000 \
   --out-dir "$out/globe/mars-canyon"
+# The sea (atmos::Ocean over the globe, 7 m/s of wind) over the Pacific: a
+# sunset from a ship's deck (2 m, the sun 3° up ahead) and the sun's glint
+# from 1.5 planet radii (the sun 50° up at the ground point).
+mkdir -p "$out/globe/ocean-deck" "$out/globe/ocean-glint"
+"$globe" --planet earth --ocean --wind 7 --descent 2 --from-radii 0.001 --to 2 --latitude 0 --longitude -150 \
+  --heading 270 --sun-elevation 3 --sun-azimuth 270 --exposure 11 --out-dir "$out/globe/ocean-deck"
+"$globe" --planet earth --ocean --wind 7 --descent 1 --from-radii 1.5 --latitude 5 --longitude -150 \
+  --sun-elevation 50 --sun-azimuth 90 --exposure 13 --out-dir "$out/globe/ocean-glint"
+# Stereo: the canyon at sunset as a red-cyan anaglyph, each eye through its
+# own off-axis frustum (atmos render --stereo), 200 m apart (hyperstereo, for
+# walls kilometres away) and converged at 5 km.
+(cd "$out/mars" && "$atmos" render --planet mars-thesis --surface globe --latitude -1.38 --longitude 138.27 \
+  --altitude 100 --look 280,2 --fov 60 --sun-elevation 2.5 --sun-azimuth 250 --exposure 10 --size 960x540 \
+  --stereo anaglyph --ipd 200 --convergence 5000 -o canyon-anaglyph.png)
 echo "gallery: $out"
