@@ -96,6 +96,23 @@ mkdir -p "$out/globe/ocean-deck" "$out/globe/ocean-glint"
   --heading 270 --sun-elevation 3 --sun-azimuth 270 --exposure 11 --out-dir "$out/globe/ocean-deck"
 "$globe" --planet earth --ocean --wind 7 --descent 1 --from-radii 1.5 --latitude 5 --longitude -150 \
   --sun-elevation 50 --sun-azimuth 90 --exposure 13 --out-dir "$out/globe/ocean-glint"
+# A shallow lagoon: the sea's shelf, 2 m deep for 19 km off the coast of
+# Andros in the Bahamas (the Earth style's relief off GSHHG's coast), from
+# 1.5 km, 25° down, the sun 60° up behind the camera: the sand shows
+# through the water up to a low coast beyond. The bathymetry at 1024
+# texels per cube face (10 km) resolves the shelf.
+mkdir -p "$out/globe/ocean-lagoon" "$out/globe/ocean-eclipse"
+"$globe" --planet earth --ocean --wind 4 --bathymetry-texels 1024 --descent 1 --from-radii 0.000235 \
+  --latitude 24.6 --longitude -77.55 --heading 200 --pitch -25 --sun-elevation 60 --sun-azimuth 330 --exposure 13.5 \
+  --out-dir "$out/globe/ocean-lagoon"
+# The sea in the umbra of a total solar eclipse: from a ship's bridge (6 m)
+# over the Pacific, a moon 0.28° wide on the sun (30° up, west): the camera
+# at the centre of an umbra about 180 km wide, the sky dark but for the
+# twilight beyond the umbra along the horizon, mirrored by the sea; the
+# sun's disc hidden, its corona as the pass draws it.
+"$globe" --planet earth --ocean --wind 5 --descent 1 --from-radii 0.000001 --latitude 0 --longitude -150 \
+  --heading 270 --pitch 10 --sun-elevation 30 --sun-azimuth 270 --moon 270,30,0.28 --stars --exposure 1 \
+  --out-dir "$out/globe/ocean-eclipse"
 # Stereo: the canyon at sunset as a red-cyan anaglyph, each eye through its
 # own off-axis frustum (atmos render --stereo), 200 m apart (hyperstereo, for
 # walls kilometres away) and converged at 5 km.

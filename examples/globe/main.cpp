@@ -17,6 +17,12 @@
 //
 // --ocean draws the sea (atmos::Ocean) over the terrain's flat sea, after
 // the globe and before the pass, with the wind of --wind.
+//
+// --moon AZ,EL,ANGULAR_RADIUS_DEG puts a moon in the sky of the ground
+// point (at the Moon's distance; azimuth and elevation as the sun's): with
+// the sun's azimuth and elevation and an angular radius above the sun's,
+// the ground point is in the umbra of a total eclipse. The globe, the sea
+// and the pass are given the same moon.
 #include <epoxy/gl.h>
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
@@ -29,10 +35,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <atmos/atmosphere.hpp>
+#include <atmos/eclipse.hpp>
 #include <atmos/globe.hpp>
 #include <atmos/ocean.hpp>
 #include <atmos/planet_file.hpp>
@@ -64,6 +72,10 @@ struct Options {
   int shadow_steps = 24;         // the pass's shadow-map samples per view ray
   bool ocean = false;       // the sea (atmos::Ocean) over the terrain
   double wind = 7.0;        // m/s, the sea's wind
+  int bathymetry_texels = 256;  // per cube face, the sea's depth map (OceanSettings::bathymetry_texels)
+  std::optional<double> pitch;  // degrees above the horizontal; none: from the altitude (see run)
+  std::vector<double> moon;     // azimuth, elevation, angular radius (degrees); empty: no moon
+  bool stars = false;           // the pass's star field
   std::string out_dir = ".";
 };
 
@@ -114,6 +126,7 @@ int run(const Options& o) {
   if (o.ocean) {
     atmos::OceanSettings sea;
     sea.water.wind_speed_m_s = o.wind;
+    sea.bathymetry_texels = o.bathymetry_texels;
     ocean = std::make_unique<atmos::Ocean>(planet, surface, pass, sea);
   }
 
@@ -142,6 +155,13 @@ int run(const Options& o) {
   const double heading = glm::radians(o.heading);
   const glm::dvec3 ahead = north * std::cos(heading) + east * std::sin(heading);
   const double nits_per_unit = 1000.0;
+  // The moon, placed in the sky of the ground point.
+  std::vector<atmos::Moon> moons;
+  if (!o.moon.empty()) {
+    const double az = glm::radians(o.moon[0]), el = glm::radians(o.moon[1]);
+    const glm::dvec3 direction = (north * std::cos(az) + east * std::sin(az)) * std::cos(el) + up * std::sin(el);
+    moons.push_back(atmos::moon_in_sky(up * ground, glm::normalize(direction), glm::radians(o.moon[2])));
+  }
 
   std::filesystem::create_directories(o.out_dir);
   const double first = o.from_radii * radius, last = o.to_m;
@@ -152,7 +172,7 @@ int run(const Options& o) {
     // it looks along the heading (east by default), 8 degrees down; with the
     // default sun (north) the relief is lit from the side.
     const double w = std::clamp(std::log10(altitude / 1e3) / std::log10(first / 1e3), 0.0, 1.0);
-    const double pitch = glm::radians(-8.0 + (-90.0 + 8.0) * w);
+    const double pitch = glm::radians(o.pitch ? *o.pitch : -8.0 + (-90.0 + 8.0) * w);
     const glm::dvec3 forward = glm::normalize(ahead * std::cos(pitch) + up * std::sin(pitch));
     const glm::dvec3 camera_m = up * (ground + altitude);
     const glm::dvec3 camera = frame.centre + camera_m * frame.units_per_metre;
@@ -164,6 +184,7 @@ int run(const Options& o) {
     view.height = o.height;
     view.sun_direction = sun;
     view.nits_per_unit = nits_per_unit;
+    view.moons = moons;
 
     const auto start = std::chrono::steady_clock::now();
     const float clear_colour[4] = {0, 0, 0, 0};
@@ -195,6 +216,8 @@ int run(const Options& o) {
     input.sun_direction = sun;
     input.nits_per_unit = nits_per_unit;
     input.output = output;
+    input.moons = moons;
+    input.stars = o.stars;
     // The terrain's shadow for the pass's light shafts (texture 0: none,
     // when shadows are off or the ground is beyond their reach).
     const atmos::GlobeShadowMap shadow = globe.shadow_map_for_pass();
@@ -275,6 +298,16 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 256));
   app.add_flag("--ocean", o.ocean, "Draw the sea (atmos::Ocean) over the terrain");
   app.add_option("--wind", o.wind, "Wind over the sea, m/s")->capture_default_str()->check(CLI::Range(0.0, 50.0));
+  app.add_option("--bathymetry-texels", o.bathymetry_texels, "The sea's depth map, texels per cube face")
+      ->capture_default_str()
+      ->check(CLI::Range(16, 2048));
+  app.add_option("--pitch", o.pitch, "The camera's pitch, degrees above the horizontal (default: 8 down near "
+                                     "the ground, turning to straight down from orbit)")
+      ->check(CLI::Range(-90.0, 90.0));
+  app.add_option("--moon", o.moon, "A moon in the sky of the ground point: AZ,EL,ANGULAR_RADIUS_DEG")
+      ->delimiter(',')
+      ->expected(3);
+  app.add_flag("--stars", o.stars, "Draw the pass's star field");
   app.add_option("--out-dir", o.out_dir, "Directory of the PNG frames")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   o.seed_given = seed->count() > 0;

@@ -118,7 +118,7 @@ struct OceanProgram {
         diffuse = -1, slope_variance = -1, upwind = -1, wave_count = -1, wave_vector = -1, wave_in_wind = -1,
         wave_phase = -1,
         bathymetry = -1, sky_map = -1, light_map = -1, reflectance_map = -1, sea_level = -1, seabed = -1, moon_count = -1,
-        moon_spheres = -1, terms = -1;
+        moon_spheres = -1, terms = -1, eclipse_top_radius = -1;
   void locate() {
     const auto at = [&](const char* name) { return glGetUniformLocation(id, name); };
     clip = at("clip_from_offset");
@@ -150,6 +150,7 @@ struct OceanProgram {
     moon_count = at("moon_count");
     moon_spheres = at("moon_spheres");
     terms = at("terms");
+    eclipse_top_radius = at("eclipse_top_radius");
   }
 };
 
@@ -516,6 +517,7 @@ void Ocean::draw(const GlobeView& view, double time_s) {
       spheres[i] = glm::vec4(glm::vec3(view.moons[i].centre_m), float(view.moons[i].radius_m));
     glUniform1i(g.moon_count, int(view.moons.size()));
     glUniform4fv(g.moon_spheres, kMaxMoons, glm::value_ptr(spheres[0]));
+    glUniform1f(g.eclipse_top_radius, float(p.top_radius_m));
   }
   glUniform1i(g.terms, int(terms));
   glDrawArrays(GL_TRIANGLES, 0, 3);

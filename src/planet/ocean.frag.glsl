@@ -89,6 +89,7 @@ uniform int terms;
 #if defined(OCEAN_ECLIPSE)
 uniform int moon_count;
 uniform vec4 moon_spheres[MOON_CAPACITY];
+uniform float eclipse_top_radius;  // m: the atmosphere's top, for the reflected sky's eclipse (below)
 #endif
 
 // The sea is moved towards the camera, ahead of the terrain's flat sea,
@@ -263,7 +264,43 @@ void main() {
       sky += weight * ((terms & 16) != 0 ? vec3(1.0) : sky_seen_from_sea(point, n, direction, sun));
   }
 #endif
+#if defined(OCEAN_ECLIPSE)
+  // The reflected sky in an eclipse. The sky's map holds the uneclipsed
+  // sky; the sky the sea mirrors is dark where the air it sees lies in the
+  // moon's shadow and lit where it lies beyond (the twilight all around the
+  // horizon in the umbra). Along the mirror direction r, from the point to
+  // where r leaves the atmosphere (distance t_top), the light a segment
+  // scatters towards the point is, for a source function J uniform along
+  // the ray, J (T_k − T_{k+1}), T the transmittance from the point
+  // (T(0, t) = T(0, top) / T(t, top), the pass's transmittance to the top
+  // along r); the moon removes the sun's part f_k outside the segment's
+  // midpoint (atmos_eclipse's sun factor). The uneclipsed sky is scaled by
+  // Σ_k (T_k − T_{k+1}) f_k / (1 − T(0, top)), 8 segments with ends at
+  // t_top (k/8)², and by no less than the diffuse light's fraction at the
+  // point: single scattering's share of the eclipse, the multiple
+  // scattering's as the terrain's.
+  {
+    vec3 mirror = reflect(-view, normal);
+    float mu_r = max(dot(mirror, n), kOceanLeastSkyCosine);
+    mirror = normalize(mirror + (mu_r - dot(mirror, n)) * n);
+    float radius = length(point), height = eclipse_top_radius - radius;
+    float rise = 2.0 * radius * height + height * height;
+    float top_distance = rise / (sqrt(radius * radius * mu_r * mu_r + rise) + radius * mu_r);
+    vec3 to_top = atmos_transmittance_to_sun(point, mirror);
+    vec3 previous = vec3(1.0), lit = vec3(0.0);
+    for (int k = 1; k <= 8; ++k) {
+      float t = top_distance * float(k * k) / 64.0, middle = top_distance * (float(k) - 0.5) * (float(k) - 0.5) / 64.0;
+      vec3 transmittance = min(to_top / max(atmos_transmittance_to_sun(point + t * mirror, mirror), vec3(1e-30)), previous);
+      float air_sun, air_sky;
+      atmos_eclipse(point + middle * mirror, sun, moon_count, moon_spheres, air_sun, air_sky);
+      lit += (previous - transmittance) * air_sun;
+      previous = transmittance;
+    }
+    sky *= max(lit / max(vec3(1.0) - previous, vec3(1e-6)), vec3(sky_factor));
+  }
+#else
   sky *= sky_factor;
+#endif
   vec3 below = water_leaving_radiance(water, n, view, sun, sun_irradiance, sky_irradiance, water_depth, seabed_albedo);
 
   vec3 radiance = ((terms & 1) != 0 ? glint : vec3(0.0)) + ((terms & 2) != 0 ? sky : vec3(0.0)) +
