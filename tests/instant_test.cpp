@@ -23,6 +23,7 @@
 #include "atmos/renderer.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "engine_frame.hpp"
 #include "figures.hpp"
 #include "gpu/instant.hpp"
 #include "physics/parameters.hpp"
@@ -113,91 +114,10 @@ TEST(InstantTables, SpectralModeMatchesThreeWavelengths) {
 
 constexpr double kEarthRadius = 6371e3;
 
-atmos::PlanetFrame engine_frame() {
-  atmos::PlanetFrame f;
-  f.centre = {1200.0, -6000.0, 300.0};
-  f.units_per_metre = 1e-3;  // kilometres
-  return f;
-}
-
-// A synthetic engine frame: a camera, the ground sphere 2 m above the
-// planet's and a round mountain, cast in double on the CPU into depth and
-// lit colour (or a G-buffer), as tests/plugin_test.cpp does.
-struct Shot {
-  glm::dvec3 camera{0.0};
-  glm::dvec3 forward{0.0, 1.0, 0.0};
-  glm::dvec3 up{0.0, 0.0, 1.0};
-  double fov_deg = 60.0;
-  int width = 48;
-  int height = 32;
-  atmos::SurfaceMode surfaces = atmos::SurfaceMode::lit_colour;
-  glm::dvec3 sun{0.0, 0.0, 1.0};
-  glm::dvec3 mountain_centre{0.0};
-  double mountain_radius_m = 0.0;
-  double planet_radius_m = kEarthRadius;  // the engine's ground: this sphere raised by 2 m
-};
-
-struct EngineFrame {
-  atmos::FrameInput input;
-  atmos::gpu::CpuEngineBuffers buffers;
-};
-
-double hit_sphere(const glm::dvec3& origin, const glm::dvec3& dir, const glm::dvec3& centre, double radius) {
-  const glm::dvec3 oc = origin - centre;
-  const double b = glm::dot(oc, dir);
-  const double h = b * b - (glm::dot(oc, oc) - radius * radius);
-  if (h < 0.0) return -1.0;
-  const double s = std::sqrt(h);
-  if (-b - s > 0.0) return -b - s;
-  if (-b + s > 0.0) return -b + s;
-  return -1.0;
-}
-
-EngineFrame make_engine_frame(const Shot& shot) {
-  const atmos::PlanetFrame f = engine_frame();
-  EngineFrame e;
-  atmos::FrameInput& in = e.input;
-  in.width = shot.width;
-  in.height = shot.height;
-  in.surfaces = shot.surfaces;
-  in.sun_direction = shot.sun;
-  const glm::dvec3 eye = f.centre + shot.camera * f.units_per_metre;
-  in.view = glm::lookAt(eye, eye + shot.forward, shot.up);
-  in.projection = glm::perspective(glm::radians(shot.fov_deg), double(shot.width) / double(shot.height), 1e-4, 1e5);
-  const size_t n = size_t(shot.width) * size_t(shot.height);
-  e.buffers.depth.assign(n, 1.0f);
-  e.buffers.colour.assign(n, glm::vec3(0.0f));
-  e.buffers.albedo.assign(n, glm::vec3(0.0f));
-  e.buffers.normal.assign(n, glm::vec3(0.0f, 0.0f, 1.0f));
-  const glm::dmat4 inverse_view_projection = glm::inverse(in.projection * in.view);
-  for (int y = 0; y < shot.height; ++y)
-    for (int x = 0; x < shot.width; ++x) {
-      const glm::dvec2 ndc((x + 0.5) / shot.width * 2.0 - 1.0, (y + 0.5) / shot.height * 2.0 - 1.0);
-      const glm::dvec4 p = inverse_view_projection * glm::dvec4(ndc, -1.0, 1.0);
-      const glm::dvec3 dir = glm::normalize(glm::dvec3(p) / p.w - eye);
-      double t = hit_sphere(shot.camera, dir, glm::dvec3(0.0), shot.planet_radius_m + 2.0);
-      glm::dvec3 centre(0.0);
-      if (shot.mountain_radius_m > 0.0) {
-        const double tm = hit_sphere(shot.camera, dir, shot.mountain_centre, shot.mountain_radius_m);
-        if (tm > 0.0 && (t < 0.0 || tm < t)) {
-          t = tm;
-          centre = shot.mountain_centre;
-        }
-      }
-      if (t < 0.0) continue;
-      const glm::dvec3 hit = shot.camera + dir * t;
-      const glm::dvec4 clip = in.projection * in.view * glm::dvec4(f.centre + hit * f.units_per_metre, 1.0);
-      const size_t i = size_t(y) * size_t(shot.width) + size_t(x);
-      e.buffers.depth[i] = float(0.5 * clip.z / clip.w + 0.5);
-      const glm::dvec3 normal = glm::normalize(hit - centre);
-      e.buffers.normal[i] = glm::vec3(normal);
-      e.buffers.albedo[i] = glm::vec3(0.15f, 0.2f, 0.1f);
-      const double lambert = std::max(glm::dot(normal, glm::normalize(shot.sun)), 0.0);
-      e.buffers.colour[i] = glm::vec3(float(300.0 * lambert + 20.0), float(350.0 * lambert + 25.0),
-                                      float(250.0 * lambert + 30.0));
-    }
-  return e;
-}
+using atmos_test::engine_frame;
+using atmos_test::EngineFrame;
+using atmos_test::make_engine_frame;
+using atmos_test::Shot;
 
 GLuint upload(GLenum format, int w, int h, GLenum pixel_format, const void* data) {
   GLuint t = 0;
@@ -313,7 +233,9 @@ TEST_F(InstantGpu, MatchesCpuTwin) {
   Shot ground;
   ground.camera = at(10.0);
   ground.forward = direction(20.0, -3.0);
-  ground.up = up;
+  ground.up_hint = up;
+  ground.width = 48;
+  ground.height = 32;
   ground.sun = direction(140.0, 35.0);
   ground.mountain_centre = at(-2000.0) + direction(25.0, 0.0) * 30e3;
   ground.mountain_radius_m = 4000.0;

@@ -47,9 +47,11 @@ double planck_shape(double wavelength_nm, double temperature_k) {
   return 1.0 / (std::pow(l, 5) * std::expm1(h * c / (l * k * temperature_k)));
 }
 
-}  // namespace
-
-std::vector<CatalogueStar> parse_bright_star_catalogue(std::istream& in, const std::string& origin) {
+// The stars of a text catalogue: parse_line(line, where) for each line of
+// `in` that is neither blank nor a comment ('#' first), where `where` is
+// "origin:line: " for error messages; an error if no line gave a star.
+template <typename ParseLine>
+std::vector<CatalogueStar> parse_catalogue_lines(std::istream& in, const std::string& origin, ParseLine parse_line) {
   std::vector<CatalogueStar> stars;
   std::string line;
   int number_of_line = 0;
@@ -58,7 +60,24 @@ std::vector<CatalogueStar> parse_bright_star_catalogue(std::istream& in, const s
     if (!line.empty() && line.back() == '\r') line.pop_back();
     const size_t first = line.find_first_not_of(" \t");
     if (first == std::string::npos || line[first] == '#') continue;
-    const std::string where = origin + ":" + std::to_string(number_of_line) + ": ";
+    stars.push_back(parse_line(line, origin + ":" + std::to_string(number_of_line) + ": "));
+  }
+  if (stars.empty()) throw Error(origin + ": no stars in the catalogue");
+  return stars;
+}
+
+// The catalogue at `path`; `package` names the Debian package that installs it.
+std::vector<CatalogueStar> load_catalogue(const std::string& path, const char* package,
+                                          std::vector<CatalogueStar> (*parse)(std::istream&, const std::string&)) {
+  std::ifstream in(path);
+  if (!in) throw Error("cannot read the star catalogue " + path + " (Debian's " + package + " installs it there)");
+  return parse(in, path);
+}
+
+}  // namespace
+
+std::vector<CatalogueStar> parse_bright_star_catalogue(std::istream& in, const std::string& origin) {
+  return parse_catalogue_lines(in, origin, [](const std::string& line, const std::string& where) {
     std::istringstream fields(line);
     double dec = 0.0, ra_hours = 0.0, v = 0.0;
     if (!(fields >> dec >> ra_hours >> v))
@@ -84,18 +103,12 @@ std::vector<CatalogueStar> parse_bright_star_catalogue(std::istream& in, const s
       int hr = 0;
       if (rest >> hr) s.bright_star_number = hr;
     }
-    stars.push_back(std::move(s));
-  }
-  if (stars.empty()) throw Error(origin + ": no stars in the catalogue");
-  return stars;
+    return s;
+  });
 }
 
 std::vector<CatalogueStar> load_bright_star_catalogue(const std::string& path) {
-  std::ifstream in(path);
-  if (!in)
-    throw Error("cannot read the star catalogue " + path +
-                " (Debian's xplanet package installs the Yale Bright Star Catalogue there)");
-  return parse_bright_star_catalogue(in, path);
+  return load_catalogue(path, "xplanet package (the Yale Bright Star Catalogue)", parse_bright_star_catalogue);
 }
 
 namespace {
@@ -121,14 +134,7 @@ glm::dvec3 unit_vector(double ra_deg, double dec_deg) {
 }  // namespace
 
 std::vector<CatalogueStar> parse_kstars_catalogue(std::istream& in, const std::string& origin) {
-  std::vector<CatalogueStar> stars;
-  std::string line;
-  int number_of_line = 0;
-  while (std::getline(in, line)) {
-    ++number_of_line;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty() || line[0] == '#') continue;
-    const std::string where = origin + ":" + std::to_string(number_of_line) + ": ";
+  return parse_catalogue_lines(in, origin, [](const std::string& line, const std::string& where) {
     if (line.size() < 56) throw Error(where + "expected at least 56 columns (RA, Dec, motions, parallax, V, B-V)");
     // RA hhmmss.ss, Dec ±ddmmss.s: sexagesimal digits in fixed columns.
     // Seconds of 60 (the file rounds 59.995 up without carrying) are
@@ -156,18 +162,12 @@ std::vector<CatalogueStar> parse_kstars_catalogue(std::istream& in, const std::s
     s.b_minus_v = bv;
     const size_t comma = line.find(',', 56);
     if (comma != std::string::npos) s.name = line.substr(comma + 1);
-    stars.push_back(std::move(s));
-  }
-  if (stars.empty()) throw Error(origin + ": no stars in the catalogue");
-  return stars;
+    return s;
+  });
 }
 
 std::vector<CatalogueStar> load_kstars_catalogue(const std::string& path) {
-  std::ifstream in(path);
-  if (!in)
-    throw Error("cannot read the star catalogue " + path +
-                " (Debian's kstars-data package installs KStars' catalogue there)");
-  return parse_kstars_catalogue(in, path);
+  return load_catalogue(path, "kstars-data package (KStars' catalogue)", parse_kstars_catalogue);
 }
 
 std::size_t colour_from_catalogue(std::vector<CatalogueStar>& stars, const std::vector<CatalogueStar>& coloured,
