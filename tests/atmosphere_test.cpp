@@ -195,7 +195,7 @@ TEST(PlanetFile, SurfaceFieldsLoadAndBadOnesAreClearErrors) {
   expect_surface_error(modified([](nlohmann::json& j) { j["surface"]["relief"]["seed"] = -3; }), "seed");
   expect_surface_error(modified([](nlohmann::json& j) { j["surface"]["relief"]["seed"] = 1.5; }), "seed");
   expect_surface_error(modified([](nlohmann::json& j) { j["surface"]["relief"].erase("style"); }), "style");
-  expect_surface_error(modified([](nlohmann::json& j) { j["surface"]["lakes"] = true; }), "unknown key \"lakes\"");
+  expect_surface_error(modified([](nlohmann::json& j) { j["surface"]["rivers"] = true; }), "unknown key \"rivers\"");
   expect_surface_error(modified([](nlohmann::json& j) { j["surface"]["sea_level"] = {{"value", 1}, {"unit", "s"}}; }),
                        "sea_level");
   expect_surface_error(modified([](nlohmann::json& j) { j["surface"] = 3; }), "surface must be an object");
@@ -247,6 +247,40 @@ TEST(PlanetFile, SurfaceFieldsLoadAndBadOnesAreClearErrors) {
                          j["surface"]["sea_level"] = {{"value", 100}, {"unit", "m"}};
                        }),
                        "contradicts surface.sea_level");
+  // Lakes: a mask (a raster without a unit) and the level of their surface,
+  // which must lie above the sea level (the style's: Earth 0).
+  const atmos::PlanetSurface lakes = atmos::parse_surface(modified([](nlohmann::json& j) {
+    j["surface"]["lakes"] = {{"mask", {{"source", "lakes.tif"}}}, {"level", {{"value", 0.372}, {"unit", "km"}}}};
+  }), "/planets/my/earth.json");
+  EXPECT_EQ(lakes.lake_mask.source, "/planets/my/lakes.tif");
+  ASSERT_TRUE(lakes.lake_level_m.has_value());
+  EXPECT_DOUBLE_EQ(*lakes.lake_level_m, 372.0);
+  expect_surface_error(modified([](nlohmann::json& j) {
+                         j["surface"]["lakes"] = {{"mask", {{"source", "lakes.tif"}}}};
+                       }),
+                       "missing surface.lakes.level");
+  expect_surface_error(modified([](nlohmann::json& j) {
+                         j["surface"]["lakes"] = {{"level", {{"value", 3}, {"unit", "m"}}}};
+                       }),
+                       "missing surface.lakes.mask");
+  expect_surface_error(modified([](nlohmann::json& j) {
+                         j["surface"]["lakes"] = {{"mask", {{"source", "lakes.tif"}, {"unit", "m"}}},
+                                                  {"level", {{"value", 3}, {"unit", "m"}}}};
+                       }),
+                       "unknown key \"unit\" in surface.lakes.mask");
+  expect_surface_error(modified([](nlohmann::json& j) {
+                         j["surface"]["relief"]["style"] = "earth";
+                         j["surface"]["lakes"] = {{"mask", {{"source", "lakes.tif"}}},
+                                                  {"level", {{"value", -28}, {"unit", "m"}}}};
+                       }),
+                       "surface.lakes.level");
+  expect_surface_error(modified([](nlohmann::json& j) {
+                         j["surface"].erase("coastline");
+                         j["surface"]["sea_level"] = {{"value", 50}, {"unit", "m"}};
+                         j["surface"]["lakes"] = {{"mask", {{"source", "lakes.tif"}}},
+                                                  {"level", {{"value", 50}, {"unit", "m"}}}};
+                       }),
+                       "not above the sea level");
   // The atmosphere's reader checks the surface too: a bad file fails wherever it is read.
   EXPECT_THROW(atmos::parse_atmosphere(modified([](nlohmann::json& j) { j["surface"]["relief"]["seed"] = "x"; }),
                                        "x"),

@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <epoxy/gl.h>
+#include <gdal.h>
+#include <ogr_srs_api.h>
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/mat4x4.hpp>
@@ -16,6 +18,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
@@ -25,6 +28,7 @@
 #include "atmos/globe.hpp"
 #include "atmos/ocean.hpp"
 #include "atmos/plugin.hpp"
+#include "cli_support.hpp"
 #include "globe_rays.hpp"
 #include "globe_target.hpp"
 #include "gpu_fixture.hpp"
@@ -547,6 +551,105 @@ TEST_F(OceanGpu, MoonOnTheSunDimsTheSea) {
               double(eclipse[size_t(4 * (centre * size + centre) + 1)]), double(day[size_t(4 * (centre * size + centre) + 1)]),
               double(eclipse_radiance[size_t(4 * (centre * size + centre) + 1)]),
               double(day_radiance[size_t(4 * (centre * size + centre) + 1)]));
+}
+
+// Lakes (PlanetSurface::lake_mask, lake_level_m) over flat ground: a mask
+// in EPSG:4326 of 5-degree pixels, lake over longitudes 0-90 and latitudes
+// -45-45 degrees, its level 5 m above the ground. From 3000 km above its
+// east edge (latitude 0, longitude 90), the water is drawn at the lakes'
+// sphere on the mask's side of the edge and nowhere beyond the mask (3
+// degrees either side of its edges are the bathymetry's 1.4-degree texels'
+// interpolation); the light from below shows the seabed through 5 m of
+// water. A mask that cannot be read is an error that names the file.
+TEST_F(OceanGpu, LakesAreDrawnWhereTheMaskSays) {
+  GDALAllRegister();
+  const std::string path = (atmos_test::scratch_directory("ocean-lakes") / "lakes.tif").string();
+  const int w = 72, h = 36;
+  GDALDatasetH ds = GDALCreate(GDALGetDriverByName("GTiff"), path.c_str(), w, h, 1, GDT_Byte, nullptr);
+  ASSERT_NE(ds, nullptr);
+  double gt[6] = {-180.0, 5.0, 0.0, 90.0, 0.0, -5.0};
+  GDALSetGeoTransform(ds, gt);
+  OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
+  OSRSetFromUserInput(srs, "EPSG:4326");
+  GDALSetSpatialRef(ds, srs);
+  OSRDestroySpatialReference(srs);
+  std::vector<std::uint8_t> mask(size_t(w) * size_t(h));
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      const double lon = gt[0] + (i + 0.5) * gt[1], lat = gt[3] + (j + 0.5) * gt[5];
+      mask[size_t(j * w + i)] = lon > 0.0 && lon < 90.0 && std::abs(lat) < 45.0 ? 1 : 0;
+    }
+  ASSERT_EQ(GDALRasterIO(GDALGetRasterBand(ds, 1), GF_Write, 0, 0, w, h, mask.data(), w, h, GDT_Byte, 0, 0), CE_None);
+  GDALClose(ds);
+
+  atmos::PlanetSurface surface;
+  surface.style = atmos::SurfaceStyle::flat;
+  surface.lake_mask.source = path;
+  surface.lake_level_m = 5.0;
+  atmos::OceanSettings settings;
+  settings.bathymetry_texels = 64;
+  atmos::Ocean ocean(*earth_, surface, *pass_, settings);
+  EXPECT_FALSE(ocean.has_sea());
+  ASSERT_TRUE(ocean.has_lakes());
+  EXPECT_DOUBLE_EQ(ocean.lake_level_m(), 5.0);
+  const int width = 64, height = 64;
+  GlobeTarget target(width, height);
+  const glm::dvec3 up(0.0, 1.0, 0.0);
+  const glm::dvec3 camera = up * (earth_->bottom_radius_m + 3000e3);
+  const glm::dvec3 sun = glm::normalize(up + glm::dvec3(0.3, 0.0, 0.2));
+  const atmos::GlobeView view = view_from(camera, -up, glm::dvec3(0, 0, 1), width, height, sun);
+  const TermsGuard guard(planet::kOceanAllTerms);
+  const std::vector<float> colour = draw(ocean, view, target);
+  guard.set(planet::kOceanBelow);
+  const std::vector<float> below = draw(ocean, view, target);
+  expect_finite(colour, "lakes");
+  const double radius = earth_->bottom_radius_m + 5.0;
+  int lake = 0, dry = 0, wrong = 0;
+  glm::dvec3 below_sum(0.0);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const std::optional<glm::dvec3> p = sea_point(view, camera, radius, x, y);
+      if (!p) continue;
+      const glm::dvec3 d = glm::normalize(*p);
+      const double lon = glm::degrees(std::atan2(d.y, d.x)), lat = glm::degrees(std::asin(d.z));
+      const size_t i = size_t(4 * (y * width + x));
+      const bool drawn = colour[i] != -1.0f;
+      if (lon > 3.0 && lon < 87.0 && std::abs(lat) < 42.0) {
+        ++lake;
+        wrong += drawn ? 0 : 1;
+        below_sum += glm::dvec3(below[i], below[i + 1], below[i + 2]);
+      } else if (lon > 93.0 || lon < -3.0 || std::abs(lat) > 48.0) {
+        ++dry;
+        wrong += drawn ? 1 : 0;
+      }
+    }
+  EXPECT_GT(lake, 500);
+  EXPECT_GT(dry, 500);
+  EXPECT_EQ(wrong, 0) << "of " << lake << " lake and " << dry << " dry pixels";
+  // 5 m of clear water over sand: the seabed's light, green above blue
+  // (deep clear water is blue over green by far: WaterColumn's colour test).
+  EXPECT_GT(below_sum.y, below_sum.z);
+  std::printf("lakes: %d lake pixels drawn, %d dry ones not (wrong %d); light from below rgb %.3g %.3g %.3g\n", lake,
+              dry, wrong, below_sum.x / lake, below_sum.y / lake, below_sum.z / lake);
+
+  surface.lake_mask.source = path + ".missing.tif";
+  try {
+    atmos::Ocean unread(*earth_, surface, *pass_, settings);
+    ADD_FAILURE() << "no error for an unreadable lake mask";
+  } catch (const atmos::Error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find(surface.lake_mask.source), std::string::npos) << m;
+    EXPECT_NE(m.find("lake mask"), std::string::npos) << m;
+    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+  }
+  surface.lake_mask.source = path;
+  surface.lake_level_m.reset();
+  EXPECT_THROW({ atmos::Ocean rejected(*earth_, surface, *pass_, settings); }, atmos::Error);
+  surface.lake_level_m = 200e3;
+  EXPECT_THROW({ atmos::Ocean rejected(*earth_, surface, *pass_, settings); }, atmos::Error);
+  surface.lake_level_m = -5.0;
+  surface.sea_level_m = 0.0;
+  EXPECT_THROW({ atmos::Ocean rejected(*earth_, surface, *pass_, settings); }, atmos::Error);
 }
 
 TEST_F(OceanGpu, RejectsBadInput) {

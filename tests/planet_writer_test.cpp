@@ -69,6 +69,9 @@ TEST(PlanetWriter, EditedPlanetReadsBackEqual) {
   surface.style = atmos::SurfaceStyle::mars;
   surface.seed = 18446744073709551615ull;
   surface.sea_level_m = -2500.25;
+  surface.lake_mask.source = "/data/lakes.tif";
+  surface.lake_mask.crs = "IAU_2015:49900";
+  surface.lake_level_m = -1200.5;
   const fs::path path = atmos_test::scratch_directory("planet-writer") / "edited.json";
   atmos::write_planet_file(path.string(), planet, surface);
   expect_same_planet(planet, atmos::load_atmosphere(path.string()), "edited mars");

@@ -83,13 +83,17 @@ struct OceanSettings {
 class Ocean {
  public:
   // The sea of `surface` (its sea level above `atmosphere`'s bottom radius,
-  // the globe's datum; none: the style's, Earth's 0) lit through `pass`,
-  // which must outlive the ocean. A surface without a sea (a style other
-  // than Earth without a sea level) makes an ocean that draws nothing.
-  // Throws atmos::Error on settings outside their ranges (one line naming
-  // the field), a sea level outside the atmosphere (below the planet's
-  // centre or above its top), rasters that cannot be read (as Globe), or
-  // without a current OpenGL 4.5 context.
+  // the globe's datum; none: the style's, Earth's 0) and its lakes (its
+  // lake mask and level: water at that level over the ground below it,
+  // where the mask says so, sampled on the bathymetry's texels) lit through
+  // `pass`, which must outlive the ocean. A surface without a sea (a style
+  // other than Earth without a sea level) nor lakes makes an ocean that
+  // draws nothing. Throws atmos::Error on settings outside their ranges
+  // (one line naming the field), a sea or lake level outside the atmosphere
+  // (below the planet's centre or above its top), a lake level not above
+  // the sea level, lakes without a mask or a level, rasters that cannot be
+  // read (as Globe; the lake mask's message names its file), or without a
+  // current OpenGL 4.5 context.
   Ocean(const Atmosphere& atmosphere, const PlanetSurface& surface, const AtmospherePass& pass,
         const OceanSettings& settings = {});
   ~Ocean();
@@ -105,6 +109,10 @@ class Ocean {
   bool has_sea() const;
   // The sea level above the datum, m (NaN without a sea).
   double sea_level_m() const;
+  // Whether the surface has lakes (PlanetSurface::lake_mask), and their
+  // level above the datum, m (NaN without lakes).
+  bool has_lakes() const;
+  double lake_level_m() const;
   // The depth of the sea below the point of the sea level in `direction`
   // (planet axes, any length), m: the sea level less the ground's height
   // there (0 over land). The shader reads the same heights from the

@@ -68,6 +68,11 @@ struct PlanetSurface {
   // 1996; Debian's gmt-gshhg-* packages): the style's relief is drawn
   // inside the real coastlines. "" = none.
   std::string coastline;
+  // Lakes: water whose surface lies lake_level_m above the datum wherever
+  // lake_mask (one band; non-zero is lake, zero or nodata is not) says so
+  // and the ground is lower (atmos::Ocean draws it). Both or neither.
+  SurfaceRaster lake_mask;
+  std::optional<double> lake_level_m;
 
   bool operator==(const PlanetSurface&) const = default;
 };

@@ -387,7 +387,7 @@ PlanetSurface surface_of(const json& doc, const std::string& origin) {
   PlanetSurface surface;
   if (!doc.is_object() || !doc.contains("surface")) return surface;
   const json& s = doc.at("surface");
-  check_keys(s, {"relief", "sea_level", "elevation", "imagery", "coastline"}, origin, "surface");
+  check_keys(s, {"relief", "sea_level", "elevation", "imagery", "coastline", "lakes"}, origin, "surface");
   if (s.contains("elevation")) surface.elevation = surface_raster(s.at("elevation"), true, origin, "surface.elevation");
   if (s.contains("imagery")) surface.imagery = surface_raster(s.at("imagery"), false, origin, "surface.imagery");
   if (s.contains("coastline")) {
@@ -415,6 +415,22 @@ PlanetSurface surface_of(const json& doc, const std::string& origin) {
     }
   }
   if (s.contains("sea_level")) surface.sea_level_m = scalar(s, "sea_level", "length", origin, "surface");
+  if (s.contains("lakes")) {
+    const json& lakes = s.at("lakes");
+    check_keys(lakes, {"mask", "level"}, origin, "surface.lakes");
+    // A mask has no unit: surface_raster without elevation refuses "unit".
+    surface.lake_mask = surface_raster(require(lakes, "mask", origin, "surface.lakes"), false, origin, "surface.lakes.mask");
+    surface.lake_level_m = scalar(lakes, "level", "length", origin, "surface.lakes");
+    // The sea covers all ground below its level (the style's: Earth's is 0,
+    // the other styles have none), so lakes at or below it would lie under it.
+    const std::optional<double> sea =
+        surface.sea_level_m ? surface.sea_level_m
+                            : (surface.style == SurfaceStyle::earth ? std::optional<double>(0.0) : std::nullopt);
+    if (sea && !(*surface.lake_level_m > *sea))
+      fail(origin, "surface.lakes.level (" + std::to_string(*surface.lake_level_m) +
+                       " m) is not above the sea level (" + std::to_string(*sea) +
+                       " m): the sea covers all ground below it");
+  }
   if (!surface.coastline.empty() && surface.style != SurfaceStyle::earth)
     fail(origin, "surface.coastline draws the earth style's land and sea: it needs surface.relief.style \"earth\"");
   if (!surface.coastline.empty() && surface.sea_level_m && *surface.sea_level_m != 0.0)

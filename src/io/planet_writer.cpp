@@ -107,6 +107,10 @@ std::string format_planet(const Atmosphere& a, const PlanetSurface& surface) {
     if (!surface.elevation.source.empty()) s["elevation"] = raster(surface.elevation, true);
     if (!surface.imagery.source.empty()) s["imagery"] = raster(surface.imagery, false);
     if (!surface.coastline.empty()) s["coastline"] = json{{"source", portable_source(surface.coastline)}};
+    if (!surface.lake_mask.source.empty() && surface.lake_level_m)
+      s["lakes"] = json{{"mask", raster(surface.lake_mask, false)}, {"level", scalar(*surface.lake_level_m, "m")}};
+    else if (!surface.lake_mask.source.empty() || surface.lake_level_m)
+      throw Error("write_planet_file: a surface's lakes need both lake_mask and lake_level_m");
     doc["surface"] = s;
   }
   return doc.dump(2) + "\n";

@@ -13,12 +13,14 @@
 #include <atomic>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "planet/gl_program.hpp"
 #include "planet/ocean_internal.hpp"
+#include "planet/raster_source.hpp"
 #include "planet/surface.hpp"
 
 namespace atmos {
@@ -118,7 +120,7 @@ struct OceanProgram {
         diffuse = -1, slope_variance = -1, upwind = -1, wave_count = -1, wave_vector = -1, wave_in_wind = -1,
         wave_phase = -1,
         bathymetry = -1, sky_map = -1, light_map = -1, reflectance_map = -1, sea_level = -1, seabed = -1, moon_count = -1,
-        moon_spheres = -1, terms = -1, eclipse_top_radius = -1;
+        moon_spheres = -1, terms = -1, lakes = -1, eclipse_top_radius = -1;
   void locate() {
     const auto at = [&](const char* name) { return glGetUniformLocation(id, name); };
     clip = at("clip_from_offset");
@@ -150,6 +152,7 @@ struct OceanProgram {
     moon_count = at("moon_count");
     moon_spheres = at("moon_spheres");
     terms = at("terms");
+    lakes = at("lakes");
     eclipse_top_radius = at("eclipse_top_radius");
   }
 };
@@ -166,13 +169,21 @@ namespace planet {
 void set_ocean_terms(unsigned mask) { terms_drawn.store(mask, std::memory_order_relaxed); }
 }  // namespace planet
 
+// The water levels an ocean draws: the sea, and the lakes of the surface's
+// lake mask.
+enum Level { kSea = 0, kLakes = 1, kLevels = 2 };
+
 struct Ocean::Impl {
   const AtmospherePass* pass = nullptr;
   OceanSettings settings;
-  bool has_sea = false;
+  bool has_sea = false, has_lakes = false;
   double sea_level_m = std::numeric_limits<double>::quiet_NaN();
+  double lake_level_m = std::numeric_limits<double>::quiet_NaN();
   double sea_radius_m = 0.0, top_radius_m = 0.0, sun_angular_radius_rad = 0.0;
+  // Per level: the water's height above the datum (m) and its sphere's radius (m).
+  std::array<double, kLevels> level_height_m{}, level_radius_m{};
   std::unique_ptr<planet::Surface> surface;
+  std::unique_ptr<planet::RasterSource> lake_mask;
   WaterOptics water;
   std::vector<Wave> waves;
   // The waves' anchor: the unit direction of the sea below the camera where
@@ -185,9 +196,11 @@ struct Ocean::Impl {
   // without the eclipse, linked at their first draw.
   OceanProgram direct_program, direct_eclipse_program;
   GLuint vertex_array = 0, bathymetry = 0;
-  // The light maps (ocean_light_maps.glsl), the program that fills them and
-  // the pass's ground albedo they were filled with (the tables follow it).
-  GLuint sky_map = 0, light_map = 0, reflectance_map = 0, map_program = 0, map_framebuffer = 0;
+  // The light maps (ocean_light_maps.glsl; the sky's and the irradiances'
+  // per level, at its radius), the program that fills them and the pass's
+  // ground albedo they were filled with (the tables follow it).
+  std::array<GLuint, kLevels> sky_map{}, light_map{};
+  GLuint reflectance_map = 0, map_program = 0, map_framebuffer = 0;
   glm::dvec3 maps_albedo{-1.0};
 
   ~Impl() {
@@ -197,7 +210,8 @@ struct Ocean::Impl {
     if (map_program != 0) glDeleteProgram(map_program);
     if (map_framebuffer != 0) glDeleteFramebuffers(1, &map_framebuffer);
     if (vertex_array != 0) glDeleteVertexArrays(1, &vertex_array);
-    const GLuint textures[] = {bathymetry, sky_map, light_map, reflectance_map};
+    const GLuint textures[] = {bathymetry, sky_map[kSea], light_map[kSea], sky_map[kLakes], light_map[kLakes],
+                               reflectance_map};
     for (GLuint t : textures)
       if (t != 0) glDeleteTextures(1, &t);
   }
@@ -237,11 +251,13 @@ struct Ocean::Impl {
     }
   }
 
+  bool present(int level) const { return level == kSea ? has_sea : has_lakes; }
+
   // Fills the light maps from the pass's tables (ocean_light_maps.frag.glsl):
-  // 64 layers of 64 x 64 of the sky's radiance and 512 x 2 irradiances,
-  // 267,000 evaluations of the pass's functions, once (and again when the
-  // pass's ground albedo, hence its tables, changes). Restores the draw
-  // framebuffer binding and the viewport.
+  // per level drawn, 64 layers of 64 x 64 of the sky's radiance and 512 x 2
+  // irradiances, 267,000 evaluations of the pass's functions, once (and
+  // again when the pass's ground albedo, hence its tables, changes).
+  // Restores the draw framebuffer binding and the viewport.
   void fill_light_maps() {
     maps_albedo = pass->ground_albedo();
     const bool first = map_program == 0;
@@ -252,14 +268,20 @@ struct Ocean::Impl {
               planet::shader_text("ocean", "src/physics/water.glsl") + "\n" +
               planet::shader_text("ocean", "src/planet/ocean_light_maps.glsl") + "\n" +
               planet::shader_text("ocean", "src/planet/ocean_light_maps.frag.glsl"));
-      glCreateTextures(GL_TEXTURE_3D, 1, &sky_map);
-      glTextureStorage3D(sky_map, 1, GL_RGBA32F, kSkyMapSize, kSkyMapSize, kSkyMapSize);
-      glCreateTextures(GL_TEXTURE_2D, 1, &light_map);
-      glTextureStorage2D(light_map, 1, GL_RGBA32F, kLightMapSize, 2);
+      std::vector<GLuint> maps;
+      for (int level = 0; level < kLevels; ++level) {
+        if (!present(level)) continue;
+        glCreateTextures(GL_TEXTURE_3D, 1, &sky_map[size_t(level)]);
+        glTextureStorage3D(sky_map[size_t(level)], 1, GL_RGBA32F, kSkyMapSize, kSkyMapSize, kSkyMapSize);
+        glCreateTextures(GL_TEXTURE_2D, 1, &light_map[size_t(level)]);
+        glTextureStorage2D(light_map[size_t(level)], 1, GL_RGBA32F, kLightMapSize, 2);
+        maps.insert(maps.end(), {sky_map[size_t(level)], light_map[size_t(level)]});
+      }
       glCreateTextures(GL_TEXTURE_3D, 1, &reflectance_map);
       glTextureStorage3D(reflectance_map, 1, GL_RGBA32F, kReflectanceMapSize, kReflectanceMapSize,
                          kReflectanceMapSize);
-      for (GLuint t : {sky_map, light_map, reflectance_map}) {
+      maps.push_back(reflectance_map);
+      for (GLuint t : maps) {
         glTextureParameteri(t, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
         glTextureParameteri(t, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
         glTextureParameteri(t, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
@@ -278,32 +300,49 @@ struct Ocean::Impl {
     glDisable(GL_DEPTH_TEST);
     glDisable(GL_BLEND);
     glDisable(GL_SCISSOR_TEST);
-    glUniform1f(glGetUniformLocation(map_program, "sea_radius"), float(sea_radius_m));
     const glm::vec3 n(water.refractive_index);
     glUniform3f(glGetUniformLocation(map_program, "sea_refractive_index"), n.x, n.y, n.z);
     // The reflectance depends on the water alone: filled once.
     if (first) fill_map(2, reflectance_map, kReflectanceMapSize, kReflectanceMapSize, kReflectanceMapSize);
-    fill_map(0, sky_map, kSkyMapSize, kSkyMapSize, kSkyMapSize);
-    fill_map(1, light_map, kLightMapSize, 2, 0);
+    for (int level = 0; level < kLevels; ++level) {
+      if (!present(level)) continue;
+      glUniform1f(glGetUniformLocation(map_program, "sea_radius"), float(level_radius_m[size_t(level)]));
+      fill_map(0, sky_map[size_t(level)], kSkyMapSize, kSkyMapSize, kSkyMapSize);
+      fill_map(1, light_map[size_t(level)], kLightMapSize, 2, 0);
+    }
     glBindFramebuffer(GL_DRAW_FRAMEBUFFER, GLuint(framebuffer));
     glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
     glBindVertexArray(0);
   }
 
-  // The ground's height (r) and its least over the texel and its 8
-  // neighbours on the face (g), for every texel of the six faces.
+  // The ground's height (r), its least over the texel and its 8
+  // neighbours on the face (g) and the lake mask (b: 1 lake, 0 not; the
+  // mask's fraction of lake pixels around the texel's centre), for every
+  // texel of the six faces.
   void bake_bathymetry() {
     const int n = settings.bathymetry_texels;
-    std::vector<float> height(size_t(6) * size_t(n) * size_t(n));
+    std::vector<float> height(size_t(6) * size_t(n) * size_t(n)), lake(height.size(), 0.0f);
     tbb::parallel_for(0, 6 * n, [&](int row) {
       const int face = row / n, j = row % n;
       for (int i = 0; i < n; ++i)
         height[(size_t(face) * n + size_t(j)) * n + size_t(i)] =
             float(surface->ground_height_m(cube_direction(face, i, j, n)));
     });
+    if (lake_mask) {
+      // The texels' spacing on the lakes' sphere: a face spans 90 degrees.
+      const double spacing = 0.5 * kPi / n * level_radius_m[kLakes];
+      std::vector<glm::dvec3> directions(static_cast<size_t>(n));
+      std::vector<std::uint8_t> valid(static_cast<size_t>(n));
+      for (int row = 0; row < 6 * n; ++row) {
+        const int face = row / n, j = row % n;
+        for (int i = 0; i < n; ++i) directions[size_t(i)] = cube_direction(face, i, j, n);
+        float* out = &lake[(size_t(face) * n + size_t(j)) * n];
+        lake_mask->sample(directions.data(), size_t(n), spacing, level_radius_m[kLakes], out, valid.data());
+      }
+    }
     glCreateTextures(GL_TEXTURE_CUBE_MAP, 1, &bathymetry);
-    glTextureStorage2D(bathymetry, 1, GL_RG32F, n, n);
-    std::vector<float> texels(size_t(2) * n * n);
+    glTextureStorage2D(bathymetry, 1, GL_RGBA32F, n, n);
+    std::vector<float> texels(size_t(4) * n * n);
     for (int face = 0; face < 6; ++face) {
       const float* h = &height[size_t(face) * n * n];
       for (int j = 0; j < n; ++j)
@@ -314,10 +353,13 @@ struct Ocean::Impl {
               const int a = std::clamp(i + di, 0, n - 1), b = std::clamp(j + dj, 0, n - 1);
               least = std::min(least, h[size_t(b) * n + size_t(a)]);
             }
-          texels[2 * (size_t(j) * n + size_t(i))] = h[size_t(j) * n + size_t(i)];
-          texels[2 * (size_t(j) * n + size_t(i)) + 1] = least;
+          float* t = &texels[4 * (size_t(j) * n + size_t(i))];
+          t[0] = h[size_t(j) * n + size_t(i)];
+          t[1] = least;
+          t[2] = lake[(size_t(face) * n + size_t(j)) * n + size_t(i)];
+          t[3] = 0.0f;
         }
-      glTextureSubImage3D(bathymetry, 0, 0, 0, face, n, n, 1, GL_RG, GL_FLOAT, texels.data());
+      glTextureSubImage3D(bathymetry, 0, 0, 0, face, n, n, 1, GL_RGBA, GL_FLOAT, texels.data());
     }
     glTextureParameteri(bathymetry, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTextureParameteri(bathymetry, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
@@ -363,6 +405,19 @@ Ocean::Ocean(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
   if (settings.first_unit < 0) throw Error("ocean settings: first_unit must be a texture unit (>= 0)");
   planet::validate_sea_level(surface, atmosphere, "ocean");
   const double sea = planet::sea_level_of(surface);
+  const bool lakes = !surface.lake_mask.source.empty() || surface.lake_level_m.has_value();
+  if (lakes) {
+    if (surface.lake_mask.source.empty() || !surface.lake_level_m)
+      throw Error("ocean: the surface's lakes need both a lake mask and a lake level");
+    const double level = *surface.lake_level_m;
+    if (!(std::isfinite(level) && level > -atmosphere.bottom_radius_m &&
+          level < atmosphere.top_radius_m - atmosphere.bottom_radius_m))
+      throw Error("ocean: the lake level " + std::to_string(level) +
+                  " m must lie between the planet's centre and the top of the atmosphere");
+    if (std::isfinite(sea) && !(level > sea))
+      throw Error("ocean: the lake level " + std::to_string(level) + " m is not above the sea level " +
+                  std::to_string(sea) + " m, which covers all ground below it");
+  }
 
   impl_ = std::make_unique<Impl>();
   Impl& p = *impl_;
@@ -370,15 +425,34 @@ Ocean::Ocean(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
   p.settings = settings;
   p.top_radius_m = atmosphere.top_radius_m;
   p.sun_angular_radius_rad = atmosphere.sun_angular_radius_rad;
-  if (!std::isfinite(sea)) return;
+  if (!std::isfinite(sea) && !lakes) return;
   GLint units = 0;
   glGetIntegerv(GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS, &units);
   if (settings.first_unit + 9 > units)
     throw Error("ocean settings: first_unit + 8 (the sea's light maps) is beyond the context's " +
                 std::to_string(units) + " texture units");
-  p.has_sea = true;
+  p.has_sea = std::isfinite(sea);
   p.sea_level_m = sea;
   p.sea_radius_m = atmosphere.bottom_radius_m + sea;
+  p.level_height_m[kSea] = sea;
+  p.level_radius_m[kSea] = p.sea_radius_m;
+  if (lakes) {
+    p.has_lakes = true;
+    p.lake_level_m = *surface.lake_level_m;
+    p.level_height_m[kLakes] = p.lake_level_m;
+    p.level_radius_m[kLakes] = atmosphere.bottom_radius_m + p.lake_level_m;
+    planet::RasterSettings mask;
+    mask.source = surface.lake_mask.source;
+    mask.kind = planet::RasterKind::mask;
+    mask.crs = surface.lake_mask.crs;
+    mask.bounds_deg = surface.lake_mask.bounds_deg;
+    mask.role = "lake mask";
+    try {
+      p.lake_mask = std::make_unique<planet::RasterSource>(mask);
+    } catch (const Error& e) {
+      throw Error(std::string("ocean: ") + e.what());
+    }
+  }
   // The channels' wavelengths (water_optics): the working ones, or in the
   // spectral mode representative wavelengths of the sRGB primaries.
   p.water = optics;
@@ -394,6 +468,8 @@ Ocean::~Ocean() = default;
 
 bool Ocean::has_sea() const { return impl_->has_sea; }
 double Ocean::sea_level_m() const { return impl_->sea_level_m; }
+bool Ocean::has_lakes() const { return impl_->has_lakes; }
+double Ocean::lake_level_m() const { return impl_->lake_level_m; }
 
 double Ocean::depth_m(const glm::dvec3& direction) const {
   const Impl& p = *impl_;
@@ -424,15 +500,17 @@ void Ocean::draw(const GlobeView& view, double time_s) {
   } catch (const Error& e) {
     throw Error(std::string("ocean view: GlobeView::moons: ") + e.what());
   }
-  if (!p.has_sea) return;
+  if (!p.has_sea && !p.has_lakes) return;
 
   const PlanetFrame& frame = p.pass->frame();
   const glm::dmat4 world_from_view = glm::inverse(view.view);
   const glm::dvec3 eye_world(world_from_view[3]);
   const glm::dvec3 camera = (eye_world - frame.centre) / frame.units_per_metre;
   const double r_c = glm::length(camera);
-  // Below the sea (or at the centre) nothing is drawn: no underwater view.
-  if (!(r_c > p.sea_radius_m)) return;
+  // Below a level's water (or at the centre) that level is not drawn: no
+  // underwater view.
+  const auto above = [&](int level) { return p.present(level) && r_c > p.level_radius_m[size_t(level)]; };
+  if (!above(kSea) && !above(kLakes)) return;
   glm::dmat4 rotation = view.view;
   rotation[3] = glm::dvec4(0.0, 0.0, 0.0, 1.0);
   glm::dmat4 scale(1.0);
@@ -441,7 +519,6 @@ void Ocean::draw(const GlobeView& view, double time_s) {
   const glm::dmat4 offset_from_clip = glm::inverse(clip_from_offset);
   if (!planet::finite(offset_from_clip)) throw Error("ocean view: singular projection");
   const glm::dvec3 up = camera / r_c;
-  const double height_term = (r_c - p.sea_radius_m) * (r_c + p.sea_radius_m);
   const glm::dvec3 sun = view.sun_direction / sun_length;
 
   // The waves: world wave vectors in the anchor's wind frame, and their
@@ -478,8 +555,6 @@ void Ocean::draw(const GlobeView& view, double time_s) {
   glBindVertexArray(p.vertex_array);
   p.pass->bind_textures(p.settings.first_unit);
   glBindTextureUnit(GLuint(p.settings.first_unit + 5), p.bathymetry);
-  glBindTextureUnit(GLuint(p.settings.first_unit + 6), p.sky_map);
-  glBindTextureUnit(GLuint(p.settings.first_unit + 7), p.light_map);
   glBindTextureUnit(GLuint(p.settings.first_unit + 8), p.reflectance_map);
   for (int unit = 5; unit < 9; ++unit) glBindSampler(GLuint(p.settings.first_unit + unit), 0);
 
@@ -490,7 +565,6 @@ void Ocean::draw(const GlobeView& view, double time_s) {
   glUniform3f(g.camera, float(camera.x), float(camera.y), float(camera.z));
   glUniform3f(g.up, float(up.x), float(up.y), float(up.z));
   glUniform1f(g.radius, float(r_c));
-  glUniform1f(g.height_term, float(height_term));
   glUniform1f(g.pixel_angle, float(2.0 / (std::abs(view.projection[1][1]) * view.height)));
   glUniform3f(g.sun, float(sun.x), float(sun.y), float(sun.z));
   const double lux_scale =
@@ -508,7 +582,6 @@ void Ocean::draw(const GlobeView& view, double time_s) {
   glUniform4fv(g.wave_vector, kMaxWaves, glm::value_ptr(vectors[0]));
   glUniform4fv(g.wave_in_wind, kMaxWaves, glm::value_ptr(in_wind[0]));
   glUniform1fv(g.wave_phase, kMaxWaves, phases.data());
-  glUniform1f(g.sea_level, float(p.sea_level_m));
   glUniform3f(g.seabed, float(p.settings.seabed_albedo.x), float(p.settings.seabed_albedo.y),
               float(p.settings.seabed_albedo.z));
   if (eclipse) {
@@ -520,7 +593,19 @@ void Ocean::draw(const GlobeView& view, double time_s) {
     glUniform1f(g.eclipse_top_radius, float(p.top_radius_m));
   }
   glUniform1i(g.terms, int(terms));
-  glDrawArrays(GL_TRIANGLES, 0, 3);
+  // The sea, then the lakes: each its own sphere, light maps and water
+  // level; the lakes only where the mask says so. The depth test keeps
+  // the nearer water, and the terrain in front of both.
+  for (int level = 0; level < kLevels; ++level) {
+    if (!above(level)) continue;
+    const double radius = p.level_radius_m[size_t(level)];
+    glUniform1f(g.height_term, float((r_c - radius) * (r_c + radius)));
+    glUniform1f(g.sea_level, float(p.level_height_m[size_t(level)]));
+    glUniform1i(g.lakes, level == kLakes ? 1 : 0);
+    glBindTextureUnit(GLuint(p.settings.first_unit + 6), p.sky_map[size_t(level)]);
+    glBindTextureUnit(GLuint(p.settings.first_unit + 7), p.light_map[size_t(level)]);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+  }
   glBindVertexArray(0);
 }
 

@@ -73,11 +73,13 @@ uniform vec4 wave_vector[OCEAN_MAX_WAVES];  // xyz: k (rad/m, planet axes), w: a
 uniform vec4 wave_in_wind[OCEAN_MAX_WAVES]; // xy: k along upwind and crosswind at the anchor, z: |k|, w: amplitude
 uniform float wave_phase[OCEAN_MAX_WAVES];  // k · camera + phase − ω t, modulo 2π
 
-uniform samplerCube bathymetry;  // r: the ground's height (m above the datum), g: its least over 3 x 3 texels
+uniform samplerCube bathymetry;  // r: the ground's height (m above the datum), g: its least over 3 x 3 texels,
+                                 // b: the lake mask (1 lake, 0 not)
 uniform sampler3D sky_map;       // the sky's radiance at sea level (ocean_light_maps.glsl): azimuth, view, sun
 uniform sampler2D light_map;     // row 0: E_sun, row 1: E_sky on the horizontal, along the sun's parameter
 uniform sampler3D reflectance_map;  // the rough surface's reflectance of the sky (rgb) and its mean direction (a)
-uniform float sea_level;         // m above the datum
+uniform float sea_level;         // m above the datum: the level drawn, the sea's or the lakes'
+uniform int lakes;               // 1: the lakes' level, drawn where the lake mask is at least one half
 uniform vec3 seabed_albedo;
 
 // Tests' switches (planet/ocean_internal.hpp): 1 the glint, 2 the sky, 4
@@ -185,8 +187,9 @@ void main() {
 
   vec3 point = camera_planet + offset;
   vec3 n = normalize(point);
-  vec2 ground = textureLod(bathymetry, n, 0.0).rg;
+  vec3 ground = textureLod(bathymetry, n, 0.0).rgb;
   if (ground.g > sea_level + 1.0) discard;  // land all around: the terrain is in front
+  if (lakes != 0 && ground.b < 0.5) discard;  // no lake here
   float water_depth = max(sea_level - ground.r, 0.0);
 
   vec3 view = -d;

@@ -235,6 +235,7 @@ struct RasterSource::Impl {
       encoded_max = type == GDT_Byte ? 255.0 : type == GDT_UInt16 ? 65535.0 : 1.0;
       return;
     }
+    if (settings.kind == RasterKind::mask) return;  // no unit
     const std::string unit = GDALGetRasterUnitType(first);
     double from_unit = 0.0;
     if (unit == "m" || unit == "metre" || unit == "meter" || unit == "metres" || unit == "meters") from_unit = 1.0;
@@ -306,6 +307,7 @@ struct RasterSource::Impl {
   float decode(double raw, int k) const {
     const double v = raw * scale[k] + offset[k];
     if (settings.kind == RasterKind::imagery) return srgb_to_linear(float(v / encoded_max));
+    if (settings.kind == RasterKind::mask) return std::isnan(v) ? float(v) : v != 0.0 ? 1.0f : 0.0f;
     return float(v * metres_per_unit);
   }
 

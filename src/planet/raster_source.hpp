@@ -1,7 +1,8 @@
 // A raster read with GDAL (any format GDAL reads: GeoTIFF, COG, VRT, JPEG
 // with a VRT around it …, in any coordinate reference system), sampled at
-// directions from the planet's centre: elevation (one band, metres) or
-// imagery (three bands, linear reflectance decoded from sRGB).
+// directions from the planet's centre: elevation (one band, metres),
+// imagery (three bands, linear reflectance decoded from sRGB) or a mask
+// (one band, non-zero is 1).
 //
 // Sampling: a direction d (planet frame: z towards the north pole, x
 // towards longitude 0) is the point of planetocentric latitude asin(d.z) and
@@ -39,7 +40,9 @@
 
 namespace atmos::planet {
 
-enum class RasterKind { elevation, imagery };
+// mask: one band, a yes or no per pixel (non-zero is yes), sampled as the
+// fraction of yes among the valid neighbours (0 or 1 on a pixel centre).
+enum class RasterKind { elevation, imagery, mask };
 
 struct RasterSettings {
   // A path, or anything GDALOpenEx accepts (VRT XML text, /vsi paths).
