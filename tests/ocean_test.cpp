@@ -328,6 +328,67 @@ TEST_F(OceanGpu, LightMapsMatchThePassFunctions) {
               worst[0], mean_error[0], worst[1], mean_error[1], worst[2], mean_error[2]);
 }
 
+// The light maps follow the tables of the pass the ocean is bound to: a
+// pass whose tables hold the ground's response, its ground albedo changed
+// from 0 to 0.8 between two draws (set_ground_albedo re-blends its
+// ground-dependent tables). At each albedo the reflected sky and the light
+// from below read from the maps match the pass's functions themselves
+// (kOceanDirectLight; per pixel, within LightMapsMatchThePassFunctions's
+// bounds for this view), and the brighter ground brightens both by more
+// than those bounds: maps left as they were would fail the first check.
+TEST_F(OceanGpu, LightMapsFollowThePassGroundAlbedo) {
+  atmos::PrecomputeOptions options;
+  options.sizes = atmos_test::small_gpu_sizes();
+  options.ground_albedo_response = true;
+  const atmos::Tables tables = atmos::precompute_tables(*earth_, options);
+  atmos::AtmospherePass pass(*earth_, tables, atmos::PlanetFrame{});
+  pass.set_ground_albedo(glm::dvec3(0.0));
+  atmos::OceanSettings settings;
+  settings.bathymetry_texels = 16;
+  atmos::Ocean ocean(*earth_, flat_sea(0.0), pass, settings);
+  const int width = 48, height = 32;
+  GlobeTarget target(width, height);
+  const double radius = earth_->bottom_radius_m;
+  const glm::dvec3 up(0, 0, 1), east(1, 0, 0), north(0, 1, 0);
+  const atmos::GlobeView view = view_from(up * (radius + 10e3), glm::normalize(north - 0.6 * up), up, width, height,
+                                          glm::normalize(up + 0.8 * east + 0.3 * north));
+  const unsigned terms[] = {planet::kOceanSky, planet::kOceanBelow};
+  const char* names[] = {"sky", "below"};
+  const TermsGuard guard(planet::kOceanAllTerms);
+  double mean[2][2] = {{0.0, 0.0}, {0.0, 0.0}};  // [albedo][term], green
+  for (int a = 0; a < 2; ++a) {
+    if (a == 1) pass.set_ground_albedo(glm::dvec3(0.8));
+    for (int t = 0; t < 2; ++t) {
+      guard.set(terms[t]);
+      const std::vector<float> mapped = draw(ocean, view, target);
+      guard.set(terms[t] | planet::kOceanDirectLight);
+      const std::vector<float> direct = draw(ocean, view, target);
+      double worst = 0.0;
+      int n = 0;
+      for (size_t i = 0; i < direct.size(); i += 4) {
+        ASSERT_EQ(mapped[i] == -1.0f, direct[i] == -1.0f) << "texel " << i / 4;
+        if (direct[i] == -1.0f) continue;
+        ++n;
+        mean[a][t] += mapped[i + 1];
+        for (int c = 0; c < 3; ++c) {
+          const double d = direct[i + size_t(c)];
+          ASSERT_GT(d, 0.0) << names[t] << " texel " << i / 4;
+          worst = std::max(worst, std::abs(mapped[i + size_t(c)] - d) / d);
+        }
+      }
+      ASSERT_GT(n, width * height / 2);
+      mean[a][t] /= n;
+      EXPECT_LT(worst, 0.025) << names[t] << " at ground albedo " << (a == 0 ? 0.0 : 0.8);
+      std::printf("light maps at ground albedo %.1f, %s: worst %.2e against the pass's functions\n",
+                  a == 0 ? 0.0 : 0.8, names[t], worst);
+    }
+  }
+  for (int t = 0; t < 2; ++t) {
+    EXPECT_GT(mean[1][t], 1.05 * mean[0][t]) << names[t];
+    std::printf("ground albedo 0 -> 0.8: %s x %.3f (green)\n", names[t], mean[1][t] / mean[0][t]);
+  }
+}
+
 // A dolly down towards the sea at 51 degrees below the horizon, from 20 km
 // down, in steps of 1.25x: the waves move from the BRDF into the normals as
 // their wavelengths grow past 4-8 pixels (at 48 x 32 pixels, from ~700 m
