@@ -713,6 +713,56 @@ TEST_F(OceanGpu, LakesAreDrawnWhereTheMaskSays) {
   EXPECT_THROW({ atmos::Ocean rejected(*earth_, surface, *pass_, settings); }, atmos::Error);
 }
 
+// A full moon mirrored by the waves: the moon's light through the glint's
+// BRDF. From 2000 km by night (the sun 60 degrees below the horizon at the
+// point below the camera), a moon in direction s 60 degrees up opposite
+// the sun (full: phase angle 0), far enough (1e10 m) that its direction
+// is the same from every sea point, against the sun's glint by day with
+// the sun in the same direction s: pixel by pixel the moon's glint is the
+// sun's times (2/3) A (rho/d)^2, the full Lambert sphere's irradiance over
+// the sun's (the BRDF, the cosines and the transmittance along s cancel).
+TEST_F(OceanGpu, FullMoonGlintIsTheSunsScaledByTheMoonsIrradiance) {
+  atmos::OceanSettings settings;
+  settings.water.wind_speed_m_s = 6.0;
+  settings.bathymetry_texels = 16;
+  atmos::Ocean ocean(*earth_, flat_sea(0.0), *pass_, settings);
+  const int width = 48, height = 48;
+  GlobeTarget target(width, height);
+  const glm::dvec3 up = glm::normalize(glm::dvec3(0.2, 0.5, 0.8));
+  const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), up));
+  const glm::dvec3 s = glm::normalize(up * std::sin(glm::radians(60.0)) + east * std::cos(glm::radians(60.0)));
+  const glm::dvec3 camera = up * (earth_->bottom_radius_m + 2000e3);
+  atmos::GlobeView view = view_from(camera, -up, glm::cross(up, east), width, height, s);
+  const TermsGuard guard(planet::kOceanGlint);
+  const std::vector<float> sun_glint = draw(ocean, view, target);
+  const double distance = 1e10, radius = 2e7;
+  view.sun_direction = -s;
+  view.moons = {atmos::Moon{camera + s * distance, radius}};
+  const std::vector<float> moon_glint = draw(ocean, view, target);
+  view.moons.clear();
+  const std::vector<float> dark = draw(ocean, view, target);
+  expect_finite(moon_glint, "moon glint");
+  const double expected = 2.0 / 3.0 * 0.12 * (radius / distance) * (radius / distance);  // MOON_ALBEDO 0.12
+  float peak = 0.0f;
+  for (size_t i = 0; i < sun_glint.size(); i += 4) peak = std::max(peak, sun_glint[i + 1]);
+  ASSERT_GT(peak, 0.0f);
+  int compared = 0;
+  double worst = 0.0;
+  for (size_t i = 0; i < sun_glint.size(); i += 4) {
+    if (sun_glint[i] == -1.0f) continue;
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_LT(dark[i + size_t(c)], 1e-6f * peak) << "the night's glint without the moon, texel " << i / 4;
+      if (sun_glint[i + size_t(c)] < 0.01f * peak) continue;
+      ++compared;
+      worst = std::max(worst, std::abs(moon_glint[i + size_t(c)] / sun_glint[i + size_t(c)] / expected - 1.0));
+    }
+  }
+  EXPECT_GT(compared, 300);
+  EXPECT_LT(worst, 0.02) << "over " << compared << " channels";
+  std::printf("full moon's glint / sun's: %d channels, worst %.2e from (2/3) A (rho/d)^2 = %.3e\n", compared, worst,
+              expected);
+}
+
 TEST_F(OceanGpu, RejectsBadInput) {
   const auto message = [&](const atmos::PlanetSurface& surface, const atmos::OceanSettings& s) {
     try {

@@ -15,7 +15,8 @@
 //
 // The radiance at a point (docs/water.md, "The sea on the globe"): the sun
 // glint (Cox & Munk 1954 slopes, microfacet BRDF) times the sun's light
-// transmitted to the point, the reflected sky (the rough surface's
+// transmitted to the point (and the same for the light of the view's
+// moons, GlobeView::moons, Lambertian spheres lit by the sun), the reflected sky (the rough surface's
 // reflectance times one sky lookup from the point in the mean reflected
 // direction, or the 16-node slope quadrature's 16), and the light leaving
 // the water (Lee et al. 1999's column over the seabed at the point's depth,

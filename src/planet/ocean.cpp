@@ -190,11 +190,12 @@ struct Ocean::Impl {
   // the wind's frame was last set, and that frame (upwind, crosswind).
   bool anchored = false;
   glm::dvec3 anchor{0.0}, upwind{0.0}, crosswind{0.0};
-  OceanProgram program;            // the sky quadrature or the mean direction, as the settings say
-  OceanProgram eclipse_program;    // linked at the first draw with moons that eclipse
-  // The tests' programs without the light maps (kOceanDirectLight), with and
-  // without the eclipse, linked at their first draw.
-  OceanProgram direct_program, direct_eclipse_program;
+  // The programs (the sky quadrature or the mean direction, as the
+  // settings say), by variant: + 1 with moons (their light on the water),
+  // + 2 with moons that eclipse, + 4 the tests' program without the light
+  // maps (kOceanDirectLight). The first linked at construction, the others
+  // at their first draw.
+  std::array<OceanProgram, 8> programs{};
   GLuint vertex_array = 0, bathymetry = 0;
   // The light maps (ocean_light_maps.glsl; the sky's and the irradiances'
   // per level, at its radius), the program that fills them and the pass's
@@ -204,9 +205,8 @@ struct Ocean::Impl {
   glm::dvec3 maps_albedo{-1.0};
 
   ~Impl() {
-    if (program.id != 0) glDeleteProgram(program.id);
-    for (const OceanProgram* q : {&eclipse_program, &direct_program, &direct_eclipse_program})
-      if (q->id != 0) glDeleteProgram(q->id);
+    for (const OceanProgram& q : programs)
+      if (q.id != 0) glDeleteProgram(q.id);
     if (map_program != 0) glDeleteProgram(map_program);
     if (map_framebuffer != 0) glDeleteFramebuffers(1, &map_framebuffer);
     if (vertex_array != 0) glDeleteVertexArrays(1, &vertex_array);
@@ -216,8 +216,9 @@ struct Ocean::Impl {
       if (t != 0) glDeleteTextures(1, &t);
   }
 
-  OceanProgram link(bool eclipse, bool direct_light) const {
+  OceanProgram link(bool moons, bool eclipse, bool direct_light) const {
     std::string head = "#version 450 core\n";
+    if (moons || eclipse) head += "#define OCEAN_MOONS 1\n";
     if (eclipse) head += "#define OCEAN_ECLIPSE 1\n";
     if (direct_light) head += "#define OCEAN_DIRECT_LIGHT 1\n";
     if (!settings.sky_quadrature) head += "#define OCEAN_SKY_MEAN_DIRECTION 1\n";
@@ -460,7 +461,7 @@ Ocean::Ocean(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
   p.surface = std::make_unique<planet::Surface>(surface, atmosphere.bottom_radius_m);
   p.bake_bathymetry();
   glCreateVertexArrays(1, &p.vertex_array);
-  p.program = p.link(false, false);
+  p.programs[0] = p.link(false, false, false);
   p.fill_light_maps();
 }
 
@@ -538,9 +539,9 @@ void Ocean::draw(const GlobeView& view, double time_s) {
 
   const unsigned terms = terms_drawn.load(std::memory_order_relaxed);
   const bool direct_light = (terms & planet::kOceanDirectLight) != 0;
-  OceanProgram* program = direct_light ? (eclipse ? &p.direct_eclipse_program : &p.direct_program)
-                                       : (eclipse ? &p.eclipse_program : &p.program);
-  if (program->id == 0) *program = p.link(eclipse, direct_light);
+  const bool moons = !view.moons.empty();
+  OceanProgram* program = &p.programs[size_t((moons ? 1 : 0) + (eclipse ? 2 : 0) + (direct_light ? 4 : 0))];
+  if (program->id == 0) *program = p.link(moons, eclipse, direct_light);
   if (p.pass->ground_albedo() != p.maps_albedo) p.fill_light_maps();
   const OceanProgram& g = *program;
   glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
@@ -584,7 +585,7 @@ void Ocean::draw(const GlobeView& view, double time_s) {
   glUniform1fv(g.wave_phase, kMaxWaves, phases.data());
   glUniform3f(g.seabed, float(p.settings.seabed_albedo.x), float(p.settings.seabed_albedo.y),
               float(p.settings.seabed_albedo.z));
-  if (eclipse) {
+  if (moons) {
     std::array<glm::vec4, kMaxMoons> spheres{};
     for (size_t i = 0; i < view.moons.size(); ++i)
       spheres[i] = glm::vec4(glm::vec3(view.moons[i].centre_m), float(view.moons[i].radius_m));

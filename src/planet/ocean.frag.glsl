@@ -40,7 +40,8 @@
 // the bathymetry's depth. E_sun is the sun's irradiance normal to it at the
 // point (transmittance and the planet's shadow), E_sky the sky's on the
 // horizontal; with OCEAN_ECLIPSE the moons' factors dim the sun's part and
-// the sky's (atmos_eclipse), as for the terrain. The sky's radiance, E_sun
+// the sky's (atmos_eclipse), as for the terrain; with OCEAN_MOONS the
+// moons' own light is mirrored through the glint's BRDF. The sky's radiance, E_sun
 // and E_sky are read from the light maps (ocean_light_maps.glsl), which
 // tabulate the pass's functions at sea level, and the rough surface's
 // reflectance of the sky from a map of water_sky_reflectance; with
@@ -88,7 +89,7 @@ uniform vec3 seabed_albedo;
 // functions instead of the light maps.
 uniform int terms;
 
-#if defined(OCEAN_ECLIPSE)
+#if defined(OCEAN_MOONS)
 uniform int moon_count;
 uniform vec4 moon_spheres[MOON_CAPACITY];
 uniform float eclipse_top_radius;  // m: the atmosphere's top, for the reflected sky's eclipse (below)
@@ -253,6 +254,27 @@ void main() {
   sky_irradiance *= sky_factor;
 
   vec3 glint = water_glint_brdf(water, normal, wave_upwind, view, sun) * sun_irradiance * max(dot(sun, normal), 0.0);
+#if defined(OCEAN_MOONS)
+  // The moons' light mirrored by the waves (a moon's glade), through the
+  // glint's BRDF as the sun's. A moon, a Lambertian sphere of albedo
+  // MOON_ALBEDO (eclipse.glsl) lit by the sun, gives at distance d the
+  // irradiance E = A E_0 (ρ/d)² (2 / (3π)) (sin α + (π − α) cos α)
+  // normal to it (Lambert's sphere; Russell 1916), E_0 the sun's above the
+  // atmosphere, ρ the moon's radius, α the phase angle (cos α = −s · l, l
+  // towards the moon; 0 at full moon, where E = (2/3) A E_0 (ρ/d)²),
+  // attenuated by the atmosphere's transmittance towards the moon.
+  for (int i = 0; i < moon_count; ++i) {
+    vec3 to_moon = moon_spheres[i].xyz - point;
+    float moon_distance = length(to_moon);
+    vec3 l = to_moon / moon_distance;
+    float alpha = acos(clamp(-dot(sun, l), -1.0, 1.0));
+    float size = moon_spheres[i].w / moon_distance;
+    float lambert = MOON_ALBEDO * size * size * (2.0 / (3.0 * PI)) * (sin(alpha) + (PI - alpha) * cos(alpha));
+    vec3 moon_irradiance = (ATMOS_RADIANCE_TO_SRGB * ATMOSPHERE.solar_irradiance) * lambert *
+                           atmos_transmittance_to_sun(point, l);
+    glint += water_glint_brdf(water, normal, wave_upwind, view, l) * moon_irradiance * max(dot(l, normal), 0.0);
+  }
+#endif
   vec3 sky = vec3(0.0);
 #if defined(OCEAN_SKY_MEAN_DIRECTION)
   vec3 mean_direction;
