@@ -32,6 +32,7 @@
 #include "globe_rays.hpp"
 #include "globe_target.hpp"
 #include "gpu_fixture.hpp"
+#include "atmos/colour.hpp"
 #include "atmos/water.hpp"
 #include "physics/eclipse_cpp.hpp"
 #include "physics/moons.hpp"
@@ -129,6 +130,29 @@ class OceanGpu : public atmos_test::EarthGpuTest {
 
   static void expect_finite(const std::vector<float>& colour, const char* what) {
     for (size_t i = 0; i < colour.size(); ++i) ASSERT_TRUE(std::isfinite(colour[i])) << what << " texel " << i / 4;
+  }
+
+  // A glint drawn by another light over `reference`'s, per channel, against
+  // `ratio`: the worst relative difference over the channels where the
+  // reference is above 1 % of its peak (green), `compared` of them; `dark`
+  // (the scene without that light) must stay below 1e-3 of what it adds.
+  static double worst_ratio(const std::vector<float>& reference, const std::vector<float>& glint,
+                            const std::vector<float>& dark, const glm::dvec3& ratio, int& compared) {
+    float peak = 0.0f;
+    for (size_t i = 0; i < reference.size(); i += 4) peak = std::max(peak, reference[i + 1]);
+    EXPECT_GT(peak, 0.0f);
+    compared = 0;
+    double worst = 0.0;
+    for (size_t i = 0; i < reference.size(); i += 4) {
+      if (reference[i] == -1.0f) continue;
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_LT(dark[i + size_t(c)], 1e-3 * ratio[c] * peak) << "without the light, texel " << i / 4;
+        if (reference[i + size_t(c)] < 0.01f * peak) continue;
+        ++compared;
+        worst = std::max(worst, std::abs(glint[i + size_t(c)] / reference[i + size_t(c)] / ratio[c] - 1.0));
+      }
+    }
+    return worst;
   }
 
   static inline std::unique_ptr<atmos::AtmospherePass> pass_;
@@ -743,24 +767,69 @@ TEST_F(OceanGpu, FullMoonGlintIsTheSunsScaledByTheMoonsIrradiance) {
   const std::vector<float> dark = draw(ocean, view, target);
   expect_finite(moon_glint, "moon glint");
   const double expected = 2.0 / 3.0 * 0.12 * (radius / distance) * (radius / distance);  // MOON_ALBEDO 0.12
-  float peak = 0.0f;
-  for (size_t i = 0; i < sun_glint.size(); i += 4) peak = std::max(peak, sun_glint[i + 1]);
-  ASSERT_GT(peak, 0.0f);
   int compared = 0;
-  double worst = 0.0;
-  for (size_t i = 0; i < sun_glint.size(); i += 4) {
-    if (sun_glint[i] == -1.0f) continue;
-    for (int c = 0; c < 3; ++c) {
-      EXPECT_LT(dark[i + size_t(c)], 1e-6f * peak) << "the night's glint without the moon, texel " << i / 4;
-      if (sun_glint[i + size_t(c)] < 0.01f * peak) continue;
-      ++compared;
-      worst = std::max(worst, std::abs(moon_glint[i + size_t(c)] / sun_glint[i + size_t(c)] / expected - 1.0));
-    }
-  }
+  const double worst = worst_ratio(sun_glint, moon_glint, dark, glm::dvec3(expected), compared);
   EXPECT_GT(compared, 300);
   EXPECT_LT(worst, 0.02) << "over " << compared << " channels";
   std::printf("full moon's glint / sun's: %d channels, worst %.2e from (2/3) A (rho/d)^2 = %.3e\n", compared, worst,
               expected);
+}
+
+// A bright star mirrored by the waves (Ocean::set_stars): the pass's
+// catalogue holds a star like Sirius (9940 K) in direction s 60 degrees up
+// at the point below the camera, and 20 dim ones below every horizon of
+// the view, of which only 16 are kept (the bright one among them). From
+// 2000 km by night (the sun opposite s), against the sun's glint by day
+// with the sun in s: per pixel the star's glint over the sun's is
+// (M E_star)_c / (M E_sun)_c, E the irradiances above the atmosphere in
+// the tables' channels, M their conversion to linear sRGB (the BRDF, the
+// cosines and the transmittance along s cancel); without the stars the
+// night's glint is dark.
+TEST_F(OceanGpu, BrightStarGlintIsTheSunsScaledByItsIrradiance) {
+  atmos::OceanSettings settings;
+  settings.water.wind_speed_m_s = 6.0;
+  settings.bathymetry_texels = 16;
+  atmos::Ocean ocean(*earth_, flat_sea(0.0), *pass_, settings);
+  const int width = 48, height = 48;
+  GlobeTarget target(width, height);
+  const glm::dvec3 up = glm::normalize(glm::dvec3(-0.4, 0.3, 0.7));
+  const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), up));
+  const glm::dvec3 s = glm::normalize(up * std::sin(glm::radians(60.0)) + east * std::cos(glm::radians(60.0)));
+  const glm::dvec3 camera = up * (earth_->bottom_radius_m + 2000e3);
+  atmos::GlobeView view = view_from(camera, -up, glm::cross(up, east), width, height, s);
+  const TermsGuard guard(planet::kOceanGlint);
+  const std::vector<float> sun_glint = draw(ocean, view, target);
+  atmos::Star bright;
+  bright.direction = s;
+  bright.v_band_irradiance = 1.4e-10;  // W m^-2 nm^-1: V = -1.46 (Vega's 3.6e-11 at V = 0)
+  bright.temperature_k = 9940.0;
+  std::vector<atmos::Star> catalogue(20);
+  for (atmos::Star& dim : catalogue) {
+    dim.direction = -up;
+    dim.v_band_irradiance = 1e-13;
+  }
+  catalogue.insert(catalogue.begin() + 7, bright);
+  pass_->set_star_catalogue(catalogue);
+  ocean.set_stars(true);
+  view.sun_direction = -s;
+  const std::vector<float> star_glint = draw(ocean, view, target);
+  ocean.set_stars(false);
+  const std::vector<float> dark = draw(ocean, view, target);
+  pass_->set_star_catalogue({});
+  EXPECT_THROW(ocean.set_stars(true, glm::dmat3(2.0)), atmos::Error);
+  expect_finite(star_glint, "star glint");
+  const glm::mat3 m = atmos::radiance_to_srgb_matrix(
+      {earth_->wavelengths_nm[0], earth_->wavelengths_nm[1], earth_->wavelengths_nm[2]});
+  const physics::AtmosphereParams params = physics::make_render_params(*earth_, tables_->sizes);
+  const glm::vec3 sun_srgb = m * glm::vec3(params.solar_irradiance);
+  const glm::vec3 star_srgb = m * atmos::star_channel_irradiance(bright, earth_->wavelengths_nm);
+  int compared = 0;
+  const double worst =
+      worst_ratio(sun_glint, star_glint, dark, glm::dvec3(star_srgb) / glm::dvec3(sun_srgb), compared);
+  EXPECT_GT(compared, 300);
+  EXPECT_LT(worst, 0.02) << "over " << compared << " channels";
+  std::printf("star's glint / sun's: %d channels, worst %.2e from the irradiances' ratio (green %.3e)\n", compared,
+              worst, double(star_srgb[1] / sun_srgb[1]));
 }
 
 TEST_F(OceanGpu, RejectsBadInput) {

@@ -43,6 +43,7 @@
 // draw framebuffer binding and the viewport.
 #pragma once
 
+#include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
 #include <memory>
@@ -81,6 +82,9 @@ struct OceanSettings {
   int first_unit = 0;
 };
 
+// How many of the catalogue's stars the water mirrors (Ocean::set_stars).
+inline constexpr int kOceanMirroredStars = 16;
+
 class Ocean {
  public:
   // The sea of `surface` (its sea level above `atmosphere`'s bottom radius,
@@ -114,6 +118,17 @@ class Ocean {
   // level above the datum, m (NaN without lakes).
   bool has_lakes() const;
   double lake_level_m() const;
+
+  // The stars whose light the water mirrors, through the glint's BRDF as
+  // the sun's (each a point of its irradiance above the atmosphere,
+  // attenuated towards it): the kOceanMirroredStars brightest (in the
+  // tables' middle channel) of the pass's star catalogue
+  // (AtmospherePass::set_star_catalogue) as it is at this call, turned into
+  // the world's axes by `world_from_star_catalogue` (as
+  // FrameInput::world_from_star_catalogue; call again when it changes).
+  // Off (the default), or an empty catalogue: none. Throws atmos::Error,
+  // changing nothing, unless `world_from_star_catalogue` is a rotation.
+  void set_stars(bool on, const glm::dmat3& world_from_star_catalogue = glm::dmat3(1.0));
   // The depth of the sea below the point of the sea level in `direction`
   // (planet axes, any length), m: the sea level less the ground's height
   // there (0 over land). The shader reads the same heights from the

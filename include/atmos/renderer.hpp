@@ -84,6 +84,18 @@ struct Star {
 // a temperature outside [1000, 100000] K.
 void validate_stars(const std::vector<Star>& stars);
 
+// A star's irradiance above the atmosphere in the channels of tables
+// computed at `wavelengths_nm` (three: at them; more: linear sRGB over
+// 683 lm/W, weighted as the sun's is), as the renderers draw the
+// catalogue's stars: its blackbody spectrum scaled to v_band_irradiance at
+// 545 nm.
+glm::vec3 star_channel_irradiance(const Star& star, const std::vector<double>& wavelengths_nm);
+
+// Throws atmos::Error, naming `who`, unless `m` is a rotation (orthonormal
+// with determinant 1, to 1e-6), as the star orientations the renderers
+// take (FrameInput::world_from_star_catalogue) must be.
+void validate_star_orientation(const glm::dmat3& m, const char* who);
+
 // Throws atmos::Error with one line naming the first problem: non-finite
 // position, zero or non-finite forward/up, up parallel to forward, size
 // outside 1..16384, field of view outside its range.

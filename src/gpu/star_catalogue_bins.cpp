@@ -184,7 +184,7 @@ void StarCatalogueBuffers::set(const std::vector<Star>& stars, const std::vector
   irradiances.reserve(stars.size());
   for (const Star& star : stars) {
     directions.push_back(glm::vec3(glm::normalize(star.direction)));
-    irradiances.push_back(star_channel_irradiance(star, wavelengths_nm));
+    irradiances.push_back(gpu::star_channel_irradiance(star, wavelengths_nm));
   }
   stars_ = stars;
   directions_ = std::move(directions);
@@ -234,6 +234,12 @@ void set_star_catalogue_uniforms(std::uint32_t program, bool enabled, const glm:
 }  // namespace atmos::gpu
 
 namespace atmos {
+
+glm::vec3 star_channel_irradiance(const Star& star, const std::vector<double>& wavelengths_nm) {
+  return gpu::star_channel_irradiance(star, wavelengths_nm);
+}
+
+void validate_star_orientation(const glm::dmat3& m, const char* who) { gpu::validate_star_orientation(m, who); }
 
 void validate_stars(const std::vector<Star>& stars) {
   for (size_t i = 0; i < stars.size(); ++i) {

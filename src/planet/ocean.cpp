@@ -10,12 +10,14 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cstddef>
 #include <atomic>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "planet/gl_program.hpp"
@@ -120,7 +122,8 @@ struct OceanProgram {
         diffuse = -1, slope_variance = -1, upwind = -1, wave_count = -1, wave_vector = -1, wave_in_wind = -1,
         wave_phase = -1,
         bathymetry = -1, sky_map = -1, light_map = -1, reflectance_map = -1, sea_level = -1, seabed = -1, moon_count = -1,
-        moon_spheres = -1, terms = -1, lakes = -1, eclipse_top_radius = -1;
+        moon_spheres = -1, terms = -1, lakes = -1, eclipse_top_radius = -1, star_count = -1, star_directions = -1,
+        star_irradiances = -1;
   void locate() {
     const auto at = [&](const char* name) { return glGetUniformLocation(id, name); };
     clip = at("clip_from_offset");
@@ -154,6 +157,9 @@ struct OceanProgram {
     terms = at("terms");
     lakes = at("lakes");
     eclipse_top_radius = at("eclipse_top_radius");
+    star_count = at("star_count");
+    star_directions = at("star_directions");
+    star_irradiances = at("star_irradiances");
   }
 };
 
@@ -193,9 +199,14 @@ struct Ocean::Impl {
   // The programs (the sky quadrature or the mean direction, as the
   // settings say), by variant: + 1 with moons (their light on the water),
   // + 2 with moons that eclipse, + 4 the tests' program without the light
-  // maps (kOceanDirectLight). The first linked at construction, the others
-  // at their first draw.
-  std::array<OceanProgram, 8> programs{};
+  // maps (kOceanDirectLight), + 8 with stars (set_stars). The first linked
+  // at construction, the others at their first draw.
+  std::array<OceanProgram, 16> programs{};
+  // The tables' working wavelengths (the stars' channel irradiances), and
+  // the mirrored stars: unit directions in the world's axes and their
+  // irradiance in the tables' channels above the atmosphere.
+  std::vector<double> wavelengths_nm;
+  std::vector<glm::vec4> star_directions, star_irradiances;
   GLuint vertex_array = 0, bathymetry = 0;
   // The light maps (ocean_light_maps.glsl; the sky's and the irradiances'
   // per level, at its radius), the program that fills them and the pass's
@@ -216,8 +227,9 @@ struct Ocean::Impl {
       if (t != 0) glDeleteTextures(1, &t);
   }
 
-  OceanProgram link(bool moons, bool eclipse, bool direct_light) const {
+  OceanProgram link(bool moons, bool eclipse, bool direct_light, bool stars) const {
     std::string head = "#version 450 core\n";
+    if (stars) head += "#define OCEAN_STARS 1\n";
     if (moons || eclipse) head += "#define OCEAN_MOONS 1\n";
     if (eclipse) head += "#define OCEAN_ECLIPSE 1\n";
     if (direct_light) head += "#define OCEAN_DIRECT_LIGHT 1\n";
@@ -425,6 +437,7 @@ Ocean::Ocean(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
   p.pass = &pass;
   p.settings = settings;
   p.top_radius_m = atmosphere.top_radius_m;
+  p.wavelengths_nm = atmosphere.wavelengths_nm;
   p.sun_angular_radius_rad = atmosphere.sun_angular_radius_rad;
   if (!std::isfinite(sea) && !lakes) return;
   GLint units = 0;
@@ -461,7 +474,7 @@ Ocean::Ocean(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
   p.surface = std::make_unique<planet::Surface>(surface, atmosphere.bottom_radius_m);
   p.bake_bathymetry();
   glCreateVertexArrays(1, &p.vertex_array);
-  p.programs[0] = p.link(false, false, false);
+  p.programs[0] = p.link(false, false, false, false);
   p.fill_light_maps();
 }
 
@@ -470,6 +483,27 @@ Ocean::~Ocean() = default;
 bool Ocean::has_sea() const { return impl_->has_sea; }
 double Ocean::sea_level_m() const { return impl_->sea_level_m; }
 bool Ocean::has_lakes() const { return impl_->has_lakes; }
+
+void Ocean::set_stars(bool on, const glm::dmat3& world_from_star_catalogue) {
+  validate_star_orientation(world_from_star_catalogue, "ocean: set_stars");
+  Impl& p = *impl_;
+  p.star_directions.clear();
+  p.star_irradiances.clear();
+  if (!on) return;
+  const std::vector<Star>& catalogue = p.pass->star_catalogue();
+  std::vector<std::pair<glm::vec3, size_t>> light;
+  light.reserve(catalogue.size());
+  for (size_t i = 0; i < catalogue.size(); ++i)
+    light.emplace_back(star_channel_irradiance(catalogue[i], p.wavelengths_nm), i);
+  const size_t count = std::min(light.size(), size_t(kOceanMirroredStars));
+  std::partial_sort(light.begin(), light.begin() + std::ptrdiff_t(count), light.end(),
+                    [](const auto& a, const auto& b) { return a.first.y > b.first.y; });
+  for (size_t k = 0; k < count; ++k) {
+    const glm::dvec3 d = glm::normalize(world_from_star_catalogue * catalogue[light[k].second].direction);
+    p.star_directions.emplace_back(glm::vec3(d), 0.0f);
+    p.star_irradiances.emplace_back(light[k].first, 0.0f);
+  }
+}
 double Ocean::lake_level_m() const { return impl_->lake_level_m; }
 
 double Ocean::depth_m(const glm::dvec3& direction) const {
@@ -540,8 +574,10 @@ void Ocean::draw(const GlobeView& view, double time_s) {
   const unsigned terms = terms_drawn.load(std::memory_order_relaxed);
   const bool direct_light = (terms & planet::kOceanDirectLight) != 0;
   const bool moons = !view.moons.empty();
-  OceanProgram* program = &p.programs[size_t((moons ? 1 : 0) + (eclipse ? 2 : 0) + (direct_light ? 4 : 0))];
-  if (program->id == 0) *program = p.link(moons, eclipse, direct_light);
+  const bool stars = !p.star_directions.empty();
+  OceanProgram* program =
+      &p.programs[size_t((moons ? 1 : 0) + (eclipse ? 2 : 0) + (direct_light ? 4 : 0) + (stars ? 8 : 0))];
+  if (program->id == 0) *program = p.link(moons, eclipse, direct_light, stars);
   if (p.pass->ground_albedo() != p.maps_albedo) p.fill_light_maps();
   const OceanProgram& g = *program;
   glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
@@ -592,6 +628,11 @@ void Ocean::draw(const GlobeView& view, double time_s) {
     glUniform1i(g.moon_count, int(view.moons.size()));
     glUniform4fv(g.moon_spheres, kMaxMoons, glm::value_ptr(spheres[0]));
     glUniform1f(g.eclipse_top_radius, float(p.top_radius_m));
+  }
+  if (stars) {
+    glUniform1i(g.star_count, int(p.star_directions.size()));
+    glUniform4fv(g.star_directions, GLsizei(p.star_directions.size()), glm::value_ptr(p.star_directions[0]));
+    glUniform4fv(g.star_irradiances, GLsizei(p.star_irradiances.size()), glm::value_ptr(p.star_irradiances[0]));
   }
   glUniform1i(g.terms, int(terms));
   // The sea, then the lakes: each its own sphere, light maps and water

@@ -89,6 +89,11 @@ uniform vec3 seabed_albedo;
 // functions instead of the light maps.
 uniform int terms;
 
+#if defined(OCEAN_STARS)
+uniform int star_count;
+uniform vec4 star_directions[16];   // xyz: unit, towards the star (planet axes); kOceanMirroredStars
+uniform vec4 star_irradiances[16];  // rgb: irradiance above the atmosphere, the tables' channels
+#endif
 #if defined(OCEAN_MOONS)
 uniform int moon_count;
 uniform vec4 moon_spheres[MOON_CAPACITY];
@@ -273,6 +278,16 @@ void main() {
     vec3 moon_irradiance = (ATMOS_RADIANCE_TO_SRGB * ATMOSPHERE.solar_irradiance) * lambert *
                            atmos_transmittance_to_sun(point, l);
     glint += water_glint_brdf(water, normal, wave_upwind, view, l) * moon_irradiance * max(dot(l, normal), 0.0);
+  }
+#endif
+#if defined(OCEAN_STARS)
+  // The brightest stars' light mirrored by the waves, as the sun's: each a
+  // point of irradiance E above the atmosphere (the tables' channels, in
+  // linear sRGB as the sun's) attenuated towards it.
+  for (int i = 0; i < star_count; ++i) {
+    vec3 l = star_directions[i].xyz;
+    vec3 star_irradiance = (ATMOS_RADIANCE_TO_SRGB * star_irradiances[i].rgb) * atmos_transmittance_to_sun(point, l);
+    glint += water_glint_brdf(water, normal, wave_upwind, view, l) * star_irradiance * max(dot(l, normal), 0.0);
   }
 #endif
   vec3 sky = vec3(0.0);
