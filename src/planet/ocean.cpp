@@ -354,8 +354,11 @@ struct Ocean::Impl {
       }
     }
     glCreateTextures(GL_TEXTURE_CUBE_MAP, 1, &bathymetry);
-    glTextureStorage2D(bathymetry, 1, GL_RGBA32F, n, n);
-    std::vector<float> texels(size_t(4) * n * n);
+    // Without lakes the mask's channel is left out (RG32F: half the bytes
+    // the sea's one fetch per pixel reads; its b then reads 0, no lake).
+    const size_t channels = lake_mask ? 3 : 2;
+    glTextureStorage2D(bathymetry, 1, lake_mask ? GL_RGB32F : GL_RG32F, n, n);
+    std::vector<float> texels(channels * n * n);
     for (int face = 0; face < 6; ++face) {
       const float* h = &height[size_t(face) * n * n];
       for (int j = 0; j < n; ++j)
@@ -366,13 +369,12 @@ struct Ocean::Impl {
               const int a = std::clamp(i + di, 0, n - 1), b = std::clamp(j + dj, 0, n - 1);
               least = std::min(least, h[size_t(b) * n + size_t(a)]);
             }
-          float* t = &texels[4 * (size_t(j) * n + size_t(i))];
+          float* t = &texels[channels * (size_t(j) * n + size_t(i))];
           t[0] = h[size_t(j) * n + size_t(i)];
           t[1] = least;
-          t[2] = lake[(size_t(face) * n + size_t(j)) * n + size_t(i)];
-          t[3] = 0.0f;
+          if (lake_mask) t[2] = lake[(size_t(face) * n + size_t(j)) * n + size_t(i)];
         }
-      glTextureSubImage3D(bathymetry, 0, 0, 0, face, n, n, 1, GL_RGBA, GL_FLOAT, texels.data());
+      glTextureSubImage3D(bathymetry, 0, 0, 0, face, n, n, 1, lake_mask ? GL_RGB : GL_RG, GL_FLOAT, texels.data());
     }
     glTextureParameteri(bathymetry, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTextureParameteri(bathymetry, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
