@@ -14,6 +14,7 @@ packages=(
   libgdal-dev libnetcdf-dev
   xplanet-images xplanet gmt-gshhg-low kstars-data
   libglfw3-dev libimgui-dev xvfb xauth
+  libopenxr-dev libopenxr-loader1
 )
 
 for arg in "$@"; do

@@ -18,8 +18,13 @@
 #include "atmos/stereo.hpp"
 #include "figures.hpp"
 #include "gpu_fixture.hpp"
+#include "sun_disc.hpp"
 
 namespace {
+
+using atmos_test::disc_centre;
+using atmos_test::image_position;
+using atmos_test::luminance_of;
 
 constexpr double kEarthRadius = 6371e3;
 
@@ -44,46 +49,6 @@ atmos::Camera head_camera(double altitude_m = 2.0) {
 glm::dvec3 sun_direction() {
   const double a = glm::radians(180.0), e = glm::radians(20.0);
   return {std::cos(e) * std::sin(a), std::cos(e) * std::cos(a), std::sin(e)};
-}
-
-// Where a direction falls in an eye's image: x to the right, y down from the
-// top-left corner, in pixels (pixel centres at half-integers), from the
-// eye's four angles alone.
-glm::dvec2 image_position(const atmos::Eye& eye, const glm::dvec3& direction, int width, int height) {
-  const glm::dvec3 forward = glm::normalize(eye.forward);
-  const glm::dvec3 right = glm::normalize(glm::cross(forward, eye.up));
-  const glm::dvec3 up = glm::cross(right, forward);
-  const double x = glm::dot(direction, right) / glm::dot(direction, forward);
-  const double y = glm::dot(direction, up) / glm::dot(direction, forward);
-  const double l = std::tan(eye.fov.left_rad), r = std::tan(eye.fov.right_rad);
-  const double d = std::tan(eye.fov.down_rad), u = std::tan(eye.fov.up_rad);
-  return {(x - l) / (r - l) * width, (u - y) / (u - d) * height};
-}
-
-// The centre of the sun's disc in an image (rows top first): the centroid
-// of the luminance above 1 % of the brightest pixel's, less that 1 % (the
-// disc is ~1e4 times brighter than the sky around it).
-glm::dvec2 disc_centre(const std::vector<double>& luminance, int width, int height) {
-  double peak = 0.0;
-  for (double v : luminance) peak = std::max(peak, v);
-  const double floor = 0.01 * peak;
-  double sum = 0.0, sx = 0.0, sy = 0.0;
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) {
-      const double w = luminance[size_t(y) * size_t(width) + size_t(x)] - floor;
-      if (w <= 0.0) continue;
-      sum += w;
-      sx += w * (x + 0.5);
-      sy += w * (y + 0.5);
-    }
-  return sum > 0.0 ? glm::dvec2(sx / sum, sy / sum) : glm::dvec2(-1.0);
-}
-
-std::vector<double> luminance_of(const atmos::Image& image) {
-  std::vector<double> l(size_t(image.width) * size_t(image.height));
-  for (size_t i = 0; i < l.size(); ++i)
-    l[i] = 0.2126 * image.rgb[3 * i] + 0.7152 * image.rgb[3 * i + 1] + 0.0722 * image.rgb[3 * i + 2];
-  return l;
 }
 
 }  // namespace

@@ -299,6 +299,29 @@ void SunOptions::validate() const {
     throw UsageError("--sun-elevation must be in [-90, 90] degrees, got " + quote(elevation));
 }
 
+void StereoOptions::add(CLI::App& app, const std::string& layouts) {
+  app.add_option("--stereo", mode, "Both eyes, each through its own off-axis frustum, " + layouts)
+      ->type_name("none|side-by-side|anaglyph")
+      ->check(CLI::IsMember({"none", "side-by-side", "anaglyph"}).description(""))
+      ->capture_default_str();
+  app.add_option("--ipd", ipd,
+                 "With --stereo: the distance between the eyes, metres, in (0, 1e7] (wider than a person's for "
+                 "distant relief: hyperstereo)")
+      ->type_name("M")
+      ->capture_default_str();
+  app.add_option("--convergence", convergence,
+                 "With --stereo: the distance at which the eyes' images coincide (the screen's plane), metres, > 0 "
+                 "(inf: the sky at zero disparity)")
+      ->type_name("M")
+      ->capture_default_str();
+}
+
+void StereoOptions::validate() const {
+  finite(ipd, "--ipd");
+  if (!(ipd > 0.0 && ipd <= 1e7)) throw UsageError("--ipd must be in (0, 1e7] metres, got " + quote(ipd));
+  if (!(convergence > 0.0)) throw UsageError("--convergence must be > 0 metres, got " + quote(convergence));
+}
+
 glm::dvec3 SunOptions::direction(const Viewpoint& viewpoint) const {
   validate();
   return viewpoint.local * atmos::direction_from_azimuth_elevation(azimuth, elevation);

@@ -19,6 +19,7 @@
 
 #include "atmos/atmosphere.hpp"
 #include "atmos/eclipse.hpp"
+#include "atmos/stereo.hpp"
 #include "atmos/tables.hpp"
 
 namespace atmos_cli {
@@ -138,6 +139,19 @@ struct SunOptions {
   void validate() const;
   // Unit vector towards the sun, planet-centred.
   glm::dvec3 direction(const Viewpoint& viewpoint) const;
+};
+
+// --stereo, --ipd, --convergence: both eyes, each through its own off-axis
+// frustum (atmos/stereo.hpp), and how they are combined (render, view).
+struct StereoOptions {
+  std::string mode = "none";  // none, side-by-side or anaglyph
+  double ipd = 0.064;         // the eyes' distance, m
+  double convergence = 10.0;  // the distance of zero disparity, m
+
+  // `layouts`: what side-by-side and anaglyph give in this command.
+  void add(CLI::App& app, const std::string& layouts);
+  void validate() const;
+  atmos::StereoRig rig() const { return {ipd, convergence}; }
 };
 
 // --moon AZ,EL,ANGULAR_RADIUS_DEG, repeatable (render, sample).

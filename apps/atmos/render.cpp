@@ -55,11 +55,7 @@ struct RenderOptions {
   double bloom = 0.0;
   bool auto_exposure = false;
   bool post = false;     // one of them given
-  // Stereo (atmos/stereo.hpp): none, side-by-side or anaglyph, the eyes'
-  // distance and the distance of zero disparity, metres.
-  std::string stereo = "none";
-  double ipd = 0.064;
-  double convergence = 10.0;
+  StereoOptions stereo;
   bool gallery = false;  // no option but the planet, table, cache, --surface, --precision and --cpu ones
 };
 
@@ -209,10 +205,8 @@ void check_options(const RenderOptions& o) {
   if (o.surface.globe(o.cpu, o.precision == "half") && o.precision == "half")
     throw UsageError("--precision half applies to --surface sphere: the globe's atmosphere pass samples "
                      "full-precision textures");
-  finite(o.ipd, "--ipd");
-  if (!(o.ipd > 0.0 && o.ipd <= 1e7)) throw UsageError("--ipd must be in (0, 1e7] metres, got " + quote(o.ipd));
-  if (!(o.convergence > 0.0)) throw UsageError("--convergence must be > 0 metres, got " + quote(o.convergence));
-  if (o.stereo != "none" && o.projection != "perspective")
+  o.stereo.validate();
+  if (o.stereo.mode != "none" && o.projection != "perspective")
     throw UsageError("--stereo needs the perspective projection, got --projection " + o.projection);
 }
 
@@ -288,14 +282,14 @@ int run_render(const RenderOptions& o) {
     // The viewpoint's altitude is above the terrain under it.
     if (globe) camera.position = globe->above_terrain(camera.position);
     atmos::Image image;
-    if (o.stereo == "none") {
+    if (o.stereo.mode == "none") {
       image = render(camera);
     } else {
       // Each eye through its own off-axis frustum, the head at the viewpoint.
-      const std::array<atmos::Eye, 2> eyes = atmos::stereo_eyes(camera, {o.ipd, o.convergence});
+      const std::array<atmos::Eye, 2> eyes = atmos::stereo_eyes(camera, o.stereo.rig());
       const atmos::Image left = render(atmos::eye_camera(eyes[0], camera.width, camera.height));
       const atmos::Image right = render(atmos::eye_camera(eyes[1], camera.width, camera.height));
-      image = o.stereo == "anaglyph" ? atmos::anaglyph(left, right) : atmos::side_by_side(left, right);
+      image = o.stereo.mode == "anaglyph" ? atmos::anaglyph(left, right) : atmos::side_by_side(left, right);
     }
     if (o.gallery) {
       write_outputs(image, {shot.name + ".png", shot.name + ".exr"}, shot.exposure);
@@ -391,22 +385,9 @@ Command add_render_command(CLI::App& app) {
   auto* auto_exposure = cmd->add_flag("--auto-exposure", o->auto_exposure,
                                       "Expose the PNG outputs from the image's log-average luminance (Collienne "
                                       "2013, eq. 4.28) instead of --exposure");
-  cmd->add_option("--stereo", o->stereo,
-                  "Render both eyes (perspective only), each through its own off-axis frustum, and combine "
-                  "them: side-by-side (left eye on the left, twice the width) or anaglyph (red-cyan: red from "
-                  "the left eye, green and blue from the right)")
-      ->type_name("none|side-by-side|anaglyph")
-      ->check(CLI::IsMember({"none", "side-by-side", "anaglyph"}).description(""))
-      ->capture_default_str();
-  cmd->add_option("--ipd", o->ipd, "With --stereo: the distance between the eyes, metres, in (0, 1e7] (wider than a person's "
-                  "for distant relief: hyperstereo)")
-      ->type_name("M")
-      ->capture_default_str();
-  cmd->add_option("--convergence", o->convergence,
-                  "With --stereo: the distance at which the eyes' images coincide (the screen's plane), "
-                  "metres, > 0 (inf: the sky at zero disparity)")
-      ->type_name("M")
-      ->capture_default_str();
+  o->stereo.add(*cmd,
+                 "rendered (perspective only) and combined: side-by-side (left eye on the left, twice the "
+                 "width) or anaglyph (red-cyan: red from the left eye, green and blue from the right)");
   return {cmd, [o, cmd, fov, tonemap, bloom, auto_exposure] {
             o->fov_given = fov->count() > 0;
             o->post = tonemap->count() > 0 || bloom->count() > 0 || auto_exposure->count() > 0;

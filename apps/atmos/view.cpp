@@ -36,6 +36,9 @@ struct ViewCommandOptions {
   int frames = 0;
   std::vector<std::string> screenshots;
   std::string record, script, replay, output_dir, frame_format = "png";
+  StereoOptions stereo;
+  bool xr = false;
+  std::string xr_mock;
 };
 
 bool ends_with(const std::string& s, const std::string& tail) {
@@ -72,7 +75,16 @@ void check_options(const ViewCommandOptions& o) {
   if (!o.screenshots.empty() && o.frames == 0)
     throw UsageError("--screenshot needs --frames N (the frame saved is the last)");
   if (!o.replay.empty() && o.output_dir.empty()) throw UsageError("--replay needs --output-dir");
-  if (o.replay.empty() && !o.output_dir.empty()) throw UsageError("--output-dir applies to --replay");
+  if (!o.xr_mock.empty() && o.output_dir.empty()) throw UsageError("--xr-mock needs --output-dir");
+  if (o.replay.empty() && o.xr_mock.empty() && !o.output_dir.empty())
+    throw UsageError("--output-dir applies to --replay and --xr-mock");
+  o.stereo.validate();
+  const int headsets = int(o.xr) + int(!o.xr_mock.empty()) + int(!o.replay.empty());
+  if (headsets > 1) throw UsageError("--xr, --xr-mock and --replay exclude each other");
+  if ((o.xr || !o.xr_mock.empty()) && o.stereo.mode != "none")
+    throw UsageError("--stereo lays out the window's two eyes; a headset (--xr, --xr-mock) shows each eye itself");
+  if ((o.xr || !o.xr_mock.empty()) && (!o.screenshots.empty() || !o.record.empty() || !o.script.empty()))
+    throw UsageError("--screenshot, --record and --script apply to the window, not to --xr or --xr-mock");
   if (o.frame_format != "png" && o.frame_format != "exr" && o.frame_format != "both")
     throw UsageError("--frame-format must be png, exr or both, got \"" + o.frame_format + "\"");
 }
@@ -127,6 +139,14 @@ int run_view(const ViewCommandOptions& o) {
   v.replay = o.replay;
   v.output_dir = o.output_dir;
   v.frame_format = o.frame_format;
+  v.stereo.mode = o.stereo.mode == "anaglyph"       ? atmos_view::StereoSettings::Mode::anaglyph
+                  : o.stereo.mode == "side-by-side" ? atmos_view::StereoSettings::Mode::side_by_side
+                                                    : atmos_view::StereoSettings::Mode::none;
+  v.stereo.interpupillary_m = o.stereo.ipd;
+  v.stereo.convergence_m = o.stereo.convergence;
+  v.xr = o.xr;
+  v.xr_mock = o.xr_mock;
+  if (o.xr || !o.xr_mock.empty()) return atmos_view::run_headset(v);
   return o.replay.empty() ? atmos_view::run_viewer(v) : atmos_view::run_replay(v);
 #else
   throw atmos::Error(
@@ -184,8 +204,20 @@ Command add_view_command(CLI::App& app) {
       ->type_name("FILE");
   cmd->add_option("--replay", o->replay, "Replay a recorded flight headless (no window) into --output-dir")
       ->type_name("FILE");
-  cmd->add_option("--output-dir", o->output_dir, "The replay's frames, frame-00000.png ...")->type_name("DIR");
+  cmd->add_option("--output-dir", o->output_dir,
+                  "The replay's frames, frame-00000.png ...; --xr-mock's eyes, eye-left.png, eye-right.png")
+      ->type_name("DIR");
   cmd->add_option("--frame-format", o->frame_format, "The replay's frames: png, exr or both")->capture_default_str();
+  o->stereo.add(*cmd,
+                 "in the window: side-by-side (each eye half the width, left eye on the left) or anaglyph "
+                 "(red-cyan: red from the left eye, green and blue from the right); the panel changes them live");
+  cmd->add_flag("--xr", o->xr,
+                "Draw for an OpenXR head-mounted display (each eye's pose and field of view from the runtime), "
+                "the camera's place and view as the tracking space's origin; --frames N stops after N frames");
+  cmd->add_option("--xr-mock", o->xr_mock,
+                  "Draw for a mock headset with fixed eyes (a JSON file, docs/viewer.md), headless, through the "
+                  "path of --xr; each eye's last image into --output-dir")
+      ->type_name("FILE");
   return {cmd, [o] { return run_view(*o); }};
 }
 

@@ -77,6 +77,20 @@ void view_bench(const std::string& planet, const std::function<void(const atmos_
     sink({std::string("view.") + surface + ".median_frame", median, "ms"});
     sink({std::string("view.") + surface + ".fps", 1e3 / median, "fps"});
   }
+  // Stereo: both eyes over the globe as a red-cyan anaglyph, each eye the
+  // window's size (one tile selection, two draws of the terrain, two passes
+  // of the plugin): against view.globe.median_frame, its cost.
+  {
+    bool ok = true;
+    const std::string out = output_of(view + "--frames 40 --surface globe --stereo anaglyph", ok);
+    const double median = figure_after(out, "median ");
+    if (!ok || !std::isfinite(median)) {
+      std::fprintf(stderr, "atmos bench: atmos view --stereo anaglyph failed: no view.stereo lines\n");
+    } else {
+      sink({"view.stereo.globe.anaglyph.median_frame", median, "ms"});
+      sink({"view.stereo.globe.anaglyph.fps", 1e3 / median, "fps"});
+    }
+  }
   // The first frame as a session starts: a script of one frame that does
   // nothing, so that the globe streams its tiles as it does for a user
   // (--frames would build every tile the first frame needs before it).

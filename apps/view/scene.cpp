@@ -2,17 +2,14 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 namespace atmos_view {
 
 namespace {
-
-// Near plane of the reversed-Z projection, m: the camera may stand half a
-// metre above the ground (Flight::kMinClearanceM); reversed-Z float depth
-// keeps the far field exact.
-constexpr double kNearM = 0.05;
 
 atmos::GlobeSettings globe_settings(bool complete_tiles) {
   atmos::GlobeSettings s;
@@ -50,32 +47,31 @@ void Scene::finish_rebind() {
 }
 
 Scene::~Scene() {
-  release_targets();
+  for (Targets& t : targets_) release_targets(t);
   glDeleteQueries(kQueries, queries_.data());
 }
 
-void Scene::release_targets() {
-  if (framebuffer_) glDeleteFramebuffers(1, &framebuffer_);
-  const GLuint textures[] = {colour_, depth_, output_};
-  if (colour_) glDeleteTextures(3, textures);
-  framebuffer_ = colour_ = depth_ = output_ = 0;
-  width_ = height_ = 0;
+void Scene::release_targets(Targets& t) {
+  if (t.framebuffer) glDeleteFramebuffers(1, &t.framebuffer);
+  const GLuint textures[] = {t.colour, t.depth, t.output};
+  if (t.colour) glDeleteTextures(3, textures);
+  t = Targets{};
 }
 
-void Scene::ensure_targets(int width, int height) {
-  if (width == width_ && height == height_) return;
-  release_targets();
-  glCreateTextures(GL_TEXTURE_2D, 1, &colour_);
-  glTextureStorage2D(colour_, 1, GL_RGBA32F, width, height);
-  glCreateTextures(GL_TEXTURE_2D, 1, &depth_);
-  glTextureStorage2D(depth_, 1, GL_DEPTH_COMPONENT32F, width, height);
-  glCreateTextures(GL_TEXTURE_2D, 1, &output_);
-  glTextureStorage2D(output_, 1, GL_RGBA32F, width, height);
-  glCreateFramebuffers(1, &framebuffer_);
-  glNamedFramebufferTexture(framebuffer_, GL_COLOR_ATTACHMENT0, colour_, 0);
-  glNamedFramebufferTexture(framebuffer_, GL_DEPTH_ATTACHMENT, depth_, 0);
-  width_ = width;
-  height_ = height;
+void Scene::ensure_targets(Targets& t, int width, int height) {
+  if (width == t.width && height == t.height) return;
+  release_targets(t);
+  glCreateTextures(GL_TEXTURE_2D, 1, &t.colour);
+  glTextureStorage2D(t.colour, 1, GL_RGBA32F, width, height);
+  glCreateTextures(GL_TEXTURE_2D, 1, &t.depth);
+  glTextureStorage2D(t.depth, 1, GL_DEPTH_COMPONENT32F, width, height);
+  glCreateTextures(GL_TEXTURE_2D, 1, &t.output);
+  glTextureStorage2D(t.output, 1, GL_RGBA32F, width, height);
+  glCreateFramebuffers(1, &t.framebuffer);
+  glNamedFramebufferTexture(t.framebuffer, GL_COLOR_ATTACHMENT0, t.colour, 0);
+  glNamedFramebufferTexture(t.framebuffer, GL_DEPTH_ATTACHMENT, t.depth, 0);
+  t.width = width;
+  t.height = height;
 }
 
 double Scene::ground_height_m(const glm::dvec3& position) const {
@@ -86,53 +82,53 @@ const atmos::GlobeStats* Scene::globe_stats() const { return globe_ ? &globe_->l
 
 const atmos::PassTimings& Scene::pass_timings() const { return pass_->last_timings(); }
 
-GLuint Scene::render(const SceneFrame& f) {
-  ensure_targets(f.width, f.height);
-  const double fov = f.fov_deg * M_PI / 180.0;
-  const glm::dmat4 view = glm::lookAt(f.pose.position, f.pose.position + f.pose.forward, f.pose.up);
-  const glm::dmat4 projection = atmos::reversed_z_projection(fov, double(f.width) / double(f.height), kNearM);
+GLuint Scene::next_query() {
+  // The oldest query of the ring: issued kQueries - 1 frames ago.
+  GLuint query = queries_[size_t(query_next_)];
+  if (query_pending_[size_t(query_next_)]) {
+    GLint available = 0;
+    glGetQueryObjectiv(query, GL_QUERY_RESULT_AVAILABLE, &available);
+    if (available) {
+      GLuint64 ns = 0;
+      glGetQueryObjectui64v(query, GL_QUERY_RESULT, &ns);
+      terrain_ms_ = double(ns) * 1e-6;
+    }
+  }
+  query_pending_[size_t(query_next_)] = true;
+  query_next_ = (query_next_ + 1) % kQueries;
+  return query;
+}
 
+namespace {
+
+void clear(GLuint framebuffer) {
   const float clear_colour[4] = {0, 0, 0, 0};
   const float clear_depth = 0.0f;
-  glClearNamedFramebufferfv(framebuffer_, GL_COLOR, 0, clear_colour);
-  glClearNamedFramebufferfv(framebuffer_, GL_DEPTH, 0, &clear_depth);
-  if (globe_) {
-    // The oldest query of the ring: issued kQueries - 1 frames ago.
-    GLuint& query = queries_[size_t(query_next_)];
-    if (query_pending_[size_t(query_next_)]) {
-      GLint available = 0;
-      glGetQueryObjectiv(query, GL_QUERY_RESULT_AVAILABLE, &available);
-      if (available) {
-        GLuint64 ns = 0;
-        glGetQueryObjectui64v(query, GL_QUERY_RESULT, &ns);
-        terrain_ms_ = double(ns) * 1e-6;
-      }
-    }
-    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
-    glViewport(0, 0, f.width, f.height);
-    // The air lit by the ground around the camera, before the globe's draw
-    // (which lights its ground with the pass's sky light).
-    if (regional_albedo_) pass_->set_ground_albedo(globe_->regional_albedo(f.pose.position));
-    atmos::GlobeView gv;
-    gv.view = view;
-    gv.projection = projection;
-    gv.width = f.width;
-    gv.height = f.height;
-    gv.sun_direction = f.sun;
-    gv.nits_per_unit = kNitsPerUnit;
-    gv.moons = f.moons;
-    glBeginQuery(GL_TIME_ELAPSED, query);
-    globe_->draw(gv);
-    glEndQuery(GL_TIME_ELAPSED);
-    query_pending_[size_t(query_next_)] = true;
-    query_next_ = (query_next_ + 1) % kQueries;
-  }
+  glClearNamedFramebufferfv(framebuffer, GL_COLOR, 0, clear_colour);
+  glClearNamedFramebufferfv(framebuffer, GL_DEPTH, 0, &clear_depth);
+}
 
+atmos::GlobeView globe_view(const SceneFrame& f, const glm::dmat4& view, const glm::dmat4& projection, int width,
+                            int height) {
+  atmos::GlobeView gv;
+  gv.view = view;
+  gv.projection = projection;
+  gv.width = width;
+  gv.height = height;
+  gv.sun_direction = f.sun;
+  gv.nits_per_unit = Scene::kNitsPerUnit;
+  gv.moons = f.moons;
+  return gv;
+}
+
+}  // namespace
+
+GLuint Scene::composite(const SceneFrame& f, Targets& t, const glm::dmat4& view, const glm::dmat4& projection) {
   atmos::FrameInput input;
-  input.colour = colour_;
-  input.depth = depth_;
-  input.width = f.width;
-  input.height = f.height;
+  input.colour = t.colour;
+  input.depth = t.depth;
+  input.width = t.width;
+  input.height = t.height;
   input.depth_encoding = atmos::DepthEncoding::reversed_z;
   input.view = view;
   input.projection = projection;
@@ -141,8 +137,76 @@ GLuint Scene::render(const SceneFrame& f) {
   input.stars = f.stars;
   input.moons = f.moons;
   input.timed = f.timed;
-  input.output = output_;
+  input.output = t.output;
   return pass_->render(input);
+}
+
+GLuint Scene::render(const SceneFrame& f) {
+  Targets& t = targets_[0];
+  ensure_targets(t, f.width, f.height);
+  const double fov = f.fov_deg * M_PI / 180.0;
+  const glm::dmat4 view = glm::lookAt(f.pose.position, f.pose.position + f.pose.forward, f.pose.up);
+  const glm::dmat4 projection = atmos::reversed_z_projection(fov, double(f.width) / double(f.height), kNearM);
+  clear(t.framebuffer);
+  if (globe_) {
+    const GLuint query = next_query();
+    glBindFramebuffer(GL_FRAMEBUFFER, t.framebuffer);
+    glViewport(0, 0, f.width, f.height);
+    // The air lit by the ground around the camera, before the globe's draw
+    // (which lights its ground with the pass's sky light).
+    if (regional_albedo_) pass_->set_ground_albedo(globe_->regional_albedo(f.pose.position));
+    glBeginQuery(GL_TIME_ELAPSED, query);
+    globe_->draw(globe_view(f, view, projection, f.width, f.height));
+    glEndQuery(GL_TIME_ELAPSED);
+  }
+  return composite(f, t, view, projection);
+}
+
+std::array<GLuint, 2> Scene::render_eyes(const SceneFrame& f, const std::array<atmos::Eye, 2>& eyes) {
+  std::array<glm::dmat4, 2> views, projections;
+  for (size_t i = 0; i < 2; ++i) {
+    ensure_targets(targets_[i], f.width, f.height);
+    clear(targets_[i].framebuffer);
+    views[i] = atmos::view_matrix(eyes[i]);
+    projections[i] = atmos::reversed_z_projection(eyes[i].fov, kNearM);
+  }
+  if (globe_) {
+    // The tiles of both eyes from one frustum that holds both, at the
+    // eyes' finest pixel density (pixels per unit of tangent).
+    const atmos::Eye cover = atmos::covering_eye(eyes);
+    const auto span = [](double a, double b) { return std::tan(b) - std::tan(a); };
+    double per_tangent_x = 0.0, per_tangent_y = 0.0;
+    for (const atmos::Eye& e : eyes) {
+      per_tangent_x = std::max(per_tangent_x, f.width / span(e.fov.left_rad, e.fov.right_rad));
+      per_tangent_y = std::max(per_tangent_y, f.height / span(e.fov.down_rad, e.fov.up_rad));
+    }
+    const int lod_width = int(std::ceil(per_tangent_x * span(cover.fov.left_rad, cover.fov.right_rad)));
+    const int lod_height = int(std::ceil(per_tangent_y * span(cover.fov.down_rad, cover.fov.up_rad)));
+    const atmos::GlobeView lod = globe_view(f, atmos::view_matrix(cover),
+                                            atmos::reversed_z_projection(cover.fov, kNearM), lod_width, lod_height);
+    const std::vector<atmos::GlobeView> eye_views = {globe_view(f, views[0], projections[0], f.width, f.height),
+                                                     globe_view(f, views[1], projections[1], f.width, f.height)};
+    const GLuint query = next_query();
+    if (regional_albedo_) pass_->set_ground_albedo(globe_->regional_albedo(0.5 * (eyes[0].position + eyes[1].position)));
+    glBeginQuery(GL_TIME_ELAPSED, query);
+    globe_->draw_views(lod, eye_views,
+                       [this](std::size_t i) { glBindFramebuffer(GL_FRAMEBUFFER, targets_[i].framebuffer); });
+    glEndQuery(GL_TIME_ELAPSED);
+  }
+  return {composite(f, targets_[0], views[0], projections[0]), composite(f, targets_[1], views[1], projections[1])};
+}
+
+atmos::Image read_hdr(GLuint texture, int width, int height) {
+  atmos::Image image = atmos::read_linear_image(texture, width, height);
+  flip_rows(image.rgb, width, height);
+  for (float& v : image.rgb) v = float(double(v) * Scene::kNitsPerUnit);
+  return image;
+}
+
+atmos::DisplayImage read_display(GLuint texture, int width, int height) {
+  atmos::DisplayImage image = atmos::read_display_image(texture, width, height);
+  flip_rows(image.rgb, width, height);
+  return image;
 }
 
 }  // namespace atmos_view

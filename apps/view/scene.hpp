@@ -12,14 +12,19 @@
 
 #include <epoxy/gl.h>
 
+#include <algorithm>
 #include <array>
+#include <cstddef>
 #include <memory>
 #include <vector>
 
 #include "atmos/atmosphere.hpp"
 #include "atmos/eclipse.hpp"
 #include "atmos/globe.hpp"
+#include "atmos/image.hpp"
+#include "atmos/post.hpp"
 #include "atmos/plugin.hpp"
+#include "atmos/stereo.hpp"
 #include "atmos/tables.hpp"
 #include "flight.hpp"
 #include "state.hpp"
@@ -80,6 +85,20 @@ class Scene {
   // Draws the frame; returns the composited HDR texture (RGBA32F, valid
   // until the next render or the scene's destruction).
   GLuint render(const SceneFrame& frame);
+  // Draws the frame for two eyes, each frame.width x frame.height pixels
+  // through its own pose and four angles (frame.pose and fov_deg are not
+  // used): the globe's tiles chosen once for both, from the frustum that
+  // covers them (atmos::covering_eye, Globe::draw_views), then the pass in
+  // each eye, whose sky, sun and aerial perspective follow that eye's
+  // inverse projection. The regional albedo is taken at the eyes' midpoint.
+  // Returns each eye's composited HDR texture (as render()'s).
+  std::array<GLuint, 2> render_eyes(const SceneFrame& frame, const std::array<atmos::Eye, 2>& eyes);
+  // The reversed-Z depth of the last render (eye 0) or render_eyes (eye 0,
+  // 1): GL_DEPTH_COMPONENT32F, the globe's (0 where no ground was drawn).
+  GLuint depth_texture(int eye) const { return targets_[size_t(eye)].depth; }
+  // The projection's near plane, m (reversed-Z: depth = near / distance
+  // along the view axis).
+  static constexpr double kNearM = 0.05;
 
   // Height of the ground above the datum below a planet-centred position, m.
   double ground_height_m(const glm::dvec3& position) const;
@@ -96,8 +115,16 @@ class Scene {
   const atmos::PassTimings& pass_timings() const;
 
  private:
-  void ensure_targets(int width, int height);
-  void release_targets();
+  // An eye's render targets: the engine's colour and depth, the pass's output.
+  struct Targets {
+    int width = 0, height = 0;
+    GLuint colour = 0, depth = 0, output = 0, framebuffer = 0;
+  };
+  void ensure_targets(Targets& t, int width, int height);
+  void release_targets(Targets& t);
+  // Reads the oldest timer query of the ring, then times the next globe draw.
+  GLuint next_query();
+  GLuint composite(const SceneFrame& f, Targets& t, const glm::dmat4& view, const glm::dmat4& projection);
 
   PlanetParams params_;
   atmos::Atmosphere planet_;
@@ -110,8 +137,7 @@ class Scene {
   bool next_regional_albedo_ = false;
   std::unique_ptr<atmos::Globe> globe_;
   bool regional_albedo_requested_ = false, regional_albedo_ = false;
-  int width_ = 0, height_ = 0;
-  GLuint colour_ = 0, depth_ = 0, output_ = 0, framebuffer_ = 0;
+  std::array<Targets, 2> targets_;
   // A ring of timer queries: query i is read once the frame after next
   // has begun, when the GPU has long finished it.
   static constexpr int kQueries = 4;
@@ -120,5 +146,20 @@ class Scene {
   int query_next_ = 0;
   double terrain_ms_;
 };
+
+// Reverses the order of the rows of an RGB image (GL's rows are
+// bottom-up, atmos::Image's and DisplayImage's top-down).
+template <typename T>
+void flip_rows(std::vector<T>& rgb, int width, int height) {
+  const size_t row = size_t(width) * 3;
+  for (size_t y = 0; y < size_t(height) / 2; ++y)
+    std::swap_ranges(rgb.begin() + std::ptrdiff_t(y * row), rgb.begin() + std::ptrdiff_t((y + 1) * row),
+                     rgb.begin() + std::ptrdiff_t((size_t(height) - 1 - y) * row));
+}
+
+// A scene's HDR texture as an image in cd/m², rows top-down.
+atmos::Image read_hdr(GLuint texture, int width, int height);
+// An srgb8 texture (PostProcess's output) as a display image, rows top-down.
+atmos::DisplayImage read_display(GLuint texture, int width, int height);
 
 }  // namespace atmos_view

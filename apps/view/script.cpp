@@ -14,7 +14,7 @@ const std::vector<std::string>& slider_names() {
   static const std::vector<std::string> names = {
       "sun_elevation", "sun_azimuth",   "time_of_day",   "exposure_ev", "compensation_ev", "bloom",
       "fov_deg",       "moon_separation_deg", "density_scale", "ground_albedo", "wavelengths",     "orders",
-      "bottom_radius_km", "thickness_km"};
+      "bottom_radius_km", "thickness_km", "interpupillary_m", "convergence_m"};
   return names;
 }
 

@@ -28,8 +28,10 @@
 #include "atmos/planet_parameters.hpp"
 #include "atmos/post.hpp"
 #include "atmos/renderer.hpp"
+#include "atmos/stereo.hpp"
 #include "scene.hpp"
 #include "script.hpp"
+#include "xr.hpp"
 
 namespace atmos_view {
 
@@ -130,31 +132,6 @@ atmos::PostSettings post_settings(const LookSettings& look) {
   s.auto_exposure.enabled = look.auto_exposure;
   s.auto_exposure.compensation_ev = look.compensation_ev;
   return s;
-}
-
-// Reverses the order of the rows of an RGB image (GL's rows are
-// bottom-up, atmos::Image's and DisplayImage's top-down).
-template <typename T>
-void flip_rows(std::vector<T>& rgb, int width, int height) {
-  const size_t row = size_t(width) * 3;
-  for (size_t y = 0; y < size_t(height) / 2; ++y)
-    std::swap_ranges(rgb.begin() + std::ptrdiff_t(y * row), rgb.begin() + std::ptrdiff_t((y + 1) * row),
-                     rgb.begin() + std::ptrdiff_t((size_t(height) - 1 - y) * row));
-}
-
-// The scene's HDR texture as an image in cd/m², rows top-down.
-atmos::Image read_hdr(GLuint texture, int width, int height) {
-  atmos::Image image = atmos::read_linear_image(texture, width, height);
-  flip_rows(image.rgb, width, height);
-  for (float& v : image.rgb) v = float(double(v) * Scene::kNitsPerUnit);
-  return image;
-}
-
-// An srgb8 texture (PostProcess's output) as a display image, rows top-down.
-atmos::DisplayImage read_display(GLuint texture, int width, int height) {
-  atmos::DisplayImage image = atmos::read_display_image(texture, width, height);
-  flip_rows(image.rgb, width, height);
-  return image;
 }
 
 // The slider of a planet parameter as planet_parameters() describes it: its
@@ -307,8 +284,15 @@ class Viewer {
   void progress_bar();
   void write_screenshot(const std::string& path, GLuint hdr, int width, int height);
 
+  // The frame's HDR image: the scene's, or its two eyes' in the stereo
+  // layout; its width (twice an eye's side by side).
+  GLuint render_frame(SceneFrame& sf, int width, int height, int& image_width);
+  void stereo_panel();
+
   const ViewOptions& o_;
   std::unique_ptr<Scene> scene_;
+  StereoSettings stereo_;
+  std::unique_ptr<StereoComposer> composer_;
   std::unique_ptr<atmos::PostProcess> post_;
   std::unique_ptr<TableJob> job_;
   std::unique_ptr<Flight> flight_;
@@ -413,6 +397,8 @@ double Viewer::slider_value(const std::string& name) const {
   if (name == "compensation_ev") return look_.compensation_ev;
   if (name == "bloom") return look_.bloom;
   if (name == "fov_deg") return look_.fov_deg;
+  if (name == "interpupillary_m") return stereo_.interpupillary_m;
+  if (name == "convergence_m") return stereo_.convergence_m;
   if (name == "moon_separation_deg") return look_.moon_separation_deg;
   if (name == "density_scale") return edited_.density_scale;
   if (name == "ground_albedo") return edited_.ground_albedo.value_or(a.ground_albedo.at(550.0));
@@ -433,6 +419,8 @@ void Viewer::set_slider(const std::string& name, double v) {
   if (name == "compensation_ev") look_.compensation_ev = std::clamp(v, -10.0, 10.0);
   if (name == "bloom") look_.bloom = std::clamp(v, 0.0, 1.0);
   if (name == "fov_deg") look_.fov_deg = std::clamp(v, 5.0, 120.0);
+  if (name == "interpupillary_m") stereo_.interpupillary_m = std::clamp(v, 1e-3, 1e7);
+  if (name == "convergence_m") stereo_.convergence_m = std::max(v, 0.1);
   if (name == "moon_separation_deg") look_.moon_separation_deg = std::clamp(v, 0.0, 10.0);
   if (name == "density_scale") edited_.density_scale = v;
   if (name == "ground_albedo") edited_.ground_albedo = v;
@@ -527,6 +515,8 @@ void Viewer::panel() {
     float fov = float(look_.fov_deg);
     if (ImGui::SliderFloat("field of view", &fov, 5.0f, 120.0f, "%.1f deg")) set_slider("fov_deg", double(fov));
   }
+
+  stereo_panel();
 
   // The sun and the sky.
   if (ImGui::CollapsingHeader("Sun and sky", ImGuiTreeNodeFlags_DefaultOpen)) {
@@ -626,6 +616,49 @@ void Viewer::panel() {
       ImGui::TextUnformatted(message_.c_str());
   }
   ImGui::End();
+}
+
+// Stereo: the layout, the eyes' distance and the distance of zero
+// disparity (the screen's plane), each with its unit and range (those of
+// atmos view's --ipd and --convergence; Ctrl+click types a value).
+void Viewer::stereo_panel() {
+  if (!ImGui::CollapsingHeader("Stereo", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  const char* modes[] = {"none", "side by side", "anaglyph (red-cyan)"};
+  int mode = int(stereo_.mode);
+  if (ImGui::Combo("stereo", &mode, modes, 3)) stereo_.mode = StereoSettings::Mode(mode);
+  if (stereo_.mode == StereoSettings::Mode::none) return;
+  float ipd = float(stereo_.interpupillary_m);
+  if (ImGui::SliderFloat("eye distance", &ipd, 0.001f, 1e5f, "%.4g m", ImGuiSliderFlags_Logarithmic))
+    set_slider("interpupillary_m", double(ipd));
+  float convergence = float(std::min(stereo_.convergence_m, 1e7));
+  if (ImGui::SliderFloat("convergence", &convergence, 0.1f, 1e7f, "%.4g m", ImGuiSliderFlags_Logarithmic))
+    set_slider("convergence_m", double(convergence));
+  // A point at infinity: ipd / convergence in tangent units (stereo.hpp).
+  ImGui::TextDisabled("sky disparity %.1f px", stereo_.interpupillary_m / stereo_.convergence_m *
+                                                   ImGui::GetIO().DisplaySize.y /
+                                                   (2.0 * std::tan(0.5 * look_.fov_deg * kDegree)));
+}
+
+GLuint Viewer::render_frame(SceneFrame& sf, int width, int height, int& image_width) {
+  image_width = width;
+  if (stereo_.mode == StereoSettings::Mode::none) return scene_->render(sf);
+  const bool side_by_side = stereo_.mode == StereoSettings::Mode::side_by_side;
+  const int eye_width = side_by_side ? std::max(1, width / 2) : width;
+  atmos::Camera head;
+  head.position = sf.pose.position;
+  head.forward = sf.pose.forward;
+  head.up = sf.pose.up;
+  head.fov_deg = sf.fov_deg;
+  head.width = eye_width;
+  head.height = height;
+  const std::array<atmos::Eye, 2> eyes =
+      atmos::stereo_eyes(head, {stereo_.interpupillary_m, stereo_.convergence_m});
+  sf.width = eye_width;
+  const std::array<GLuint, 2> hdr = scene_->render_eyes(sf, eyes);
+  if (!composer_) composer_ = std::make_unique<StereoComposer>();
+  image_width = side_by_side ? 2 * eye_width : eye_width;
+  return composer_->compose(side_by_side ? StereoComposer::Layout::side_by_side : StereoComposer::Layout::anaglyph,
+                            hdr[0], hdr[1], eye_width, height);
 }
 
 // One tree node per constituent of the planet on screen: its scattering
@@ -767,6 +800,7 @@ int Viewer::run() {
       v.job_.reset();
       v.scene_.reset();
       v.post_.reset();
+      v.composer_.reset();
     }
   } release{*this};
 
@@ -803,6 +837,7 @@ int Viewer::run() {
   post_ = std::make_unique<atmos::PostProcess>();
   edited_ = o_.planet;
   look_ = o_.look;
+  stereo_ = o_.stereo;
   flight_ = std::make_unique<Flight>(scene_->bottom_radius_m());
   flight_->place(o_.latitude_deg, o_.longitude_deg, o_.altitude_m, o_.heading_deg, o_.pitch_deg, ground());
   sun_ = sun_from_angles(flight_->position(), o_.sun_azimuth_deg, o_.sun_elevation_deg);
@@ -920,7 +955,8 @@ int Viewer::run() {
       sf.stars = look_.stars || glm::dot(sun_, glm::normalize(sf.pose.position)) < 0.0;
       sf.moons = place_moons(look_, sf.pose.position, sun_, scene_->top_radius_m(), moon_of_date_);
       sf.timed = timed_;
-      hdr = scene_->render(sf);
+      int image_width = width;
+      hdr = render_frame(sf, width, height, image_width);
       {
         std::lock_guard<std::mutex> lock(warm_mutex_);
         warm_frame_ = sf;
@@ -928,7 +964,7 @@ int Viewer::run() {
       }
       atmos::PostInput pin;
       pin.colour = hdr;
-      pin.width = width;
+      pin.width = image_width;
       pin.height = height;
       pin.nits_per_unit = Scene::kNitsPerUnit;
       pin.dt_s = frame == 0 ? 0.0 : (script ? kScriptStepS : dt);
@@ -936,14 +972,20 @@ int Viewer::run() {
       const GLuint ldr = post_->process(pin, post_settings(look_));
       glNamedFramebufferTexture(blit, GL_COLOR_ATTACHMENT0, ldr, 0);
       glBindFramebuffer(GL_FRAMEBUFFER, 0);
-      glBlitNamedFramebuffer(blit, 0, 0, 0, width, height, 0, 0, width, height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+      if (image_width != width) {
+        const float black[4] = {0, 0, 0, 1};
+        glClearNamedFramebufferfv(0, GL_COLOR, 0, black);
+      }
+      glBlitNamedFramebuffer(blit, 0, 0, 0, image_width, height, 0, 0, image_width, height, GL_COLOR_BUFFER_BIT,
+                             GL_NEAREST);
       glViewport(0, 0, width, height);
       ImGui::Render();
       ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
       const bool last =
           frames > 0 && frame >= frames - 1 && !(script && (awaiting_tables_ || frame + 1 < settle_until));
       if (last)
-        for (const std::string& path : o_.screenshots) write_screenshot(path, hdr, width, height);
+        for (const std::string& path : o_.screenshots)
+          write_screenshot(path, hdr, has_extension(path, ".exr") ? image_width : width, height);
 
       FrameRecord fr;
       fr.time_s = script ? frame * kScriptStepS : frame_start - start_s_;
@@ -1057,6 +1099,80 @@ int run_replay(const ViewOptions& o) {
     previous_time = f.time_s;
   }
   std::printf("replayed %zu frames into %s\n", record.frames.size(), o.output_dir.c_str());
+  post.reset();
+  scene.reset();
+  return 0;
+}
+
+int run_headset(const ViewOptions& o) {
+  const double run_start_s = now_s();
+  // The provider first: no runtime, no headset or a bad mock file fail now,
+  // before any window, context or tables.
+  std::unique_ptr<OpenXrProvider> xr;
+  std::unique_ptr<MockViewProvider> mock;
+  if (o.xr)
+    xr = make_openxr_provider();
+  else
+    mock = std::make_unique<MockViewProvider>(MockViewProvider::read(o.xr_mock));
+  ViewProvider& provider = xr ? static_cast<ViewProvider&>(*xr) : *mock;
+  (void)make_atmosphere(o.planet);
+  if (o.globe) (void)atmos::load_surface(o.planet.planet);
+
+  // OpenXR binds its session to a GLX context: a hidden window's. The mock
+  // draws headless.
+  std::unique_ptr<Window> window;
+  std::unique_ptr<atmos::GlContext> context;
+  if (xr) {
+    window = std::make_unique<Window>(64, 64, false);
+    xr->start();
+  } else {
+    context = atmos::GlContext::create_headless();
+  }
+  const bool regional = o.globe && !o.planet_albedo;
+  const PlanetTables tables = load_planet_tables(o.planet, o.globe, regional, o.cache);
+  std::printf("tables: %s in %.2f s\n", tables.status.c_str(), tables.seconds);
+  // The mock's images do not depend on the machine's speed: every tile is
+  // built before it is drawn. A headset streams them.
+  auto scene = std::make_unique<Scene>(tables, o.globe, regional, mock != nullptr);
+  auto post = std::make_unique<atmos::PostProcess>();
+  Flight flight(scene->bottom_radius_m());
+  const Flight::GroundHeight ground = [&scene](const glm::dvec3& p) { return scene->ground_height_m(p); };
+  flight.place(o.latitude_deg, o.longitude_deg, o.altitude_m, o.heading_deg, o.pitch_deg, ground);
+  SceneFrame sf;
+  sf.pose = flight.pose();
+  sf.sun = sun_from_angles(flight.position(), o.sun_azimuth_deg, o.sun_elevation_deg);
+  sf.stars = o.look.stars || glm::dot(sf.sun, glm::normalize(sf.pose.position)) < 0.0;
+  std::optional<glm::dvec3> moon_of_date;
+  if (o.moon_of_date_m) moon_of_date = glm::normalize(flight.position()) * scene->bottom_radius_m() + *o.moon_of_date_m;
+  sf.moons = place_moons(o.look, sf.pose.position, sf.sun, scene->top_radius_m(), moon_of_date);
+
+  HeadsetRenderer headset;
+  std::vector<double> ms;
+  double previous = now_s();
+  int frames = 0;
+  while (o.frames == 0 || frames < o.frames) {
+    const double start = now_s();
+    if (!headset.frame(provider, *scene, *post, sf, post_settings(o.look), frames == 0 ? 0.0 : start - previous))
+      break;
+    glFinish();
+    previous = start;
+    ms.push_back((now_s() - start) * 1e3);
+    if (frames == 0) std::printf("first frame: %.2f s after the start\n", now_s() - run_start_s);
+    ++frames;
+  }
+  std::vector<double> steady(ms.size() > 1 ? ms.begin() + 1 : ms.end(), ms.end());
+  std::printf("headset: %d frames of %dx%d per eye, median %.1f ms\n", frames, provider.eye_width(),
+              provider.eye_height(), median(steady));
+  if (mock && mock->frames_ended() > 0) {
+    std::filesystem::create_directories(o.output_dir);
+    const char* names[] = {"eye-left", "eye-right"};
+    for (int i = 0; i < 2; ++i) {
+      const std::filesystem::path base = std::filesystem::path(o.output_dir) / names[i];
+      if (o.frame_format != "png") atmos::write_exr(mock->hdr(i), base.string() + ".exr");
+      if (o.frame_format != "exr") atmos::write_png(mock->display(i), base.string() + ".png");
+    }
+    std::printf("eyes: %s/eye-left, eye-right\n", o.output_dir.c_str());
+  }
   post.reset();
   scene.reset();
   return 0;

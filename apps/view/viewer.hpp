@@ -11,6 +11,16 @@
 
 namespace atmos_view {
 
+// Stereo in the window: each eye through its own off-axis frustum
+// (atmos::stereo_eyes), the two images side by side (each eye half the
+// window's width) or as a red-cyan anaglyph.
+struct StereoSettings {
+  enum class Mode { none, side_by_side, anaglyph };
+  Mode mode = Mode::none;
+  double interpupillary_m = 0.064;  // (0, 1e7]
+  double convergence_m = 10.0;      // > 0, may be infinite
+};
+
 struct ViewOptions {
   PlanetParams planet;
   CacheConfig cache;
@@ -35,6 +45,9 @@ struct ViewOptions {
   std::string replay;      // a recorded flight to replay headless
   std::string output_dir;  // the replay's frames
   std::string frame_format = "png";  // the replay's: png, exr or both
+  StereoSettings stereo;
+  bool xr = false;      // draw for an OpenXR headset (xr.hpp) instead of the window
+  std::string xr_mock;  // draw for the mock headset of this file, headless, its eyes into output_dir
 };
 
 // The viewer's window until it is closed (or `frames` are drawn). Throws
@@ -42,5 +55,11 @@ struct ViewOptions {
 int run_viewer(const ViewOptions& options);
 // Replays options.replay headless into options.output_dir.
 int run_replay(const ViewOptions& options);
+// Draws for a headset (options.xr: OpenXR's, which fails with atmos::Error
+// before any window opens when no runtime or headset is there;
+// options.xr_mock: the mock's, headless, each eye's last image written to
+// options.output_dir as eye-left and eye-right .png/.exr) until its session
+// ends or options.frames are drawn.
+int run_headset(const ViewOptions& options);
 
 }  // namespace atmos_view

@@ -54,6 +54,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -135,6 +136,7 @@ struct GlobeStats {
   int tiles_queued = 0;     // after the draw: requests the background thread has yet to build
   int tiles_ready = 0;      // after the draw: tiles built and waiting for an upload (CPU memory)
   int nodes_visited = 0;    // quadtree nodes visited by the selection
+  int view_selections = 0;  // the view's selections this draw: 1, for all the views of draw_views too
   long long triangles = 0;  // drawn, skirts included
   double selection_ms = 0.0;   // CPU: the quadtree traversal and culling
   // CPU time of draw()'s thread for new tiles: their requests and uploads,
@@ -195,6 +197,21 @@ class Globe {
   // a zero sun direction, invalid moons (validate_moons), or, with
   // shadows, a projection that is not a perspective one.
   void draw(const GlobeView& view);
+
+  // Several views of one frame with one level of detail (the two eyes of a
+  // stereo pair or a headset): the tiles are selected, streamed and their
+  // shadow maps drawn once, for `lod_view`, whose frustum must hold every
+  // view's (atmos::covering_eye, stereo.hpp) and whose height sets the
+  // screen-space error (at least the views' pixels per unit of tangent);
+  // then each of `views` is drawn with that one mesh, placed relative to
+  // lod_view's position (the same morphs, so the same geometry, in every
+  // view), after bind_target(i) has bound views[i]'s framebuffer (empty:
+  // all into the bound one). The sun, the moons and the light are
+  // lod_view's; views[i] gives only its view, projection and viewport.
+  // last_stats() holds the one selection and the triangles of all views.
+  // Throws atmos::Error as draw() for lod_view or any of the views.
+  void draw_views(const GlobeView& lod_view, const std::vector<GlobeView>& views,
+                  const std::function<void(std::size_t)>& bind_target);
 
   // Height of the drawn surface's relief above the datum, metres, below the
   // world position `position` (engine units): what a camera must stay above.

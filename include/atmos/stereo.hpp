@@ -70,6 +70,19 @@ std::array<Eye, 2> stereo_eyes(const Camera& head, const StereoRig& rig);
 // 1e-6 of it, or on an invalid field of view.
 Camera eye_camera(const Eye& eye, int width, int height);
 
+// One eye whose frustum holds both eyes' frusta: the culling and
+// level-of-detail view of an engine that selects its geometry once for the
+// pair (Globe::draw_views). Its axes are the mean of the eyes' (they may be
+// canted, as a headset's displays), its four angles bound every corner ray
+// of both frusta, and its apex lies on the axis behind the eyes' midpoint,
+// by the least distance d for which each eye lies inside its frustum (an
+// eye at lateral offset x from the midpoint and z along the axis is inside
+// when tan left (z + d) <= x <= tan right (z + d), likewise vertically):
+// about the half baseline over the tangent of the outer half-angle, 2.7 cm
+// for 64 mm eyes and a 100 degree field. Throws atmos::Error on an invalid
+// eye or eyes whose views do not share a hemisphere.
+Eye covering_eye(const std::array<Eye, 2>& eyes);
+
 // The engine's matrices of an eye: world -> view (rigid; the view looks
 // along -z with y up, as glm::lookAt), and view -> clip from the four angles
 // in OpenGL's depth convention (glm::frustum: -1 at `near`, 1 at `far`) or

@@ -123,6 +123,64 @@ Camera eye_camera(const Eye& eye, int width, int height) {
   return camera;
 }
 
+Eye covering_eye(const std::array<Eye, 2>& eyes) {
+  glm::dvec3 forwards[2], ups[2];
+  for (size_t i = 0; i < 2; ++i) {
+    const Eye& e = eyes[i];
+    validate_fov(e.fov, "covering_eye");
+    if (!(glm::length(glm::cross(glm::normalize(e.forward), glm::normalize(e.up))) > 1e-6) ||
+        !std::isfinite(glm::length(e.position)))
+      throw Error("covering_eye: an eye's position is not finite or its forward and up are zero or parallel");
+    forwards[i] = glm::normalize(e.forward);
+    ups[i] = glm::normalize(e.up);
+  }
+  Eye cover;
+  const glm::dvec3 sum = forwards[0] + forwards[1];
+  if (!(glm::dot(forwards[0], forwards[1]) > 0.0)) throw Error("covering_eye: the eyes look more than 90 degrees apart");
+  const glm::dvec3 forward = glm::normalize(sum);
+  const glm::dvec3 right = glm::normalize(glm::cross(forward, ups[0] + ups[1]));
+  const glm::dvec3 up = glm::cross(right, forward);
+  // The frusta's corner rays in the covering basis: the tangents' bounds.
+  Tangents bound{INFINITY, -INFINITY, INFINITY, -INFINITY};
+  for (size_t i = 0; i < 2; ++i) {
+    const Tangents t = tangents(eyes[i].fov);
+    const glm::dvec3 f = forwards[i], r = glm::normalize(glm::cross(f, ups[i])), u = glm::cross(r, f);
+    for (double x : {t.left, t.right})
+      for (double y : {t.down, t.up}) {
+        const glm::dvec3 ray = f + r * x + u * y;
+        const double z = glm::dot(ray, forward);
+        if (!(z > 1e-9)) throw Error("covering_eye: an eye's frustum reaches behind the mean view axis");
+        bound.left = std::min(bound.left, glm::dot(ray, right) / z);
+        bound.right = std::max(bound.right, glm::dot(ray, right) / z);
+        bound.down = std::min(bound.down, glm::dot(ray, up) / z);
+        bound.up = std::max(bound.up, glm::dot(ray, up) / z);
+      }
+  }
+  // An eye off the axis on a side the bounds do not reach needs them to:
+  // a small margin, then the apex far enough back.
+  const glm::dvec3 middle = 0.5 * (eyes[0].position + eyes[1].position);
+  constexpr double kMargin = 1e-3;
+  double back = 0.0;
+  for (const Eye& e : eyes) {
+    const glm::dvec3 d = e.position - middle;
+    const double x = glm::dot(d, right), y = glm::dot(d, up), z = glm::dot(d, forward);
+    if (x < 0.0) bound.left = std::min(bound.left, -kMargin);
+    if (x > 0.0) bound.right = std::max(bound.right, kMargin);
+    if (y < 0.0) bound.down = std::min(bound.down, -kMargin);
+    if (y > 0.0) bound.up = std::max(bound.up, kMargin);
+    back = std::max(back, -z);
+    if (x < 0.0) back = std::max(back, x / bound.left - z);
+    if (x > 0.0) back = std::max(back, x / bound.right - z);
+    if (y < 0.0) back = std::max(back, y / bound.down - z);
+    if (y > 0.0) back = std::max(back, y / bound.up - z);
+  }
+  cover.position = middle - forward * back;
+  cover.forward = forward;
+  cover.up = up;
+  cover.fov = fov_of(bound);
+  return cover;
+}
+
 glm::dmat4 view_matrix(const Eye& eye) {
   if (!(glm::length(glm::cross(glm::normalize(eye.forward), glm::normalize(eye.up))) > 1e-6))
     throw Error("view_matrix: the eye's forward and up are zero, not finite or parallel");

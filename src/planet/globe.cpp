@@ -15,6 +15,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <map>
 #include <set>
@@ -697,27 +698,34 @@ void Globe::rebind(const Atmosphere& atmosphere, const AtmospherePass& pass) {
   p.sun_angular_radius_rad = atmosphere.sun_angular_radius_rad;
 }
 
-void Globe::draw(const GlobeView& view) {
+void Globe::draw(const GlobeView& view) { draw_views(view, {}, {}); }
+
+void Globe::draw_views(const GlobeView& view, const std::vector<GlobeView>& eye_views,
+                       const std::function<void(std::size_t)>& bind_target) {
   Impl& p = *impl_;
   const PlanetFrame& frame = p.pass->frame();
   // --- Validation, before any state change. ---
-  if (view.width < 1 || view.height < 1) throw Error("globe view: empty viewport");
-  if (!planet::finite(view.view) || !planet::finite(view.projection))
-    throw Error("globe view: non-finite view or projection matrix");
-  if (!std::isfinite(glm::determinant(view.view)) || std::abs(glm::determinant(view.view)) < 1e-12)
-    throw Error("globe view: singular view matrix");
-  if (!(std::abs(view.projection[1][1]) > 0.0)) throw Error("globe view: degenerate projection");
+  const auto check_matrices = [&p](const GlobeView& v) {
+    if (v.width < 1 || v.height < 1) throw Error("globe view: empty viewport");
+    if (!planet::finite(v.view) || !planet::finite(v.projection))
+      throw Error("globe view: non-finite view or projection matrix");
+    if (!std::isfinite(glm::determinant(v.view)) || std::abs(glm::determinant(v.view)) < 1e-12)
+      throw Error("globe view: singular view matrix");
+    if (!(std::abs(v.projection[1][1]) > 0.0)) throw Error("globe view: degenerate projection");
+    // The cascades slice a perspective frustum: w_clip = c x (distance along
+    // the view axis), c > 0, and x_clip, y_clip independent of w.
+    if (p.shadows && !(v.projection[2][3] < 0.0 && v.projection[0][3] == 0.0 && v.projection[1][3] == 0.0 &&
+                       v.projection[3][3] == 0.0 && std::abs(v.projection[0][0]) > 0.0))
+      throw Error("globe view: shadows need a perspective projection (w_clip proportional to the view depth)");
+  };
+  check_matrices(view);
+  for (const GlobeView& v : eye_views) check_matrices(v);
   const double sun_length = glm::length(view.sun_direction);
   if (!(sun_length > 0.0) || !std::isfinite(sun_length)) throw Error("globe view: zero or non-finite sun direction");
   if (!(view.nits_per_unit > 0.0) || !std::isfinite(view.nits_per_unit))
     throw Error("globe view: nits_per_unit must be positive");
   if (!(view.sun_illuminance_lux >= 0.0) || !std::isfinite(view.sun_illuminance_lux))
     throw Error("globe view: sun_illuminance_lux must be >= 0");
-  // The cascades slice a perspective frustum: w_clip = c x (distance along
-  // the view axis), c > 0, and x_clip, y_clip independent of w.
-  if (p.shadows && !(view.projection[2][3] < 0.0 && view.projection[0][3] == 0.0 && view.projection[1][3] == 0.0 &&
-                     view.projection[3][3] == 0.0 && std::abs(view.projection[0][0]) > 0.0))
-    throw Error("globe view: shadows need a perspective projection (w_clip proportional to the view depth)");
   // Moons that may hide part of the sun from some ground point select the
   // eclipse's variant; others change nothing (as in AtmospherePass).
   bool eclipse = false;
@@ -761,6 +769,7 @@ void Globe::draw(const GlobeView& view) {
   const planet::Selection selection =
       planet::select_tiles(lod_camera, lod_settings, p.builder.bounds(), known_range);
   GlobeStats stats;
+  stats.view_selections = 1;
   stats.selection_ms = ms_since(t0);
   stats.nodes_visited = selection.nodes_visited;
 
@@ -831,17 +840,12 @@ void Globe::draw(const GlobeView& view) {
   // planet; a clip transform whose x, y and w rows have a positive
   // determinant mirrors the image (the usual perspective's is negative:
   // -P00 P11 times the rotation's 1), and the front face is then clockwise.
-  const glm::dmat3 clip_xyw(glm::dvec3(clip_from_offset[0][0], clip_from_offset[0][1], clip_from_offset[0][3]),
-                            glm::dvec3(clip_from_offset[1][0], clip_from_offset[1][1], clip_from_offset[1][3]),
-                            glm::dvec3(clip_from_offset[2][0], clip_from_offset[2][1], clip_from_offset[2][3]));
   GLint engine_front_face = GL_CCW, engine_cull_face = GL_BACK;
   glGetIntegerv(GL_FRONT_FACE, &engine_front_face);
   glGetIntegerv(GL_CULL_FACE_MODE, &engine_cull_face);
-  glFrontFace(glm::determinant(clip_xyw) < 0.0 ? GL_CCW : GL_CW);
   glCullFace(GL_BACK);
   glEnable(GL_CULL_FACE);
   glDisable(GL_BLEND);
-  glViewport(0, 0, view.width, view.height);
   TileProgram* lit = shadowed ? &p.shadows->lit : &p.program;
   if (eclipse) {
     lit = &p.eclipse_programs[shadowed ? 1 : 0];
@@ -851,8 +855,6 @@ void Globe::draw(const GlobeView& view) {
   glUseProgram(program.id);
   glBindVertexArray(p.vertex_array);
   p.pass->bind_textures(p.settings.first_unit);
-  const glm::mat4 clip_f(clip_from_offset);
-  glUniformMatrix4fv(program.clip, 1, GL_FALSE, glm::value_ptr(clip_f));
   glUniform3f(program.camera, float(camera.x), float(camera.y), float(camera.z));
   glUniform3f(program.sun, float(sun.x), float(sun.y), float(sun.z));
   const double lux_scale = view.sun_illuminance_lux > 0.0 ? view.sun_illuminance_lux / p.pass->sun_illuminance_lux() : 1.0;
@@ -877,8 +879,6 @@ void Globe::draw(const GlobeView& view) {
     glUniform1fv(program.blend, n, blend.data());
     glUniform1fv(program.texel, n, texel.data());
     glUniform1fv(program.depth_per_m, n, depth_per_m.data());
-    const glm::dvec3 forward = -glm::dvec3(rotation[0][2], rotation[1][2], rotation[2][2]);
-    glUniform3f(program.forward, float(forward.x), float(forward.y), float(forward.z));
     glBindTextureUnit(GLuint(p.settings.first_unit + 5), s.maps);
     glBindSampler(GLuint(p.settings.first_unit + 5), s.sampler);
   }
@@ -891,7 +891,35 @@ void Globe::draw(const GlobeView& view) {
     glUniform4fv(program.moon_spheres, kMaxMoons, glm::value_ptr(spheres[0]));
   }
 
-  stats.triangles = p.draw_tiles(draws, program, camera);
+  // Each view with the one selection: draw()'s view, or each of draw_views'
+  // views, whose tiles are placed relative to the selection's camera
+  // (morphs and lighting by the same offsets in every view) and carried to
+  // the view's own eye: view x world = R (offset + camera - eye) in metres.
+  const std::size_t view_count = eye_views.empty() ? 1 : eye_views.size();
+  for (std::size_t i = 0; i < view_count; ++i) {
+    const GlobeView& v = eye_views.empty() ? view : eye_views[i];
+    glm::dmat4 view_rotation = rotation, clip = clip_from_offset;
+    if (!eye_views.empty()) {
+      const glm::dvec3 eye = (glm::dvec3(glm::inverse(v.view)[3]) - frame.centre) / frame.units_per_metre;
+      view_rotation = v.view;
+      view_rotation[3] = glm::dvec4(0.0, 0.0, 0.0, 1.0);
+      clip = v.projection * view_rotation * glm::scale(glm::dmat4(1.0), glm::dvec3(frame.units_per_metre)) *
+             glm::translate(glm::dmat4(1.0), camera - eye);
+    }
+    if (bind_target) bind_target(i);
+    const glm::dmat3 clip_xyw(glm::dvec3(clip[0][0], clip[0][1], clip[0][3]),
+                              glm::dvec3(clip[1][0], clip[1][1], clip[1][3]),
+                              glm::dvec3(clip[2][0], clip[2][1], clip[2][3]));
+    glFrontFace(glm::determinant(clip_xyw) < 0.0 ? GL_CCW : GL_CW);
+    glViewport(0, 0, v.width, v.height);
+    const glm::mat4 clip_f(clip);
+    glUniformMatrix4fv(program.clip, 1, GL_FALSE, glm::value_ptr(clip_f));
+    if (shadowed) {
+      const glm::dvec3 forward = -glm::dvec3(view_rotation[0][2], view_rotation[1][2], view_rotation[2][2]);
+      glUniform3f(program.forward, float(forward.x), float(forward.y), float(forward.z));
+    }
+    stats.triangles += p.draw_tiles(draws, program, camera);
+  }
   glDisable(GL_CULL_FACE);
   glFrontFace(GLenum(engine_front_face));
   glCullFace(GLenum(engine_cull_face));
