@@ -14,8 +14,10 @@
 
 #include "cli_support.hpp"
 #include "png_decoder.hpp"
+#include "sun_disc.hpp"
 #include "atmos/image.hpp"
 #include "atmos/planet_file.hpp"
+#include <glm/vec2.hpp>
 #include <nlohmann/json.hpp>
 #include <algorithm>
 
@@ -449,6 +451,76 @@ TEST(ViewCli, TablesOverTheSameGroundRebindTheGlobe) {
   // The frames from the swap on: the new pass's, the rebind's and five more.
   EXPECT_EQ(figure(r.out, "swap: "), 7.0) << r.out;
   std::printf("swap over the globe: max/median frame time %.2f\n", ratio);
+}
+
+// The centre of the sun's disc in one channel of a linear image (cd/m²).
+glm::dvec2 channel_disc_centre(const atmos::Image& image, int channel) {
+  std::vector<double> values(size_t(image.width) * size_t(image.height));
+  for (size_t i = 0; i < values.size(); ++i) values[i] = image.rgb[3 * i + size_t(channel)];
+  return atmos_test::disc_centre(values, image.width, image.height);
+}
+
+// The window in red-cyan stereo over the globe: the sun ahead, 5° up,
+// falls in the left eye's image (the red channel) and the right eye's
+// (green) ipd / convergence apart in tangent units, 0.01 m / 2 m x 2062 px
+// per unit of tangent (180 px over 5°, where the disc is 19 px across):
+// 10.31 px, at the same height. The PNG is the window as shown, with the
+// panel's Stereo section.
+TEST(ViewCli, AnaglyphPutsEachEyesSunWhereItsFrustumDoes) {
+  SKIP_WITHOUT_VIEWER();
+  const fs::path png = scratch() / "anaglyph.png", exr = scratch() / "anaglyph.exr";
+  const CliRun r = view("--frames 2 --stereo anaglyph --ipd 0.01 --convergence 2 --fov 5 --pitch 5 "
+                        "--sun-azimuth 90 --sun-elevation 5 --screenshot " + png.string() + " --screenshot " +
+                        exr.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_TRUE(fs::exists(png)) << r.out;
+  const atmos::Image image = atmos::read_exr(exr.string());
+  ASSERT_EQ(image.width, 320);
+  ASSERT_EQ(image.height, 180);
+  const glm::dvec2 left = channel_disc_centre(image, 0), right = channel_disc_centre(image, 1);
+  const double expected = 0.01 / 2.0 * 180.0 / (2.0 * std::tan(2.5 * M_PI / 180.0));
+  std::printf("anaglyph: the sun at (%.3f, %.3f) in the left eye, (%.3f, %.3f) in the right: disparity %.3f px "
+              "(expected %.3f)\n", left.x, left.y, right.x, right.y, right.x - left.x, expected);
+  // The red and the green discs of a sun 5° up are reddened unevenly across
+  // them by the air: their centroids differ by hundredths of a pixel.
+  EXPECT_NEAR(right.x - left.x, expected, 0.15);
+  EXPECT_NEAR(right.y, left.y, 0.1);
+  const CliRun bad = view("--frames 1 --stereo anaglyph --convergence 0", false);
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("--convergence must be > 0"), std::string::npos) << bad.err;
+}
+
+// atmos view --xr without an OpenXR runtime: a one-line error before any
+// window opens (built without OpenXR: that it was). The mock headset goes
+// the same way, headless, and writes each eye.
+TEST(ViewCli, HeadsetsWithoutARuntimeAndTheMock) {
+  SKIP_WITHOUT_VIEWER();
+  CliRun r = atmos_test::run_cli(scratch(), "view --xr --frames 1" + kSmall, "", "env -u XR_RUNTIME_JSON");
+  EXPECT_EQ(r.code, 1) << r.out;
+  const bool openxr = r.err.find("built without OpenXR") == std::string::npos;
+  if (openxr) {
+    EXPECT_NE(r.err.find("no OpenXR runtime is installed/active (XR_ERROR_"), std::string::npos) << r.err;
+  }
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+
+  const fs::path mock = scratch() / "headset.json", eyes = scratch() / "eyes";
+  std::ofstream(mock) << R"({"width": 64, "height": 48, "frames": 2, "eyes": [
+    {"position_m": [-0.032, 0, 0], "orientation_wxyz": [1, 0, 0, 0],
+     "fov_deg": {"left": -45, "right": 38, "up": 30, "down": -34}},
+    {"position_m": [0.032, 0, 0], "orientation_wxyz": [1, 0, 0, 0],
+     "fov_deg": {"left": -38, "right": 45, "up": 34, "down": -30}}]})";
+  r = view("--surface sphere --xr-mock " + mock.string() + " --frame-format both --output-dir " + eyes.string(), false);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("headset: 2 frames of 64x48 per eye"), std::string::npos) << r.out;
+  const atmos::Image left = atmos::read_exr((eyes / "eye-left.exr").string());
+  const atmos::Image right = atmos::read_exr((eyes / "eye-right.exr").string());
+  ASSERT_EQ(left.width, 64);
+  ASSERT_EQ(right.height, 48);
+  EXPECT_TRUE(fs::exists(eyes / "eye-left.png"));
+  EXPECT_NE(left.rgb, right.rgb);  // their angles differ
+  r = view("--xr-mock " + mock.string() + " --stereo anaglyph --output-dir " + eyes.string(), false);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("a headset (--xr, --xr-mock) shows each eye itself"), std::string::npos) << r.err;
 }
 
 // A flight replayed twice, headless, gives the same files byte for byte.
