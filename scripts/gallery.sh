@@ -22,6 +22,10 @@ done
 (cd "$out/earth" && "$atmos" render --planet earth --wavelengths 15 --orders auto --look 270,8 --fov 75 \
   --sun-azimuth 270 --sun-elevation 1 --size 960x540 --exposure 10.5 --tonemap filmic --bloom 0.05 \
   -o sunset-bloom.png)
+# Earth at dusk, the sun 3° below the horizon (the ozone layer's absorption
+# colours the zenith).
+(cd "$out/earth" && "$atmos" render --planet earth --wavelengths 15 --sun-elevation -3 --sun-azimuth 180 \
+  --look 180,4 --fov 70 --size 640x360 --exposure 7 -o dusk-spectral.png)
 # Earth's night sky with the star field (the sun 18° below the horizon).
 (cd "$out/earth" && "$atmos" render --planet earth --wavelengths 15 --orders auto --altitude 2 --look 315,35 \
   --fov 60 --size 960x540 --sun-elevation -18 --sun-azimuth 135 --exposure -3 -o night-stars.png)
@@ -119,4 +123,9 @@ mkdir -p "$out/globe/ocean-lagoon" "$out/globe/ocean-eclipse"
 (cd "$out/mars" && "$atmos" render --planet mars-thesis --surface globe --latitude -1.38 --longitude 138.27 \
   --altitude 100 --look 280,2 --fov 60 --sun-elevation 2.5 --sun-azimuth 250 --exposure 10 --size 960x540 \
   --stereo anaglyph --ipd 200 --convergence 5000 -o canyon-anaglyph.png)
+# The viewer (atmos view) under Xvfb, its panel shown: 400 km over the
+# Mediterranean, the sun 12° up in the local frame of the ground below.
+mkdir -p "$out/viewer"
+xvfb-run -a -s "-screen 0 1280x720x24" "$atmos" view --frames 5 --altitude 400000 --pitch -22 --heading 20 \
+  --sun-azimuth 250 --sun-elevation 12 --latitude 33 --longitude 8 --screenshot "$out/viewer/orbit-panel.png"
 echo "gallery: $out"
