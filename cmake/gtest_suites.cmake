@@ -8,6 +8,7 @@
 #   -DSKIP_APP_SUITES=1 (those suites are not registered: their programs are not built)
 #   -DSLOW_SUITES="regex of the unit suites slow under the sanitizers" (label slow)
 #   -DTIMES=<file of "suite seconds" lines> -DTIMEOUT=seconds -DENVIRONMENT="VAR=value;..."
+#   -DGPU_ENVIRONMENT="VAR=value;..." (added for the gpu and apps suites)
 execute_process(COMMAND ${EXECUTABLE} --gtest_list_tests OUTPUT_VARIABLE listing RESULT_VARIABLE result
                 ERROR_VARIABLE errors)
 if(NOT result EQUAL 0)
@@ -69,7 +70,11 @@ foreach(line IN LISTS lines)
     if(DEFINED seconds)
       set(cost " COST ${seconds}")
     endif()
-    string(REPLACE ";" "\\;" environment_arg "${ENVIRONMENT}")
+    set(environment ${ENVIRONMENT})
+    if((GPU_SUITES AND suite MATCHES "${GPU_SUITES}") OR (APP_SUITES AND suite MATCHES "${APP_SUITES}"))
+      list(APPEND environment ${GPU_ENVIRONMENT})
+    endif()
+    string(REPLACE ";" "\\;" environment_arg "${environment}")
     string(APPEND script
       "add_test(\"${PREFIX}${key}\" \"${EXECUTABLE}\" \"--gtest_filter=${suite}.*\" \"--gtest_brief=1\")\n"
       "set_tests_properties(\"${PREFIX}${key}\" PROPERTIES LABELS \"${labels}\" TIMEOUT ${TIMEOUT}${cost}"
