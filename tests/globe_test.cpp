@@ -1455,6 +1455,9 @@ TEST_F(GlobeGpu, RejectsBadInput) {
   atmos::GlobeView empty = view;
   empty.width = 0;
   EXPECT_THROW(globe.draw(empty), atmos::Error);
+  atmos::GlobeView singular = view;
+  singular.view = glm::dmat4(0.0);
+  EXPECT_THROW(globe.draw(singular), atmos::Error);
   EXPECT_THROW(globe.height_m(glm::dvec3(std::numeric_limits<double>::infinity(), 0, 0)), atmos::Error);
   EXPECT_THROW(atmos::reversed_z_projection(0.0, 1.0, 1.0), atmos::Error);
   // The cascades slice a perspective frustum: with shadows, an

@@ -869,6 +869,24 @@ TEST_F(OceanGpu, RejectsBadInput) {
   atmos::GlobeView view = view_from(glm::dvec3(0, 0, 7e6), glm::dvec3(0, 0, -1), glm::dvec3(0, 1, 0), 8, 8,
                                     glm::dvec3(0, 0, 1));
   EXPECT_THROW(ocean.draw(view, std::nan("")), atmos::Error);
+  // The view checks the planet layer shares (planet::check_view_matrices).
+  const auto draw_message = [&](const atmos::GlobeView& v) {
+    try {
+      ocean.draw(v);
+    } catch (const atmos::Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  atmos::GlobeView bad = view;
+  bad.width = 0;
+  EXPECT_EQ(draw_message(bad), "ocean view: empty viewport");
+  bad = view;
+  bad.view = glm::dmat4(0.0);
+  EXPECT_EQ(draw_message(bad), "ocean view: singular view matrix");
+  bad = view;
+  bad.projection[1][1] = 0.0;
+  EXPECT_EQ(draw_message(bad), "ocean view: degenerate projection");
   view.sun_direction = glm::dvec3(0.0);
   EXPECT_THROW(ocean.draw(view), atmos::Error);
   // A surface without a sea: an ocean that draws nothing.

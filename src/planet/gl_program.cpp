@@ -1,7 +1,10 @@
 #include "planet/gl_program.hpp"
 
+#include <glm/matrix.hpp>
+
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "atmos/atmosphere.hpp"
 #include "data/embedded_files.hpp"
@@ -69,6 +72,15 @@ bool finite(const glm::dmat4& m) {
     for (int r = 0; r < 4; ++r)
       if (!std::isfinite(m[c][r])) return false;
   return true;
+}
+
+void check_view_matrices(const char* who, const GlobeView& view) {
+  const std::string prefix = std::string(who) + " view: ";
+  if (view.width < 1 || view.height < 1) throw Error(prefix + "empty viewport");
+  if (!finite(view.view) || !finite(view.projection)) throw Error(prefix + "non-finite view or projection matrix");
+  const double determinant = glm::determinant(view.view);
+  if (!std::isfinite(determinant) || std::abs(determinant) < 1e-12) throw Error(prefix + "singular view matrix");
+  if (!(std::abs(view.projection[1][1]) > 0.0)) throw Error(prefix + "degenerate projection");
 }
 
 }  // namespace atmos::planet

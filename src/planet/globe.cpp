@@ -706,12 +706,7 @@ void Globe::draw_views(const GlobeView& view, const std::vector<GlobeView>& eye_
   const PlanetFrame& frame = p.pass->frame();
   // --- Validation, before any state change. ---
   const auto check_matrices = [&p](const GlobeView& v) {
-    if (v.width < 1 || v.height < 1) throw Error("globe view: empty viewport");
-    if (!planet::finite(v.view) || !planet::finite(v.projection))
-      throw Error("globe view: non-finite view or projection matrix");
-    if (!std::isfinite(glm::determinant(v.view)) || std::abs(glm::determinant(v.view)) < 1e-12)
-      throw Error("globe view: singular view matrix");
-    if (!(std::abs(v.projection[1][1]) > 0.0)) throw Error("globe view: degenerate projection");
+    planet::check_view_matrices("globe", v);
     // The cascades slice a perspective frustum: w_clip = c x (distance along
     // the view axis), c > 0, and x_clip, y_clip independent of w.
     if (p.shadows && !(v.projection[2][3] < 0.0 && v.projection[0][3] == 0.0 && v.projection[1][3] == 0.0 &&

@@ -518,12 +518,7 @@ double Ocean::depth_m(const glm::dvec3& direction) const {
 
 void Ocean::draw(const GlobeView& view, double time_s) {
   Impl& p = *impl_;
-  if (view.width < 1 || view.height < 1) throw Error("ocean view: empty viewport");
-  if (!planet::finite(view.view) || !planet::finite(view.projection))
-    throw Error("ocean view: non-finite view or projection matrix");
-  if (!std::isfinite(glm::determinant(view.view)) || std::abs(glm::determinant(view.view)) < 1e-12)
-    throw Error("ocean view: singular view matrix");
-  if (!(std::abs(view.projection[1][1]) > 0.0)) throw Error("ocean view: degenerate projection");
+  planet::check_view_matrices("ocean", view);
   const double sun_length = glm::length(view.sun_direction);
   if (!(sun_length > 0.0) || !std::isfinite(sun_length)) throw Error("ocean view: zero or non-finite sun direction");
   if (!(view.nits_per_unit > 0.0) || !std::isfinite(view.nits_per_unit))
