@@ -762,6 +762,15 @@ TEST_F(GlobeGpu, RebindDrawsAsANewGlobeWithTheNewPass) {
   const std::vector<float> rebound = draw(globe);
   atmos::Globe fresh(dense, surface, dense_pass, settings);
   EXPECT_EQ(rebound, draw(fresh));
+  // The same with the programs linked beforehand (link_rebind_programs, as
+  // a thread of a shared context does); those of another pass are not taken.
+  atmos::Globe prelinked(*earth_, surface, *pass_, settings);
+  prelinked.link_rebind_programs(dense_pass);
+  prelinked.rebind(dense, dense_pass);
+  EXPECT_EQ(draw(prelinked), rebound);
+  prelinked.link_rebind_programs(dense_pass);
+  prelinked.rebind(*earth_, *pass_);
+  EXPECT_EQ(draw(prelinked), thin);
   // The denser air dims the sunlight on the ground.
   double thin_sum = 0.0, dense_sum = 0.0;
   for (size_t k = 0; k < thin.size(); k += 4)

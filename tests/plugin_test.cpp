@@ -141,8 +141,10 @@ class Plugin : public atmos_test::EarthGpuTest {
   }
   void SetUp() override { ASSERT_TRUE(pass_ != nullptr) << error_; }
 
-  // Runs the pass on an engine frame; returns the output (rows bottom-up).
-  static std::vector<glm::vec3> run(EngineFrame& e, bool depth_component = false) {
+  // Runs the pass (`pass`, else the suite's) on an engine frame; returns
+  // the output (rows bottom-up).
+  static std::vector<glm::vec3> run(EngineFrame& e, bool depth_component = false,
+                                    atmos::AtmospherePass* pass = nullptr) {
     GpuEngineFrame gpu;
     const int w = e.input.width, h = e.input.height;
     e.input.depth = gpu.add(depth_component ? upload_depth32f(w, h, e.buffers.depth) : upload_r32f(w, h, e.buffers.depth));
@@ -157,7 +159,7 @@ class Plugin : public atmos_test::EarthGpuTest {
       for (size_t i = 0; i < depth.size(); ++i) depth[i] = e.buffers.shadow_depth[i].x;
       e.input.shadow_map = gpu.add(upload_depth32f(e.buffers.shadow_width, e.buffers.shadow_height, depth));
     }
-    const GLuint out = pass_->render(e.input);
+    const GLuint out = (pass ? *pass : *pass_).render(e.input);
     // The texture names stay in e.input (deleted now): the CPU twin reads the
     // buffers, and only whether a shadow map was given.
     return read_rgb(out, w, h);
@@ -269,6 +271,36 @@ TEST_F(Plugin, MatchesCpuTwin) {
     EXPECT_LE(rms, shot.moons.empty() ? kRmsRelative : kEclipseRmsRelative) << name;
     EXPECT_GT(surfaces, 0) << name << ": the shot shows no surface";
   }
+}
+
+// A pass built without programs (PassPrograms::none) links, before any
+// draw, exactly the programs a frame draws with (link_programs), and then
+// draws it as the suite's pass does, bit for bit. The frame is the suite's
+// first comparison shot (10 m up at noon, lit colour): the programs are
+// those the suite's pass compiled, so the driver's cache keeps this cheap.
+TEST_F(Plugin, LinksAFramesProgramsBeforeItsFirstDraw) {
+  const Shot shot = comparison_shots().front().second;
+  EngineFrame first = make_engine_frame(shot), second = make_engine_frame(shot);
+  const std::vector<glm::vec3> expected = run(first);
+  atmos::AtmospherePass pass(*earth_, *tables_, engine_frame(), atmos::PassPrograms::none);
+  // Textures are not read: a frame of numbers alone.
+  atmos::FrameInput numbers = second.input;
+  numbers.depth = numbers.colour = 0;
+  EXPECT_FALSE(pass.programs_linked(numbers));
+  pass.link_programs(numbers);
+  EXPECT_TRUE(pass.programs_linked(numbers));
+  // Another camera (orbit) needs other programs.
+  atmos::FrameInput orbit = make_engine_frame(comparison_shots()[2].second).input;
+  EXPECT_FALSE(pass.programs_linked(orbit));
+  // Bad numbers: the error render() gives.
+  atmos::FrameInput bad = numbers;
+  bad.width = 0;
+  EXPECT_THROW(pass.link_programs(bad), atmos::Error);
+  const std::vector<glm::vec3> drawn = run(second, false, &pass);
+  ASSERT_EQ(drawn.size(), expected.size());
+  size_t differing = 0;
+  for (size_t i = 0; i < drawn.size(); ++i) differing += drawn[i] == expected[i] ? 0 : 1;
+  EXPECT_EQ(differing, 0u);
 }
 
 // From orbit the pass sorts the pixels into classes and draws each with its

@@ -189,6 +189,13 @@ class Globe {
   // built on it: build a new Globe), on a sea level outside `atmosphere`,
   // or a pass that does not reach the lowest ground, as the constructor.
   void rebind(const Atmosphere& atmosphere, const AtmospherePass& pass);
+  // Links the programs rebind(..., pass) needs (the lit programs with
+  // `pass`'s library) for it to take instead of linking them itself: it
+  // may run on another thread whose current context shares the globe's
+  // objects (a GL share group) while the globe draws on, but not while
+  // rebind() or another link_rebind_programs() runs. Throws atmos::Error on
+  // compile errors.
+  void link_rebind_programs(const AtmospherePass& pass);
 
   // Draws the surface into the bound framebuffer's colour attachment 0 (lit
   // colour, RGB) and depth attachment (reversed-Z: clear it to 0 first),

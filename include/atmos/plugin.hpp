@@ -181,12 +181,26 @@ struct PassTimings {
   double total_ms() const { return sky_view_ms + volume_ms + composite_ms; }
 };
 
+// Which programs an AtmospherePass compiles before its constructor returns.
+// Drivers compile much of a program's code at its first draw (llvmpipe's
+// JIT in particular), so that the default draws a 1x1 frame with each:
+// the engine's first frames then measure frames, not compilation.
+enum class PassPrograms {
+  // Those of a camera in the atmosphere and of one above it, by day, the
+  // engine's colour lit (SurfaceMode::lit_colour), without shadows or stars.
+  common,
+  // None: each is compiled at its first use in render(), or beforehand by
+  // link_programs() (on other threads too).
+  none,
+};
+
 class AtmospherePass {
  public:
-  // Uploads the tables and compiles the shaders in the CURRENT OpenGL
-  // context (4.5 core). Throws atmos::Error on mismatched tables, a missing
-  // or too old context, compile errors, or an invalid frame.
-  AtmospherePass(const Atmosphere& atmosphere, const Tables& tables, const PlanetFrame& frame);
+  // Uploads the tables and compiles the shaders (`programs`) in the CURRENT
+  // OpenGL context (4.5 core). Throws atmos::Error on mismatched tables, a
+  // missing or too old context, compile errors, or an invalid frame.
+  AtmospherePass(const Atmosphere& atmosphere, const Tables& tables, const PlanetFrame& frame,
+                 PassPrograms programs = PassPrograms::common);
   // The instant approximate mode (Hillaire 2020; docs/instant.md): the same
   // pass from InstantTables (compute_instant_tables: 0.2 s for three
   // wavelengths on 2 cores),
@@ -199,7 +213,8 @@ class AtmospherePass {
   // moons that hide part of the sun), glsl_library() and bind_textures()
   // (they read the 4D tables) and set_ground_albedo() (no ground response:
   // compute the instant tables of an atmosphere with the new albedo).
-  AtmospherePass(const Atmosphere& atmosphere, const InstantTables& tables, const PlanetFrame& frame);
+  AtmospherePass(const Atmosphere& atmosphere, const InstantTables& tables, const PlanetFrame& frame,
+                 PassPrograms programs = PassPrograms::common);
   ~AtmospherePass();
   AtmospherePass(const AtmospherePass&) = delete;
   AtmospherePass& operator=(const AtmospherePass&) = delete;
@@ -211,6 +226,25 @@ class AtmospherePass {
   // matrix, invalid moons. A camera inside the planet is moved up to its
   // surface (documented clamping, as everywhere in atmos).
   std::uint32_t render(const FrameInput& input);
+
+  // Links the programs that render(input) would draw with and that are not
+  // linked yet, without drawing: the sky-view table's, the volume's and the
+  // composite's variants of that camera, sun, moons, shadows, stars and
+  // surface mode. The input's textures are not read (they may be 0); its
+  // matrices, size and sun are checked as render() checks them. It may run
+  // on several threads at once, each with its own current context that
+  // shares objects with the pass's (a GL share group: a shared context of
+  // the engine's window), while no thread calls render(): each program is
+  // linked by one of them, so that more cores compile. The driver may still
+  // compile a program's machine code at its first draw. Throws
+  // atmos::Error as render() does (a program another thread links is not
+  // waited for).
+  void link_programs(const FrameInput& input);
+  // Whether every program render(input) would draw with is linked (then
+  // render() links none; the driver may still compile machine code at the
+  // first draw). The input's textures are not read. Throws atmos::Error as
+  // link_programs() does.
+  bool programs_linked(const FrameInput& input) const;
 
   const PassTimings& last_timings() const;
 

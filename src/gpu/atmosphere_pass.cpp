@@ -11,6 +11,9 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <functional>
+#include <mutex>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -127,6 +130,10 @@ struct AtmospherePass::Impl {
   std::unique_ptr<gpu::GpuTimer> timer;
   // The program variants (gpu::PassVariant::index), compiled on first use.
   GLuint programs[gpu::PassVariant::kCount] = {};
+  // link_programs(): the slots of all programs, guarded by the mutex, and
+  // those some caller is linking.
+  std::mutex link_mutex;
+  std::set<const GLuint*> linking;
   // The aerial-perspective volume: its compute programs (sun high, sun low,
   // eclipse) and textures (see composite.glsl).
   GLuint volume_programs[3] = {0, 0, 0};
@@ -203,7 +210,7 @@ namespace {
 // What both modes' constructors do once the tables are on the GPU: the
 // pass's own objects, and a first frame of the common variants.
 void create_pass_objects(AtmospherePass& pass, AtmospherePass::Impl& p, const Atmosphere& atmosphere,
-                         const PlanetFrame& frame) {
+                         const PlanetFrame& frame, PassPrograms programs) {
   p.timer = std::make_unique<gpu::GpuTimer>();
   p.stencil_export = epoxy_has_gl_extension("GL_ARB_shader_stencil_export");
   p.own_sun_lux = gpu::own_sun_illuminance(p.tables->params(), p.tables->radiance_to_srgb());
@@ -243,6 +250,7 @@ void create_pass_objects(AtmospherePass& pass, AtmospherePass::Impl& p, const At
   glSamplerParameteri(p.shadow_sampler, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
   gpu::check_gl("while creating the atmosphere pass");
 
+  if (programs == PassPrograms::none) return;
   // Drivers (llvmpipe's JIT in particular) compile shaders at their first
   // draw: draw the common variants once (lit colour, sun high, camera in
   // and above the atmosphere) over a 1x1 sky, so that the engine's first
@@ -274,6 +282,169 @@ void create_pass_objects(AtmospherePass& pass, AtmospherePass::Impl& p, const At
   p.timings = PassTimings{};
 }
 
+// The classes of the stencil mask's bits (atmosphere_pass.frag.glsl).
+constexpr GLint kSkyBit = 1;
+constexpr GLint kLowSunBit = 2;
+constexpr GLint kSpaceBit = 4;
+constexpr GLint kSpaceVolumeBit = 8;
+constexpr GLint kNightBit = 16;  // set by the exporting classifying draw only
+// A draw of the composite: the classifying ones set their bit where they
+// keep the pixel (with `sky_only`, among the sky pixels alone); the shading
+// ones draw where the mask's bits under `compare` equal `bits`. With
+// `export_stencil`, the one classifying draw of every class
+// (PIXELS_CLASSIFY_ALL), which writes its bits through the stencil
+// reference it exports.
+struct Draw {
+  GLuint program;
+  bool classify;
+  GLint bits;
+  bool sky_only = false;
+  GLint compare = 0xFF;
+  bool export_stencil = false;
+};
+
+// The programs of one frame: the aerial-perspective volume's (0 when the
+// frame has none), the space volume's (0 when none), and the composite's
+// draws in their order, each program passed through `resolve` with its
+// slot in the pass and a function that links it: render() links the
+// missing ones as it goes, link_programs() shares them among its callers,
+// programs_linked() only looks.
+struct FramePrograms {
+  GLuint volume = 0;
+  GLuint space = 0;
+  std::vector<Draw> draws;
+};
+
+using ResolveProgram = std::function<GLuint(GLuint& slot, const std::function<GLuint()>& link)>;
+
+FramePrograms frame_programs(AtmospherePass::Impl& p, const physics::PassFrame& frame, const FrameInput& input,
+                             const ResolveProgram& resolve) {
+  FramePrograms out;
+  // The composite's low-sun integration (none in the instant mode, whose
+  // sky-view table and volume integrate every ray).
+  const bool low_sun = frame.low_sun && !p.instant;
+  const bool eclipse = frame.moons.count > 0;
+  const bool shadows = input.shadow_map != 0;
+  const bool sky_view_camera = physics::camera_uses_sky_view(p.tables->params(), frame.camera);
+  const physics::AtmosphereParams& params = p.tables->params();
+  const physics::SpectralSets& spectral = p.tables->spectral();
+  if (frame.volume && p.instant) {
+    out.volume = resolve(p.instant_volume_programs[frame.low_sun ? 1 : 0], [&] {
+      return gpu::link_compute_program(
+          gpu::instant_aerial_perspective_compute_shader_source(params, spectral, frame.low_sun));
+    });
+  } else if (frame.volume) {
+    out.volume = resolve(p.volume_programs[eclipse ? 2 : low_sun ? 1 : 0], [&] {
+      return gpu::link_compute_program(
+          gpu::aerial_perspective_compute_shader_source(params, spectral, low_sun, eclipse, false, true));
+    });
+  }
+  if (frame.space_volume) {
+    out.space = resolve(p.space_program, [&] {
+      return gpu::link_compute_program(
+          gpu::aerial_perspective_compute_shader_source(params, spectral, false, false, true, false));
+    });
+  }
+  const auto composite_program = [&](const gpu::PassVariant& v) {
+    return resolve(p.programs[v.index()], [&] {
+      return gpu::link_program(gpu::atmosphere_pass_vertex_shader_source(),
+                               gpu::atmosphere_pass_fragment_shader_source(params, spectral, v));
+    });
+  };
+  gpu::PassVariant variant;
+  variant.sky_view_camera = sky_view_camera;
+  variant.low_sun = low_sun;
+  variant.shadows = shadows;
+  variant.gbuffer = input.surfaces == SurfaceMode::gbuffer;
+  variant.volume = frame.volume;
+  variant.blend = frame.volume && frame.volume_weight < 1.0f;
+  variant.stars = frame.stars.enabled;
+  variant.eclipse = eclipse;
+  // Which pixels need the low-sun integration, when some may and the
+  // composite evaluates it: not with moons (every pixel integrates), nor for
+  // cameras whose surfaces read the volume alone and whose sky reads the
+  // sky-view table (the variant's low_sun changes nothing there).
+  const bool classify_low_sun = low_sun && !eclipse && !(frame.volume && !variant.blend && sky_view_camera);
+  // The sky beside the atmosphere, for cameras above it.
+  const bool classify_space = !sky_view_camera && !p.instant;
+  // The instant mode's pixels of a camera above the atmosphere: one draw
+  // over all of them (instant_composite.glsl: instant_space_pixel).
+  const bool instant_space = p.instant && !sky_view_camera;
+  const auto program_of = [&](gpu::PassVariant::Pixels pixels, bool pixel_low_sun) {
+    // The classifying programs read the frame's geometry alone: one program
+    // each.
+    const bool classifying = pixels == gpu::PassVariant::Pixels::classify ||
+                             pixels == gpu::PassVariant::Pixels::classify_low_sun ||
+                             pixels == gpu::PassVariant::Pixels::classify_space ||
+                             pixels == gpu::PassVariant::Pixels::classify_space_volume;
+    gpu::PassVariant v = classifying ? gpu::PassVariant{} : variant;
+    v.pixels = pixels;
+    if (!classifying) v.low_sun = pixel_low_sun;
+    return composite_program(v);
+  };
+  std::vector<Draw>& draws = out.draws;
+  const bool export_stencil = p.stencil_export && stencil_export_enabled.load(std::memory_order_relaxed);
+  if (instant_space) {
+    gpu::PassVariant v = variant;
+    v.pixels = gpu::PassVariant::Pixels::instant_space;
+    v.low_sun = frame.low_sun;
+    v.shadows = false;
+    v.volume = false;
+    const GLuint program = composite_program(v);
+    draws.push_back({program, false, 0, false, 0});
+  } else if (export_stencil) {
+    gpu::PassVariant v;
+    v.pixels = gpu::PassVariant::Pixels::classify_all;
+    v.low_sun = classify_low_sun;
+    v.sky_view_camera = !classify_space;
+    v.space_volume = frame.space_volume;
+    const GLuint program = composite_program(v);
+    draws.push_back({program, true, 0, false, 0xFF, true});
+  } else {
+    draws.push_back({program_of(gpu::PassVariant::Pixels::classify, false), true, kSkyBit});
+    if (classify_low_sun)
+      draws.push_back({program_of(gpu::PassVariant::Pixels::classify_low_sun, false), true, kLowSunBit});
+    if (classify_space)
+      draws.push_back({program_of(gpu::PassVariant::Pixels::classify_space, false), true, kSpaceBit, true});
+    if (frame.space_volume)
+      draws.push_back({program_of(gpu::PassVariant::Pixels::classify_space_volume, false), true, kSpaceVolumeBit});
+  }
+  // The surfaces the space volume covers (with or without the low-sun
+  // bit), by the one program that reads it; the others never do.
+  variant.space_volume = false;
+  if (frame.space_volume) {
+    gpu::PassVariant v = variant;
+    v.pixels = gpu::PassVariant::Pixels::surface;
+    v.low_sun = false;
+    v.space_volume = true;
+    const GLuint program = composite_program(v);
+    draws.push_back({program, false, kSpaceVolumeBit, false, kSpaceVolumeBit | kSkyBit});
+  }
+  if (classify_low_sun) {
+    // Without the integration where no pixel needs it, with it where some do.
+    draws.push_back({program_of(gpu::PassVariant::Pixels::sky, false), false, kSkyBit});
+    draws.push_back({program_of(gpu::PassVariant::Pixels::sky, true), false, kSkyBit | kLowSunBit});
+    draws.push_back({program_of(gpu::PassVariant::Pixels::surface, false), false, 0});
+    draws.push_back({program_of(gpu::PassVariant::Pixels::surface, true), false, kLowSunBit});
+    if (export_stencil) {
+      // The low-sun surfaces in the planet's shadow, without the integration.
+      gpu::PassVariant v = variant;
+      v.pixels = gpu::PassVariant::Pixels::surface;
+      v.low_sun = false;
+      v.night = true;
+      const GLuint program = composite_program(v);
+      draws.push_back({program, false, kLowSunBit | kNightBit});
+    }
+  } else if (!instant_space) {
+    draws.push_back({program_of(gpu::PassVariant::Pixels::sky, low_sun), false, kSkyBit});
+    draws.push_back({program_of(gpu::PassVariant::Pixels::surface, low_sun), false, 0});
+  }
+  if (classify_space)
+    draws.push_back({program_of(gpu::PassVariant::Pixels::space, false), false, kSkyBit | kSpaceBit});
+
+  return out;
+}
+
 void check_planet_frame(const PlanetFrame& frame) {
   if (!is_finite(frame.centre))
     throw Error("invalid planet frame: centre is not finite");
@@ -283,7 +454,8 @@ void check_planet_frame(const PlanetFrame& frame) {
 
 }  // namespace
 
-AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const Tables& tables, const PlanetFrame& frame)
+AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const Tables& tables, const PlanetFrame& frame,
+                               PassPrograms programs)
     : impl_(std::make_unique<Impl>()) {
   check_planet_frame(frame);
   check_tables_match(atmosphere, tables);
@@ -300,14 +472,15 @@ AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const Tables& table
       p.ground_response = std::make_unique<Tables>(tables);
       p.ground_albedo = glm::dvec3(tables.ground_response.planet_albedo);
     }
-    create_pass_objects(*this, p, atmosphere, frame);
+    create_pass_objects(*this, p, atmosphere, frame, programs);
   } catch (...) {
     p.release();
     throw;
   }
 }
 
-AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const InstantTables& tables, const PlanetFrame& frame)
+AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const InstantTables& tables, const PlanetFrame& frame,
+                               PassPrograms programs)
     : impl_(std::make_unique<Impl>()) {
   check_planet_frame(frame);
   check_tables_match(atmosphere, tables);
@@ -321,7 +494,7 @@ AtmospherePass::AtmospherePass(const Atmosphere& atmosphere, const InstantTables
   try {
     p.tables = std::make_unique<gpu::GpuTables>(atmosphere, tables);
     p.ground_albedo = glm::dvec3(p.tables->params().ground_albedo);
-    create_pass_objects(*this, p, atmosphere, frame);
+    create_pass_objects(*this, p, atmosphere, frame, programs);
   } catch (...) {
     p.release();
     throw;
@@ -392,6 +565,83 @@ void AtmospherePass::bind_textures(int first_unit) const {
   }
 }
 
+namespace {
+
+// The frame of an input whose textures are not read (link_programs,
+// programs_linked): its numbers checked as render() checks them.
+physics::PassFrame frame_without_textures(const AtmospherePass::Impl& p, const FrameInput& input) {
+  if (input.width < 1 || input.height < 1 || input.width > kMaxImageSize || input.height > kMaxImageSize)
+    throw Error("plugin input: frame size " + std::to_string(input.width) + "x" + std::to_string(input.height) +
+                " outside 1.." + std::to_string(kMaxImageSize));
+  gpu::validate_frame_numbers(input);
+  gpu::validate_star_orientation(input.world_from_star_catalogue, "plugin input");
+  physics::PassFrame frame =
+      gpu::make_pass_frame(input, p.frame, p.tables->params(), p.tables->radiance_to_srgb(), p.own_sun_lux);
+  if (p.instant) {
+    if (frame.moons.count > 0)
+      throw Error("plugin input: the instant mode draws no eclipses, and a moon hides part of the sun from the "
+                  "atmosphere (use Tables)");
+    gpu::make_instant_frame(p.tables->params(), frame);
+  }
+  return frame;
+}
+
+}  // namespace
+
+bool AtmospherePass::programs_linked(const FrameInput& input) const {
+  Impl& p = *impl_;
+  const physics::PassFrame frame = frame_without_textures(p, input);
+  std::lock_guard<std::mutex> lock(p.link_mutex);
+  bool all = true;
+  const ResolveProgram check = [&all](GLuint& slot, const std::function<GLuint()>&) {
+    all = all && slot != 0;
+    return slot;
+  };
+  if (physics::camera_uses_sky_view(p.tables->params(), frame.camera)) {
+    GLuint& slot = p.tables->sky_view_program(frame.camera, frame.sun_direction, frame.moons);
+    all = all && slot != 0;
+  }
+  (void)frame_programs(p, frame, input, check);
+  return all;
+}
+
+void AtmospherePass::link_programs(const FrameInput& input) {
+  Impl& p = *impl_;
+  gpu::require_gl_context("the engine plugin (atmos::AtmospherePass::link_programs)");
+  const physics::PassFrame frame = frame_without_textures(p, input);
+  // Each missing program is claimed by the first caller that needs it,
+  // linked outside the lock (the other callers link others meanwhile), then
+  // published in its slot.
+  const ResolveProgram claim_and_link = [&p](GLuint& slot, const std::function<GLuint()>& link) -> GLuint {
+    {
+      std::lock_guard<std::mutex> lock(p.link_mutex);
+      if (slot != 0 || p.linking.count(&slot) > 0) return slot;
+      p.linking.insert(&slot);
+    }
+    GLuint program = 0;
+    try {
+      program = link();
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(p.link_mutex);
+      p.linking.erase(&slot);
+      throw;
+    }
+    std::lock_guard<std::mutex> lock(p.link_mutex);
+    slot = program;
+    p.linking.erase(&slot);
+    return program;
+  };
+  if (physics::camera_uses_sky_view(p.tables->params(), frame.camera)) {
+    claim_and_link(p.tables->sky_view_program(frame.camera, frame.sun_direction, frame.moons),
+                   [&] { return p.tables->link_sky_view_program(frame.camera, frame.sun_direction, frame.moons); });
+  }
+  (void)frame_programs(p, frame, input, claim_and_link);
+  gpu::check_gl("while linking the atmosphere pass's programs");
+  // The programs are drawn with in another context of the share group: its
+  // commands must have completed there (OpenGL 4.5 core, 5.3.1).
+  glFinish();
+}
+
 std::uint32_t AtmospherePass::render(const FrameInput& input) {
   Impl& p = *impl_;
   gpu::require_gl_context("the engine plugin (atmos::AtmospherePass)");
@@ -445,6 +695,11 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   }
   const glm::vec3 camera_f = frame.camera;
   const glm::vec3 sun_f = frame.sun_direction;
+  // The programs of this frame, linked now where they are not yet.
+  const FramePrograms programs = frame_programs(p, frame, input, [](GLuint& slot, const std::function<GLuint()>& link) {
+    if (slot == 0) slot = link();
+    return slot;
+  });
 
   // --- The output target. ---
   GLuint output = input.output;
@@ -472,9 +727,6 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   glDisable(GL_FRAMEBUFFER_SRGB);
   glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
 
-  // The composite's low-sun integration (none in the instant mode, whose
-  // sky-view table and volume integrate every ray).
-  const bool low_sun = frame.low_sun && !p.instant;
   // With moons (make_pass_frame: physics::make_moons, once per frame): the
   // eclipse variants, which read them from the uniforms (set_moons_uniforms).
   const bool eclipse = frame.moons.count > 0;
@@ -491,10 +743,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   // Pass 2: this frame's aerial-perspective volume, for cameras low in the
   // atmosphere.
   if (frame.volume && p.instant) {
-    GLuint& volume_program = p.instant_volume_programs[frame.low_sun ? 1 : 0];
-    if (volume_program == 0)
-      volume_program = gpu::link_compute_program(gpu::instant_aerial_perspective_compute_shader_source(
-          p.tables->params(), p.tables->spectral(), frame.low_sun));
+    const GLuint volume_program = programs.volume;
     glUseProgram(volume_program);
     glProgramUniform3f(volume_program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
     glProgramUniform3f(volume_program, 1, frame.sun_direction.x, frame.sun_direction.y, frame.sun_direction.z);
@@ -512,10 +761,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     if (input.timed) timings.volume_ms = p.timer->end_ms();
     for (GLuint i = 0; i < 4; ++i) glBindImageTexture(i, 0, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
   } else if (frame.volume) {
-    GLuint& volume_program = p.volume_programs[eclipse ? 2 : low_sun ? 1 : 0];
-    if (volume_program == 0)
-      volume_program = gpu::link_compute_program(gpu::aerial_perspective_compute_shader_source(
-          p.tables->params(), p.tables->spectral(), low_sun, eclipse, false, true));
+    const GLuint volume_program = programs.volume;
     glUseProgram(volume_program);
     if (eclipse) gpu::set_moons_uniforms(volume_program, frame.moons);
     glProgramUniform3f(volume_program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
@@ -554,10 +800,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
       }
       for (GLuint i = 0; i < 4; ++i)
         glBindImageTexture(i, p.space_volume[i], 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-      if (p.space_program == 0)
-        p.space_program = gpu::link_compute_program(gpu::aerial_perspective_compute_shader_source(
-            p.tables->params(), p.tables->spectral(), false, false, true, false));
-      const GLuint program = p.space_program;
+      const GLuint program = programs.space;
       glUseProgram(program);
       glProgramUniform3f(program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
       glProgramUniform3f(program, 1, frame.sun_direction.x, frame.sun_direction.y, frame.sun_direction.z);
@@ -591,138 +834,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   if (glCheckNamedFramebufferStatus(p.framebuffer, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
     throw Error("plugin: this OpenGL driver cannot render to the output texture with an 8-bit stencil buffer");
 
-  gpu::PassVariant variant;
-  variant.sky_view_camera = sky_view_camera;
-  variant.low_sun = low_sun;
-  variant.shadows = shadows;
-  variant.gbuffer = input.surfaces == SurfaceMode::gbuffer;
-  variant.volume = frame.volume;
-  variant.blend = frame.volume && frame.volume_weight < 1.0f;
-  variant.stars = frame.stars.enabled;
-  variant.eclipse = eclipse;
-  // The classes of the stencil mask's bits (atmosphere_pass.frag.glsl).
-  constexpr GLint kSkyBit = 1;
-  constexpr GLint kLowSunBit = 2;
-  constexpr GLint kSpaceBit = 4;
-  constexpr GLint kSpaceVolumeBit = 8;
-  constexpr GLint kNightBit = 16;  // set by the exporting classifying draw only
-  // Which pixels need the low-sun integration, when some may and the
-  // composite evaluates it: not with moons (every pixel integrates), nor for
-  // cameras whose surfaces read the volume alone and whose sky reads the
-  // sky-view table (the variant's low_sun changes nothing there).
-  const bool classify_low_sun = low_sun && !eclipse && !(frame.volume && !variant.blend && sky_view_camera);
-  // The sky beside the atmosphere, for cameras above it.
-  const bool classify_space = !sky_view_camera && !p.instant;
-  // The instant mode's pixels of a camera above the atmosphere: one draw
-  // over all of them (instant_composite.glsl: instant_space_pixel).
-  const bool instant_space = p.instant && !sky_view_camera;
-  const auto program_of = [&](gpu::PassVariant::Pixels pixels, bool pixel_low_sun) {
-    // The classifying programs read the frame's geometry alone: one program
-    // each.
-    const bool classifying = pixels == gpu::PassVariant::Pixels::classify ||
-                             pixels == gpu::PassVariant::Pixels::classify_low_sun ||
-                             pixels == gpu::PassVariant::Pixels::classify_space ||
-                             pixels == gpu::PassVariant::Pixels::classify_space_volume;
-    gpu::PassVariant v = classifying ? gpu::PassVariant{} : variant;
-    v.pixels = pixels;
-    if (!classifying) v.low_sun = pixel_low_sun;
-    GLuint& program = p.programs[v.index()];
-    if (program == 0)
-      program = gpu::link_program(gpu::atmosphere_pass_vertex_shader_source(),
-                                  gpu::atmosphere_pass_fragment_shader_source(p.tables->params(),
-                                                                              p.tables->spectral(), v));
-    return program;
-  };
-  // The draws: the classifying ones set their bit where they keep the
-  // pixel (with `sky_only`, among the sky pixels alone); the shading ones
-  // draw where the mask's bits under `compare` equal `bits`.
-  // With `export_stencil`, the one classifying draw of every class
-  // (PIXELS_CLASSIFY_ALL), which writes its bits through the stencil
-  // reference it exports.
-  struct Draw {
-    GLuint program;
-    bool classify;
-    GLint bits;
-    bool sky_only = false;
-    GLint compare = 0xFF;
-    bool export_stencil = false;
-  };
-  std::vector<Draw> draws;
-  const bool export_stencil = p.stencil_export && stencil_export_enabled.load(std::memory_order_relaxed);
-  if (instant_space) {
-    gpu::PassVariant v = variant;
-    v.pixels = gpu::PassVariant::Pixels::instant_space;
-    v.low_sun = frame.low_sun;
-    v.shadows = false;
-    v.volume = false;
-    GLuint& program = p.programs[v.index()];
-    if (program == 0)
-      program = gpu::link_program(gpu::atmosphere_pass_vertex_shader_source(),
-                                  gpu::atmosphere_pass_fragment_shader_source(p.tables->params(),
-                                                                              p.tables->spectral(), v));
-    draws.push_back({program, false, 0, false, 0});
-  } else if (export_stencil) {
-    gpu::PassVariant v;
-    v.pixels = gpu::PassVariant::Pixels::classify_all;
-    v.low_sun = classify_low_sun;
-    v.sky_view_camera = !classify_space;
-    v.space_volume = frame.space_volume;
-    GLuint& program = p.programs[v.index()];
-    if (program == 0)
-      program = gpu::link_program(gpu::atmosphere_pass_vertex_shader_source(),
-                                  gpu::atmosphere_pass_fragment_shader_source(p.tables->params(),
-                                                                              p.tables->spectral(), v));
-    draws.push_back({program, true, 0, false, 0xFF, true});
-  } else {
-    draws.push_back({program_of(gpu::PassVariant::Pixels::classify, false), true, kSkyBit});
-    if (classify_low_sun)
-      draws.push_back({program_of(gpu::PassVariant::Pixels::classify_low_sun, false), true, kLowSunBit});
-    if (classify_space)
-      draws.push_back({program_of(gpu::PassVariant::Pixels::classify_space, false), true, kSpaceBit, true});
-    if (frame.space_volume)
-      draws.push_back({program_of(gpu::PassVariant::Pixels::classify_space_volume, false), true, kSpaceVolumeBit});
-  }
-  // The surfaces the space volume covers (with or without the low-sun
-  // bit), by the one program that reads it; the others never do.
-  variant.space_volume = false;
-  if (frame.space_volume) {
-    gpu::PassVariant v = variant;
-    v.pixels = gpu::PassVariant::Pixels::surface;
-    v.low_sun = false;
-    v.space_volume = true;
-    GLuint& program = p.programs[v.index()];
-    if (program == 0)
-      program = gpu::link_program(gpu::atmosphere_pass_vertex_shader_source(),
-                                  gpu::atmosphere_pass_fragment_shader_source(p.tables->params(),
-                                                                              p.tables->spectral(), v));
-    draws.push_back({program, false, kSpaceVolumeBit, false, kSpaceVolumeBit | kSkyBit});
-  }
-  if (classify_low_sun) {
-    // Without the integration where no pixel needs it, with it where some do.
-    draws.push_back({program_of(gpu::PassVariant::Pixels::sky, false), false, kSkyBit});
-    draws.push_back({program_of(gpu::PassVariant::Pixels::sky, true), false, kSkyBit | kLowSunBit});
-    draws.push_back({program_of(gpu::PassVariant::Pixels::surface, false), false, 0});
-    draws.push_back({program_of(gpu::PassVariant::Pixels::surface, true), false, kLowSunBit});
-    if (export_stencil) {
-      // The low-sun surfaces in the planet's shadow, without the integration.
-      gpu::PassVariant v = variant;
-      v.pixels = gpu::PassVariant::Pixels::surface;
-      v.low_sun = false;
-      v.night = true;
-      GLuint& program = p.programs[v.index()];
-      if (program == 0)
-        program = gpu::link_program(gpu::atmosphere_pass_vertex_shader_source(),
-                                    gpu::atmosphere_pass_fragment_shader_source(p.tables->params(),
-                                                                                p.tables->spectral(), v));
-      draws.push_back({program, false, kLowSunBit | kNightBit});
-    }
-  } else if (!instant_space) {
-    draws.push_back({program_of(gpu::PassVariant::Pixels::sky, low_sun), false, kSkyBit});
-    draws.push_back({program_of(gpu::PassVariant::Pixels::surface, low_sun), false, 0});
-  }
-  if (classify_space)
-    draws.push_back({program_of(gpu::PassVariant::Pixels::space, false), false, kSkyBit | kSpaceBit});
-
+  const std::vector<Draw>& draws = programs.draws;
   const physics::SkyViewFrame sky_view = frame.sky_view;
   const bool star_catalogue = frame.stars.enabled && !p.star_catalogue.empty();
   for (const Draw& draw : draws) {

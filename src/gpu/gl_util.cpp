@@ -462,19 +462,40 @@ void set_moons_uniforms(GLuint program, const physics::Moons& moons) {
   glProgramUniform4fv(program, kMoonsLocation + 1, MOON_CAPACITY, &moons.sphere[0].x);
 }
 
+namespace {
+
+// The sky-view variant of a frame: eclipsed with moons, else with the
+// low-sun integration where the sun may be low on some view ray.
+bool sky_view_low_sun(const physics::AtmosphereParams& params, const glm::vec3& camera, const glm::vec3& sun,
+                      const physics::Moons& moons) {
+  return moons.count > 0 || physics::sun_may_be_low_on_view_rays(params, camera, sun);
+}
+
+}  // namespace
+
+GLuint& GpuTables::sky_view_program(const glm::vec3& camera, const glm::vec3& sun, const physics::Moons& moons) {
+  const bool eclipse = moons.count > 0;
+  if (instant() && eclipse) throw Error("the instant mode's sky-view table has no eclipses");
+  const bool low_sun = sky_view_low_sun(*params_, camera, sun, moons);
+  return instant() ? instant_sky_view_programs_[low_sun ? 1 : 0] : sky_view_programs_[eclipse ? 2 : low_sun ? 1 : 0];
+}
+
+GLuint GpuTables::link_sky_view_program(const glm::vec3& camera, const glm::vec3& sun,
+                                        const physics::Moons& moons) const {
+  const bool eclipse = moons.count > 0;
+  if (instant() && eclipse) throw Error("the instant mode's sky-view table has no eclipses");
+  const bool low_sun = sky_view_low_sun(*params_, camera, sun, moons);
+  AssembledSource vertex;
+  vertex.append("vertex shader", fullscreen_vertex_shader_source());
+  return link_program(vertex, instant() ? instant_sky_view_fragment_shader_source(*params_, *spectral_, low_sun)
+                                        : sky_view_fragment_shader_source(*params_, *spectral_, low_sun, eclipse));
+}
+
 double GpuTables::update_sky_view(const glm::vec3& camera, const glm::vec3& sun, const physics::SkyViewFrame& frame,
                                   GpuTimer* timer, const physics::Moons& moons) {
   const bool eclipse = moons.count > 0;
-  if (instant() && eclipse) throw Error("the instant mode's sky-view table has no eclipses");
-  const bool low_sun = eclipse || physics::sun_may_be_low_on_view_rays(*params_, camera, sun);
-  GLuint& program = instant() ? instant_sky_view_programs_[low_sun ? 1 : 0]
-                              : sky_view_programs_[eclipse ? 2 : low_sun ? 1 : 0];
-  if (program == 0) {
-    AssembledSource vertex;
-    vertex.append("vertex shader", fullscreen_vertex_shader_source());
-    program = link_program(vertex, instant() ? instant_sky_view_fragment_shader_source(*params_, *spectral_, low_sun)
-                                             : sky_view_fragment_shader_source(*params_, *spectral_, low_sun, eclipse));
-  }
+  GLuint& program = sky_view_program(camera, sun, moons);
+  if (program == 0) program = link_sky_view_program(camera, sun, moons);
   glUseProgram(program);
   glProgramUniform3f(program, 0, camera.x, camera.y, camera.z);
   glProgramUniform3f(program, 7, sun.x, sun.y, sun.z);

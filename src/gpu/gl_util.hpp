@@ -169,6 +169,13 @@ class GpuTables {
   // the instant mode's table (without moons).
   double update_sky_view(const glm::vec3& camera, const glm::vec3& sun, const physics::SkyViewFrame& frame,
                          GpuTimer* timer, const physics::Moons& moons = physics::no_moons());
+  // The slot of the program update_sky_view draws with for that camera,
+  // sun and moons (0 until linked), and a new link of that program (which
+  // the caller stores in the slot): the variant without or with the low-sun
+  // integration, or eclipsed. The link needs a current context of the
+  // tables' share group, not necessarily the one that draws.
+  GLuint& sky_view_program(const glm::vec3& camera, const glm::vec3& sun, const physics::Moons& moons);
+  GLuint link_sky_view_program(const glm::vec3& camera, const glm::vec3& sun, const physics::Moons& moons) const;
 
  private:
   void release();

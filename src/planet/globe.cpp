@@ -18,6 +18,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -173,6 +174,17 @@ struct Globe::Impl {
   // The eclipse's variants, [0] unshadowed and [1] shadowed, linked at the
   // first draw with moons that eclipse (id 0 until then).
   std::array<TileProgram, 2> eclipse_programs{};
+  // The lit programs of a pass the globe is to be rebound to, linked
+  // beforehand (link_rebind_programs; id 0 when none), and that pass's
+  // library (AtmospherePass::glsl_library), which they were linked with.
+  std::string prelinked_for;
+  TileProgram prelinked_lit, prelinked_shadowed;
+  void drop_prelinked() {
+    if (prelinked_lit.id != 0) glDeleteProgram(prelinked_lit.id);
+    if (prelinked_shadowed.id != 0) glDeleteProgram(prelinked_shadowed.id);
+    prelinked_lit = prelinked_shadowed = TileProgram{};
+    prelinked_for.clear();
+  }
   // The atmosphere's top (m) and the sun's angular radius (rad): which
   // moons may eclipse.
   double top_radius_m = 0.0, sun_angular_radius_rad = 0.0;
@@ -204,13 +216,17 @@ struct Globe::Impl {
     if (program.id != 0) glDeleteProgram(program.id);
     for (const TileProgram& e : eclipse_programs)
       if (e.id != 0) glDeleteProgram(e.id);
+    drop_prelinked();
   }
 
   // The pass's tables must reach the lowest ground (as lowest_surface_height_m
   // estimates it): below their bottom the light and the aerial perspective
-  // would be clamped to it.
-  void check_pass_reaches_ground(const AtmospherePass& with) const {
-    const double lowest = surface.estimated_lowest_m();
+  // would be clamped to it. The estimate samples the elevation raster:
+  // taken once, the surface being fixed.
+  std::optional<double> lowest_m;
+  void check_pass_reaches_ground(const AtmospherePass& with) {
+    if (!lowest_m) lowest_m = surface.estimated_lowest_m();
+    const double lowest = *lowest_m;
     if (with.bottom_radius_m() > datum_radius_m + lowest + 1.0)
       throw Error("globe: the ground goes down to " + std::to_string(lowest) +
                   " m, below the bottom of the pass's atmosphere (" +
@@ -661,6 +677,29 @@ Globe::Globe(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
 
 Globe::~Globe() = default;
 
+void Globe::link_rebind_programs(const AtmospherePass& pass) {
+  Impl& p = *impl_;
+  std::string library = pass.glsl_library(p.settings.first_unit);
+  if (p.prelinked_lit.id != 0 && p.prelinked_for == library) return;
+  p.drop_prelinked();
+  TileProgram lit = lit_program(pass, p.settings.first_unit, false, false);
+  TileProgram shadowed;
+  if (p.shadows) {
+    try {
+      shadowed = lit_program(pass, p.settings.first_unit, true, false);
+    } catch (...) {
+      glDeleteProgram(lit.id);
+      throw;
+    }
+  }
+  // Drawn with in another context of the share group: its commands must
+  // have completed here (OpenGL 4.5 core, 5.3.1).
+  glFinish();
+  p.prelinked_lit = lit;
+  p.prelinked_shadowed = shadowed;
+  p.prelinked_for = std::move(library);
+}
+
 void Globe::rebind(const Atmosphere& atmosphere, const AtmospherePass& pass) {
   Impl& p = *impl_;
   if (atmosphere.bottom_radius_m != p.datum_radius_m)
@@ -670,11 +709,19 @@ void Globe::rebind(const Atmosphere& atmosphere, const AtmospherePass& pass) {
   planet::validate_sea_level(p.description, atmosphere, "globe");
   p.check_pass_reaches_ground(pass);
   // The programs that light tiles carry the pass's library: the new ones
-  // are linked before anything changes, so that a failure leaves the globe
-  // bound to its old pass.
-  TileProgram lit = lit_program(pass, p.settings.first_unit, false, false);
-  TileProgram shadowed;
-  if (p.shadows) {
+  // are linked (or taken from link_rebind_programs) before anything
+  // changes, so that a failure leaves the globe bound to its old pass.
+  TileProgram lit, shadowed;
+  if (p.prelinked_lit.id != 0 && p.prelinked_for == pass.glsl_library(p.settings.first_unit)) {
+    lit = p.prelinked_lit;
+    shadowed = p.prelinked_shadowed;
+    p.prelinked_lit = p.prelinked_shadowed = TileProgram{};
+    p.prelinked_for.clear();
+  } else {
+    p.drop_prelinked();
+    lit = lit_program(pass, p.settings.first_unit, false, false);
+  }
+  if (p.shadows && shadowed.id == 0) {
     try {
       shadowed = lit_program(pass, p.settings.first_unit, true, false);
     } catch (...) {
