@@ -17,20 +17,78 @@ atmos::GlobeSettings globe_settings(bool complete_tiles) {
   return s;
 }
 
+// The pass's input for a frame, without its textures.
+atmos::FrameInput frame_input(const SceneFrame& f, int width, int height, const glm::dmat4& view,
+                              const glm::dmat4& projection) {
+  atmos::FrameInput input;
+  input.width = width;
+  input.height = height;
+  input.depth_encoding = atmos::DepthEncoding::reversed_z;
+  input.view = view;
+  input.projection = projection;
+  input.sun_direction = f.sun;
+  input.nits_per_unit = Scene::kNitsPerUnit;
+  input.stars = f.stars;
+  input.moons = f.moons;
+  input.timed = f.timed;
+  return input;
+}
+
+glm::dmat4 view_of(const SceneFrame& f) {
+  return glm::lookAt(f.pose.position, f.pose.position + f.pose.forward, f.pose.up);
+}
+
+glm::dmat4 projection_of(const SceneFrame& f) {
+  return atmos::reversed_z_projection(f.fov_deg * M_PI / 180.0, double(f.width) / double(f.height), Scene::kNearM);
+}
+
 }  // namespace
 
-Scene::Scene(const PlanetTables& t, bool globe, bool regional_albedo, bool complete_tiles)
+Scene::Scene(const PlanetTables& t, bool globe, bool regional_albedo, bool complete_tiles, atmos::PassPrograms programs,
+             const EarlyLink* early)
     : params_(t.params), planet_(t.planet), surface_(t.surface), terrain_ms_(std::numeric_limits<double>::quiet_NaN()) {
-  pass_ = std::make_unique<atmos::AtmospherePass>(t.air, t.tables, atmos::PlanetFrame{});
-  if (globe) globe_ = std::make_unique<atmos::Globe>(t.planet, t.surface, *pass_, globe_settings(complete_tiles));
+  pass_ = std::make_unique<atmos::AtmospherePass>(t.air, t.tables, atmos::PlanetFrame{}, programs);
+  if (early) start_linker(*pass_, *early, false);
+  try {
+    if (globe) globe_ = std::make_unique<atmos::Globe>(t.planet, t.surface, *pass_, globe_settings(complete_tiles));
+  } catch (...) {
+    if (linker_.joinable()) linker_.join();
+    throw;
+  }
   regional_albedo_requested_ = globe && regional_albedo;
   regional_albedo_ = regional_albedo_requested_ && !t.tables.ground_response.empty();
   glCreateQueries(GL_TIME_ELAPSED, kQueries, queries_.data());
 }
 
-bool Scene::prepare_rebind(const PlanetTables& t) {
+void Scene::start_linker(atmos::AtmospherePass& pass, const EarlyLink& early, bool globe_programs) {
+  join_linker();
+  const atmos::FrameInput input = frame_input(early.frame, early.frame.width, early.frame.height,
+                                              view_of(early.frame), projection_of(early.frame));
+  linking_ = true;
+  atmos::Globe* globe = globe_programs ? globe_.get() : nullptr;
+  linker_ = std::thread([this, &pass, globe, make_current = early.make_current, input] {
+    make_current(true);
+    try {
+      pass.link_programs(input);
+      if (globe) globe->link_rebind_programs(pass);
+    } catch (...) {
+      linker_error_ = std::current_exception();
+    }
+    make_current(false);
+    linking_ = false;
+  });
+}
+
+bool Scene::programs_linked(const SceneFrame& f) const {
+  const atmos::AtmospherePass& pass = next_pass_ ? *next_pass_ : *pass_;
+  return pass.programs_linked(frame_input(f, f.width, f.height, view_of(f), projection_of(f)));
+}
+
+bool Scene::prepare_rebind(const PlanetTables& t, const EarlyLink* early) {
   if (!globe_ || !(t.surface == surface_) || t.planet.bottom_radius_m != planet_.bottom_radius_m) return false;
-  next_pass_ = std::make_unique<atmos::AtmospherePass>(t.air, t.tables, atmos::PlanetFrame{});
+  next_pass_ = std::make_unique<atmos::AtmospherePass>(
+      t.air, t.tables, atmos::PlanetFrame{}, early ? atmos::PassPrograms::none : atmos::PassPrograms::common);
+  if (early) start_linker(*next_pass_, *early, true);
   next_params_ = t.params;
   next_planet_ = t.planet;
   next_regional_albedo_ = regional_albedo_requested_ && !t.tables.ground_response.empty();
@@ -38,6 +96,12 @@ bool Scene::prepare_rebind(const PlanetTables& t) {
 }
 
 void Scene::finish_rebind() {
+  try {
+    join_linker();
+  } catch (...) {
+    next_pass_.reset();
+    throw;
+  }
   std::unique_ptr<atmos::AtmospherePass> pass = std::move(next_pass_);
   globe_->rebind(next_planet_, *pass);
   pass_ = std::move(pass);
@@ -46,7 +110,17 @@ void Scene::finish_rebind() {
   regional_albedo_ = next_regional_albedo_;
 }
 
+void Scene::join_linker() {
+  if (linker_.joinable()) linker_.join();
+  if (linker_error_) {
+    const std::exception_ptr error = linker_error_;
+    linker_error_ = nullptr;
+    std::rethrow_exception(error);
+  }
+}
+
 Scene::~Scene() {
+  if (linker_.joinable()) linker_.join();
   for (Targets& t : targets_) release_targets(t);
   glDeleteQueries(kQueries, queries_.data());
 }
@@ -124,29 +198,22 @@ atmos::GlobeView globe_view(const SceneFrame& f, const glm::dmat4& view, const g
 }  // namespace
 
 GLuint Scene::composite(const SceneFrame& f, Targets& t, const glm::dmat4& view, const glm::dmat4& projection) {
-  atmos::FrameInput input;
+  atmos::FrameInput input = frame_input(f, t.width, t.height, view, projection);
   input.colour = t.colour;
   input.depth = t.depth;
-  input.width = t.width;
-  input.height = t.height;
-  input.depth_encoding = atmos::DepthEncoding::reversed_z;
-  input.view = view;
-  input.projection = projection;
-  input.sun_direction = f.sun;
-  input.nits_per_unit = kNitsPerUnit;
-  input.stars = f.stars;
-  input.moons = f.moons;
-  input.timed = f.timed;
   input.output = t.output;
   return pass_->render(input);
+}
+
+void Scene::link_programs(const SceneFrame& f) const {
+  pass_->link_programs(frame_input(f, f.width, f.height, view_of(f), projection_of(f)));
 }
 
 GLuint Scene::render(const SceneFrame& f) {
   Targets& t = targets_[0];
   ensure_targets(t, f.width, f.height);
-  const double fov = f.fov_deg * M_PI / 180.0;
-  const glm::dmat4 view = glm::lookAt(f.pose.position, f.pose.position + f.pose.forward, f.pose.up);
-  const glm::dmat4 projection = atmos::reversed_z_projection(fov, double(f.width) / double(f.height), kNearM);
+  const glm::dmat4 view = view_of(f);
+  const glm::dmat4 projection = projection_of(f);
   clear(t.framebuffer);
   if (globe_) {
     const GLuint query = next_query();

@@ -14,8 +14,12 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstddef>
+#include <exception>
+#include <functional>
 #include <memory>
+#include <thread>
 #include <vector>
 
 #include "atmos/atmosphere.hpp"
@@ -65,7 +69,20 @@ class Scene {
   // `complete_tiles`: every tile a view needs is built before it is drawn
   // (stills, replays: the image does not depend on the machine's speed),
   // else the globe streams them from its thread.
-  Scene(const PlanetTables& tables, bool globe, bool regional_albedo, bool complete_tiles);
+  // `programs`: which of the pass's programs are compiled before the
+  // constructor returns (atmos::PassPrograms; the others at their first
+  // draw, or by link_programs beforehand).
+  // `early`: a frame whose pass programs are linked on a thread of the
+  // scene's own, in a context that shares the scene's objects, from the
+  // moment the pass exists (while the globe is built on this thread) until
+  // join_linker().
+  struct EarlyLink {
+    // Makes that context current on the calling thread (true), or none (false).
+    std::function<void(bool current)> make_current;
+    SceneFrame frame;
+  };
+  Scene(const PlanetTables& tables, bool globe, bool regional_albedo, bool complete_tiles,
+        atmos::PassPrograms programs = atmos::PassPrograms::common, const EarlyLink* early = nullptr);
   ~Scene();
   Scene(const Scene&) = delete;
   Scene& operator=(const Scene&) = delete;
@@ -78,9 +95,26 @@ class Scene {
   // then on. prepare_rebind returns false, with the scene unchanged, when
   // the ground differs or the scene has no globe (build a new Scene then);
   // both throw atmos::Error as the constructor, leaving the old tables.
-  bool prepare_rebind(const PlanetTables& tables);
+  // With `early`, prepare_rebind builds the new pass without programs and
+  // links those of early->frame on the scene's thread (as the
+  // constructor's `early`); finish_rebind waits for it (see linking()).
+  bool prepare_rebind(const PlanetTables& tables, const EarlyLink* early = nullptr);
   bool rebind_pending() const { return next_pass_ != nullptr; }
   void finish_rebind();
+  // Whether the scene's thread is still linking programs (the early link
+  // of the constructor or of prepare_rebind).
+  bool linking() const { return linking_.load(); }
+  // Whether the pass that draws from the next frame on (the rebind's, if
+  // one is pending) has linked every program of `frame`.
+  bool programs_linked(const SceneFrame& frame) const;
+
+  // Links the pass's programs that render(frame) draws with, without
+  // drawing (atmos::AtmospherePass::link_programs): callable from several
+  // threads at once, each with a current context that shares objects with
+  // the scene's, while no thread draws the scene.
+  void link_programs(const SceneFrame& frame) const;
+  // Waits for the early link's thread; rethrows its error.
+  void join_linker();
 
   // Draws the frame; returns the composited HDR texture (RGBA32F, valid
   // until the next render or the scene's destruction).
@@ -145,6 +179,13 @@ class Scene {
   std::array<bool, kQueries> query_pending_{};
   int query_next_ = 0;
   double terrain_ms_;
+  // Links the programs of early.frame in `pass` on linker_, and with
+  // `globe_programs` the globe's for a rebind to `pass`.
+  void start_linker(atmos::AtmospherePass& pass, const EarlyLink& early, bool globe_programs);
+  // The early link's thread, whether it runs, and its error.
+  std::thread linker_;
+  std::atomic<bool> linking_{false};
+  std::exception_ptr linker_error_;
 };
 
 // Reverses the order of the rows of an RGB image (GL's rows are

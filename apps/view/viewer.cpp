@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <memory>
 #include <mutex>
@@ -167,6 +168,7 @@ void on_glfw_error(int code, const char* description) {
 // that used the context.
 struct Window {
   GLFWwindow* window = nullptr;
+  GLFWwindow* shared = nullptr;  // nullptr if the context could not be shared
 
   Window(int width, int height, bool visible) {
     const char* display = std::getenv("DISPLAY");
@@ -189,6 +191,11 @@ struct Window {
       glfwTerminate();
       throw atmos::Error("cannot open an OpenGL 4.5 core window: " + why);
     }
+    // A hidden window whose context shares the window's objects: a scene's
+    // thread links programs in it (Scene::EarlyLink). Without it they are
+    // linked on this thread.
+    glfwWindowHint(GLFW_VISIBLE, GLFW_FALSE);
+    shared = glfwCreateWindow(1, 1, "atmos view: programs", nullptr, window);
     glfwMakeContextCurrent(window);
     glfwSwapInterval(0);
     // Keys and buttons are polled once a frame: sticky ones report a press
@@ -197,6 +204,7 @@ struct Window {
     glfwSetInputMode(window, GLFW_STICKY_MOUSE_BUTTONS, GLFW_TRUE);
   }
   ~Window() {
+    if (shared) glfwDestroyWindow(shared);
     glfwDestroyWindow(window);
     glfwTerminate();
   }
@@ -271,8 +279,15 @@ class Viewer {
   Flight::GroundHeight ground() const {
     return [this](const glm::dvec3& p) { return scene_->ground_height_m(p); };
   }
-  void swap_scene(PlanetTables&& tables, int frame);
+  // New tables: their pass (or scene) built, its programs linked on the
+  // scene's thread (swap_scene); swapped in once linked (finish_swap).
+  void swap_scene(PlanetTables&& tables);
+  bool swap_pending() const { return scene_->rebind_pending() || next_scene_ != nullptr; }
+  bool swap_ready() const;
   void finish_swap(int frame);
+  // The latest frame for the scene's thread to link the programs of new
+  // tables for (none without a shared context).
+  std::optional<Scene::EarlyLink> early_link(double top_radius_m);
   void set_slider(const std::string& name, double value);
   double slider_value(const std::string& name) const;
   void request_tables();
@@ -289,8 +304,16 @@ class Viewer {
   GLuint render_frame(SceneFrame& sf, int width, int height, int& image_width);
   void stereo_panel();
 
+  // The frame's inputs from the camera, the sun and the look.
+  SceneFrame scene_frame(int width, int height, double top_radius_m);
+  // The camera, sun and moons of the viewer's start over the planet of
+  // `tables` (the ground at its datum until the globe is built).
+  void place_camera(const PlanetTables& tables);
+
   const ViewOptions& o_;
+  GLFWwindow* shared_context_ = nullptr;
   std::unique_ptr<Scene> scene_;
+  std::unique_ptr<Scene> next_scene_;  // new tables over another ground, linking its programs
   StereoSettings stereo_;
   std::unique_ptr<StereoComposer> composer_;
   std::unique_ptr<atmos::PostProcess> post_;
@@ -327,35 +350,98 @@ class Viewer {
   }
 };
 
-void Viewer::swap_scene(PlanetTables&& tables, int frame) {
+SceneFrame Viewer::scene_frame(int width, int height, double top_radius_m) {
+  SceneFrame sf;
+  sf.pose = flight_->pose();
+  sf.fov_deg = look_.fov_deg;
+  sf.width = width;
+  sf.height = height;
+  sf.sun = sun_;
+  sf.stars = look_.stars || glm::dot(sun_, glm::normalize(sf.pose.position)) < 0.0;
+  sf.moons = place_moons(look_, sf.pose.position, sun_, top_radius_m, moon_of_date_);
+  sf.timed = timed_;
+  return sf;
+}
+
+void Viewer::place_camera(const PlanetTables& tables) {
+  const Flight::GroundHeight datum = [](const glm::dvec3&) { return 0.0; };
+  const Flight::GroundHeight g = scene_ ? ground() : datum;
+  flight_ = std::make_unique<Flight>(tables.planet.bottom_radius_m);
+  flight_->place(o_.latitude_deg, o_.longitude_deg, o_.altitude_m, o_.heading_deg, o_.pitch_deg, g);
+  sun_ = sun_from_angles(flight_->position(), o_.sun_azimuth_deg, o_.sun_elevation_deg);
+  // The date's Moon seen from the starting ground point, where it stays.
+  if (o_.moon_of_date_m)
+    moon_of_date_ = glm::normalize(flight_->position()) * tables.planet.bottom_radius_m + *o_.moon_of_date_m;
+}
+
+std::optional<Scene::EarlyLink> Viewer::early_link(double top_radius_m) {
+  if (!shared_context_) return std::nullopt;
+  SceneFrame sf;
+  {
+    std::lock_guard<std::mutex> lock(warm_mutex_);
+    sf = warm_frame_;
+  }
+  if (sf.width < 1 || sf.height < 1) return std::nullopt;
+  sf.moons = place_moons(look_, sf.pose.position, sf.sun, top_radius_m, moon_of_date_);
+  GLFWwindow* shared = shared_context_;
+  return Scene::EarlyLink{[shared](bool current) { glfwMakeContextCurrent(current ? shared : nullptr); }, sf};
+}
+
+void Viewer::swap_scene(PlanetTables&& tables) {
   const double start = now_s();
   last_tables_s_ = tables.seconds;
+  pending_status_ = tables.status;
+  // The programs of the latest frame are linked for the new pass on the
+  // scene's thread in the shared context, while this thread draws on with
+  // the old tables; they are swapped in once it is done (finish_swap).
+  const std::optional<Scene::EarlyLink> early = early_link(tables.planet.top_radius_m);
   // The same ground keeps its globe: the new pass now, the globe bound to
-  // it on the next frame (finish_swap). Another ground needs a new scene,
+  // it once its programs are linked. Another ground needs a new scene,
   // built first: if it cannot be built the old one stays.
-  if (scene_->prepare_rebind(tables)) {
+  if (scene_->prepare_rebind(tables, early ? &*early : nullptr)) {
     pending_pass_ms_ = (now_s() - start) * 1e3;
-    pending_status_ = tables.status;
     return;
   }
-  const double altitude = flight_ ? flight_->altitude_m(ground()) : 0.0;
-  auto scene = std::make_unique<Scene>(tables, o_.globe, !o_.planet_albedo, o_.frames > 0);
-  scene_ = std::move(scene);
-  if (flight_) flight_->set_bottom_radius(scene_->bottom_radius_m(), altitude, ground());
-  last_swap_ms_ = (now_s() - start) * 1e3;
-  std::printf("tables: %s in %.2f s; swapped in at frame %d (%.0f ms to build the scene)\n", tables.status.c_str(),
-              tables.seconds, frame, last_swap_ms_);
-  std::fflush(stdout);
+  next_scene_ = std::make_unique<Scene>(tables, o_.globe, !o_.planet_albedo, o_.frames > 0,
+                                        early ? atmos::PassPrograms::none : atmos::PassPrograms::common,
+                                        early ? &*early : nullptr);
+  pending_pass_ms_ = (now_s() - start) * 1e3;
+}
+
+bool Viewer::swap_ready() const {
+  return (scene_->rebind_pending() && !scene_->linking()) || (next_scene_ && !next_scene_->linking());
 }
 
 void Viewer::finish_swap(int frame) {
   const double start = now_s();
+  // Whether this frame's programs were all linked before the swap (none
+  // is then linked on this thread).
+  SceneFrame latest;
+  {
+    std::lock_guard<std::mutex> lock(warm_mutex_);
+    latest = warm_frame_;
+  }
+  if (next_scene_) {
+    std::unique_ptr<Scene> scene = std::move(next_scene_);
+    scene->join_linker();
+    const bool linked = latest.width > 0 && scene->programs_linked(latest);
+    const double altitude = flight_ ? flight_->altitude_m(ground()) : 0.0;
+    scene_ = std::move(scene);
+    if (flight_) flight_->set_bottom_radius(scene_->bottom_radius_m(), altitude, ground());
+    last_swap_ms_ = pending_pass_ms_ + (now_s() - start) * 1e3;
+    std::printf("tables: %s in %.2f s; swapped in at frame %d (%.0f ms to build the scene; programs linked "
+                "beforehand: %s)\n",
+                pending_status_.c_str(), last_tables_s_, frame, pending_pass_ms_, linked ? "yes" : "no");
+    std::fflush(stdout);
+    return;
+  }
+  const bool linked = latest.width > 0 && !scene_->linking() && scene_->programs_linked(latest);
   scene_->finish_rebind();
   const double rebind_ms = (now_s() - start) * 1e3;
   last_swap_ms_ = pending_pass_ms_ + rebind_ms;
-  std::printf("tables: %s in %.2f s; swapped in at frame %d (%.0f ms for their pass the frame before, %.0f ms to "
-              "rebind the scene)\n",
-              pending_status_.c_str(), last_tables_s_, frame, pending_pass_ms_, rebind_ms);
+  std::printf("tables: %s in %.2f s; swapped in at frame %d (%.0f ms for their pass before, %.0f ms to "
+              "rebind the scene; programs linked beforehand: %s)\n",
+              pending_status_.c_str(), last_tables_s_, frame, pending_pass_ms_, rebind_ms, linked ? "yes" : "no");
   std::fflush(stdout);
 }
 
@@ -763,6 +849,7 @@ int Viewer::run() {
 
   Window window(o_.width, o_.height, true);
   window_ = window.window;
+  shared_context_ = window.shared;
   Gui gui(window_);
   const bool regional = o_.globe && !o_.planet_albedo;
   // The precomputation keeps one core of two free for the frames.
@@ -784,7 +871,7 @@ int Viewer::run() {
     // raster (GDAL and netCDF stay on the viewer's thread).
     PlanetTables flat = tables;
     flat.surface = atmos::PlanetSurface{};
-    Scene scene(flat, o_.globe, regional, true);
+    Scene scene(flat, o_.globe, regional, true, atmos::PassPrograms::none);
     sf.moons = place_moons(look_of_warm_frame(), sf.pose.position, sf.sun, scene.top_radius_m(), moon_of_date_);
     (void)scene.render(sf);
     glFinish();
@@ -798,6 +885,7 @@ int Viewer::run() {
     Viewer& v;
     ~Release() {
       v.job_.reset();
+      v.next_scene_.reset();
       v.scene_.reset();
       v.post_.reset();
       v.composer_.reset();
@@ -833,19 +921,32 @@ int Viewer::run() {
     glfwSwapBuffers(window_);
   }
   std::printf("tables: %s in %.2f s\n", first->status.c_str(), first->seconds);
-  scene_ = std::make_unique<Scene>(*first, o_.globe, regional, o_.frames > 0);
-  post_ = std::make_unique<atmos::PostProcess>();
   edited_ = o_.planet;
   look_ = o_.look;
   stereo_ = o_.stereo;
-  flight_ = std::make_unique<Flight>(scene_->bottom_radius_m());
-  flight_->place(o_.latitude_deg, o_.longitude_deg, o_.altitude_m, o_.heading_deg, o_.pitch_deg, ground());
-  sun_ = sun_from_angles(flight_->position(), o_.sun_azimuth_deg, o_.sun_elevation_deg);
-  // The date's Moon seen from the starting ground point, where it stays.
-  if (o_.moon_of_date_m)
-    moon_of_date_ = glm::normalize(flight_->position()) * scene_->bottom_radius_m() + *o_.moon_of_date_m;
   record_.globe = o_.globe;
   record_.planet_albedo = o_.planet_albedo;
+  // The first frame's pass programs alone are linked before it: on a
+  // thread of the scene's in the hidden shared context from the moment the
+  // pass exists (while this thread builds the globe), and here for the
+  // camera on the globe. Where no context could be shared, here alone.
+  int first_width = 0, first_height = 0;
+  glfwGetFramebufferSize(window_, &first_width, &first_height);
+  first_width = std::max(first_width, 1);
+  first_height = std::max(first_height, 1);
+  place_camera(*first);
+  std::optional<Scene::EarlyLink> early;
+  if (shared_context_) {
+    GLFWwindow* shared = shared_context_;
+    early = Scene::EarlyLink{[shared](bool current) { glfwMakeContextCurrent(current ? shared : nullptr); },
+                             scene_frame(first_width, first_height, first->planet.top_radius_m)};
+  }
+  scene_ = std::make_unique<Scene>(*first, o_.globe, regional, o_.frames > 0, atmos::PassPrograms::none,
+                                   early ? &*early : nullptr);
+  place_camera(*first);
+  scene_->link_programs(scene_frame(first_width, first_height, scene_->top_radius_m()));
+  scene_->join_linker();
+  post_ = std::make_unique<atmos::PostProcess>();
 
   GLuint blit = 0;
   glCreateFramebuffers(1, &blit);
@@ -866,9 +967,10 @@ int Viewer::run() {
   constexpr double kMaxWaitForTablesS = 180.0;
   double waited_from = -1.0;
   int settle_until = 0;  // a scripted session runs up to this frame after a swap
+  bool first_linked = false;  // the first frame's programs, linked before it
   for (int frame = 0; !glfwWindowShouldClose(window_); ++frame) {
     if (frames > 0 && frame >= frames) {
-      if (!script || (!awaiting_tables_ && frame >= settle_until)) break;
+      if (!script || (!awaiting_tables_ && !swap_pending() && frame >= settle_until)) break;
       if (waited_from < 0.0) waited_from = now_s();
       if (now_s() - waited_from > kMaxWaitForTablesS) break;
     }
@@ -882,19 +984,22 @@ int Viewer::run() {
 
     // New tables: swapped in on this thread, the GL context's.
     bool swapped = false;
-    if (scene_->rebind_pending()) {
-      try {
-        finish_swap(frame);
-      } catch (const std::exception& e) {
-        message_ = e.what();
-        message_is_error_ = true;
-        edited_ = scene_->params();
+    if (swap_pending()) {
+      if (swap_ready()) {
+        try {
+          finish_swap(frame);
+        } catch (const std::exception& e) {
+          next_scene_.reset();
+          message_ = e.what();
+          message_is_error_ = true;
+          edited_ = scene_->params();
+        }
+        swapped = true;
+        settle_until = frame + 1 + kFramesAfterSwap;
       }
-      swapped = true;
-      settle_until = frame + 1 + kFramesAfterSwap;
     } else if (std::optional<PlanetTables> t = job_->take_result()) {
       try {
-        swap_scene(std::move(*t), frame);
+        swap_scene(std::move(*t));
         message_.clear();
       } catch (const std::exception& e) {
         message_ = e.what();
@@ -946,15 +1051,8 @@ int Viewer::run() {
     GLuint hdr = 0;
     bool recorded = false;
     if (width > 0 && height > 0) {
-      SceneFrame sf;
-      sf.pose = flight_->pose();
-      sf.fov_deg = look_.fov_deg;
-      sf.width = width;
-      sf.height = height;
-      sf.sun = sun_;
-      sf.stars = look_.stars || glm::dot(sun_, glm::normalize(sf.pose.position)) < 0.0;
-      sf.moons = place_moons(look_, sf.pose.position, sun_, scene_->top_radius_m(), moon_of_date_);
-      sf.timed = timed_;
+      SceneFrame sf = scene_frame(width, height, scene_->top_radius_m());
+      if (frame == 0) first_linked = scene_->programs_linked(sf);
       int image_width = width;
       hdr = render_frame(sf, width, height, image_width);
       {
@@ -982,7 +1080,8 @@ int Viewer::run() {
       ImGui::Render();
       ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
       const bool last =
-          frames > 0 && frame >= frames - 1 && !(script && (awaiting_tables_ || frame + 1 < settle_until));
+          frames > 0 && frame >= frames - 1 &&
+          !(script && (awaiting_tables_ || swap_pending() || frame + 1 < settle_until));
       if (last)
         for (const std::string& path : o_.screenshots)
           write_screenshot(path, hdr, has_extension(path, ".exr") ? image_width : width, height);
@@ -1007,7 +1106,8 @@ int Viewer::run() {
     glFinish();
     const double frame_ms = (now_s() - frame_start) * 1e3;
     if (frame == 0) {
-      std::printf("first frame: %.2f s after the start\n", now_s() - run_start_s);
+      std::printf("first frame: %.2f s after the start (programs linked beforehand: %s)\n", now_s() - run_start_s,
+                  first_linked ? "yes" : "no");
       std::fflush(stdout);
     }
     log_.add(frame_ms, dragging, swapped);
