@@ -37,8 +37,11 @@
 #include "physics/eclipse_cpp.hpp"
 #include "physics/moons.hpp"
 #include "physics/parameters.hpp"
-#include "physics/water_cpp.hpp"
+#include "physics/view_ray_scattering_cpp.hpp"
+#include "physics/water.hpp"
 #include "planet/ocean_internal.hpp"
+#include "runtime/table_samplers.hpp"
+#include "table_sizes.hpp"
 
 namespace {
 
@@ -91,6 +94,13 @@ class OceanGpu : public atmos_test::EarthGpuTest {
     target.clear();
     ocean.draw(view, time_s);
     return target.read_colour();
+  }
+
+  // The conversion of the Earth tables' channels (its three working
+  // wavelengths) to linear sRGB, the pass's ATMOS_RADIANCE_TO_SRGB.
+  static glm::mat3 channels_to_srgb() {
+    return atmos::radiance_to_srgb_matrix(
+        {earth_->wavelengths_nm[0], earth_->wavelengths_nm[1], earth_->wavelengths_nm[2]});
   }
 
   // The water's parameters as the ocean makes them for the Earth tables
@@ -160,8 +170,10 @@ class OceanGpu : public atmos_test::EarthGpuTest {
 
 // From 2000 km, the glint of every sea pixel against the CPU twin of the
 // same BRDF (water_glint_brdf) at the pixel's sphere point, times the sun's
-// irradiance the shader used there (drawn with kOceanSunIrradiance) and the
-// sun's cosine; the waves are all far below the pixels (36 km here), so the
+// irradiance the shader used there (drawn with kOceanSunIrradiance, in
+// linear sRGB: M E with M the tables' channels' conversion, E the
+// channels, here the three working wavelengths) and the sun's cosine, per
+// wavelength and converted as the shader does: M (f ⊙ M⁻¹ E_srgb) μ_s; the waves are all far below the pixels (36 km here), so the
 // BRDF has Cox & Munk's whole variance about the sphere's normal.
 TEST_F(OceanGpu, GlintFromOrbitMatchesTheCpuTwin) {
   atmos::OceanSettings settings;
@@ -184,6 +196,7 @@ TEST_F(OceanGpu, GlintFromOrbitMatchesTheCpuTwin) {
   const std::vector<float> irradiance = draw(ocean, view, target);
   expect_finite(glint, "glint");
   const physics::WaterParams water = water_params(settings);
+  const glm::dmat3 to_srgb(channels_to_srgb()), to_channels = glm::inverse(to_srgb);
   float peak = 0.0f;
   for (size_t i = 0; i < glint.size(); i += 4) peak = std::max(peak, glint[i + 1]);
   ASSERT_GT(peak, 0.0f);
@@ -203,8 +216,10 @@ TEST_F(OceanGpu, GlintFromOrbitMatchesTheCpuTwin) {
       const physics::vec3 brdf = physics::water_glint_brdf(water, physics::vec3(n), physics::vec3(upwind_at(camera, n, 30.0)),
                                                            physics::vec3(v), physics::vec3(sun));
       const double mu_s = std::max(glm::dot(sun, n), 0.0);
+      const float* e = &irradiance[size_t(4 * (y * width + x))];
+      const glm::dvec3 twin = to_srgb * (glm::dvec3(brdf) * (to_channels * glm::dvec3(e[0], e[1], e[2]))) * mu_s;
       for (int c = 0; c < 3; ++c) {
-        const double expected = double(brdf[c]) * irradiance[size_t(4 * (y * width + x) + c)] * mu_s;
+        const double expected = twin[c];
         if (expected < 0.01 * peak) continue;
         ++compared;
         worst = std::max(worst, std::abs(g[c] - expected) / expected);
@@ -711,9 +726,11 @@ TEST_F(OceanGpu, LakesAreDrawnWhereTheMaskSays) {
   EXPECT_GT(lake, 500);
   EXPECT_GT(dry, 500);
   EXPECT_EQ(wrong, 0) << "of " << lake << " lake and " << dry << " dry pixels";
-  // 5 m of clear water over sand: the seabed's light, green above blue
-  // (deep clear water is blue over green by far: WaterColumn's colour test).
-  EXPECT_GT(below_sum.y, below_sum.z);
+  // 5 m of clear water over sand: the seabed's light, its red more than a
+  // quarter of its green (deep clear water's red is 6 % of its green at
+  // 680 and 550 nm, and below 0 in sRGB at 15 wavelengths: WaterColumn's
+  // and WaterSpectral's colour tests).
+  EXPECT_GT(below_sum.x, 0.25 * below_sum.y);
   std::printf("lakes: %d lake pixels drawn, %d dry ones not (wrong %d); light from below rgb %.3g %.3g %.3g\n", lake,
               dry, wrong, below_sum.x / lake, below_sum.y / lake, below_sum.z / lake);
 
@@ -780,11 +797,12 @@ TEST_F(OceanGpu, FullMoonGlintIsTheSunsScaledByTheMoonsIrradiance) {
 // at the point below the camera, and 20 dim ones below every horizon of
 // the view, of which only 16 are kept (the bright one among them). From
 // 2000 km by night (the sun opposite s), against the sun's glint by day
-// with the sun in s: per pixel the star's glint over the sun's is
-// (M E_star)_c / (M E_sun)_c, E the irradiances above the atmosphere in
-// the tables' channels, M their conversion to linear sRGB (the BRDF, the
-// cosines and the transmittance along s cancel); without the stars the
-// night's glint is dark.
+// with the sun in s: per pixel and channel of the tables the star's glint
+// over the sun's is E_star / E_sun, E the irradiances above the atmosphere
+// in the tables' channels (the BRDF, the cosines and the transmittance
+// along s cancel channel by channel; the pixels are taken back from linear
+// sRGB to the channels with M⁻¹, M the shader's conversion); without the
+// stars the night's glint is dark.
 TEST_F(OceanGpu, BrightStarGlintIsTheSunsScaledByItsIrradiance) {
   atmos::OceanSettings settings;
   settings.water.wind_speed_m_s = 6.0;
@@ -818,18 +836,109 @@ TEST_F(OceanGpu, BrightStarGlintIsTheSunsScaledByItsIrradiance) {
   pass_->set_star_catalogue({});
   EXPECT_THROW(ocean.set_stars(true, glm::dmat3(2.0)), atmos::Error);
   expect_finite(star_glint, "star glint");
-  const glm::mat3 m = atmos::radiance_to_srgb_matrix(
-      {earth_->wavelengths_nm[0], earth_->wavelengths_nm[1], earth_->wavelengths_nm[2]});
   const physics::AtmosphereParams params = physics::make_render_params(*earth_, tables_->sizes);
-  const glm::vec3 sun_srgb = m * glm::vec3(params.solar_irradiance);
-  const glm::vec3 star_srgb = m * atmos::star_channel_irradiance(bright, earth_->wavelengths_nm);
+  const glm::vec3 sun_channels = glm::vec3(params.solar_irradiance);
+  const glm::vec3 star_channels = atmos::star_channel_irradiance(bright, earth_->wavelengths_nm);
+  const glm::mat3 to_channels = glm::inverse(channels_to_srgb());
+  const auto channels = [&](std::vector<float> image) {
+    for (size_t i = 0; i < image.size(); i += 4) {
+      if (image[i] == -1.0f) continue;  // not drawn
+      const glm::vec3 c = to_channels * glm::vec3(image[i], image[i + 1], image[i + 2]);
+      for (int k = 0; k < 3; ++k) image[i + size_t(k)] = c[k];
+    }
+    return image;
+  };
   int compared = 0;
-  const double worst =
-      worst_ratio(sun_glint, star_glint, dark, glm::dvec3(star_srgb) / glm::dvec3(sun_srgb), compared);
+  const double worst = worst_ratio(channels(sun_glint), channels(star_glint), channels(dark),
+                                   glm::dvec3(star_channels) / glm::dvec3(sun_channels), compared);
   EXPECT_GT(compared, 300);
   EXPECT_LT(worst, 0.02) << "over " << compared << " channels";
   std::printf("star's glint / sun's: %d channels, worst %.2e from the irradiances' ratio (green %.3e)\n", compared,
-              worst, double(star_srgb[1] / sun_srgb[1]));
+              worst, double(star_channels[1] / sun_channels[1]));
+}
+
+// At 15 working wavelengths (small tables of their own, five triples): from
+// 2000 km by day, every sea pixel's sun glint and light from below against
+// the CPU twin water_spectral_radiance at the pixel's sphere point, lit by
+// the sun's irradiance of each triple (its solar irradiance times the
+// transmittance of its tile) and the sky's irradiance from the tables'
+// CPU samplers, converted to colour as the pass does (linear sRGB = 683
+// times the channels). Drawn with the pass's functions (kOceanDirectLight)
+// rather than the light maps, which the ocean then does not fill: at 15
+// wavelengths the sky's map alone takes minutes on llvmpipe.
+TEST_F(OceanGpu, SpectralGlintAndLightFromBelowMatchTheCpuTwin) {
+  atmos::Atmosphere earth = *earth_;
+  earth.wavelengths_nm = atmos::spectral_wavelengths(15);
+  atmos::PrecomputeOptions options;
+  options.sizes = atmos_test::small_gpu_sizes();
+  const atmos::Tables tables = atmos::precompute_tables(earth, options);
+  atmos::AtmospherePass pass(earth, tables, atmos::PlanetFrame{});
+  atmos::OceanSettings settings;
+  settings.water.wind_speed_m_s = 6.0;
+  settings.water.chlorophyll_mg_m3 = 0.3;
+  settings.wind_azimuth_deg = 30.0;
+  settings.bathymetry_texels = 16;
+  const double sea_level = 20.0;  // 20 m of water over the flat ground: the seabed shows
+  const TermsGuard guard(planet::kOceanGlint | planet::kOceanBelow | planet::kOceanDirectLight);
+  atmos::Ocean ocean(earth, flat_sea(sea_level), pass, settings);
+  const int width = 40, height = 40;
+  GlobeTarget target(width, height);
+  const double radius = earth.bottom_radius_m + sea_level;
+  const glm::dvec3 up = glm::normalize(glm::dvec3(0.3, -1.0, 0.4));
+  const glm::dvec3 camera = up * (earth.bottom_radius_m + 2000e3);
+  const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), up));
+  const glm::dvec3 sun = glm::normalize(up + 0.25 * east + 0.1 * glm::cross(up, east));
+  const atmos::GlobeView view = view_from(camera, -up, glm::cross(up, east), width, height, sun);
+  const std::vector<float> colour = draw(ocean, view, target);
+  expect_finite(colour, "spectral sea");
+
+  namespace ph = physics;
+  const ph::AtmosphereParams params = ph::make_render_params(earth, tables.sizes);
+  const std::unique_ptr<ph::SpectralSets> sets = ph::make_spectral_sets(earth, tables.sizes);
+  const std::unique_ptr<ph::WaterSpectrum> spectrum = ph::make_water_spectrum(settings.water, earth);
+  ASSERT_EQ(spectrum->count, 5);
+  const atmos::runtime::TableSamplers samplers = atmos::runtime::make_samplers(tables);
+  const glm::vec3 albedo(settings.seabed_albedo);
+  float peak = 0.0f;
+  for (size_t i = 0; i < colour.size(); i += 4) peak = std::max(peak, colour[i + 1]);
+  ASSERT_GT(peak, 0.0f);
+  int compared = 0;
+  double worst = 0.0;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const std::optional<glm::dvec3> p = sea_point(view, camera, radius, x, y);
+      const float* g = &colour[size_t(4 * (y * width + x))];
+      if (!p) continue;
+      ASSERT_NE(g[0], -1.0f) << "not drawn on the sphere at " << x << "," << y;
+      const glm::vec3 n(glm::normalize(*p)), v(glm::normalize(camera - *p)), s(sun);
+      const glm::vec3 point(*p);
+      const float r = ph::clamp_radius(params, float(radius)), mu_s = ph::clamp_cosine(glm::dot(n, s));
+      ph::vec3 sun_sets[SPECTRAL_SET_CAPACITY] = {};
+      for (int k = 0; k < spectrum->count; ++k)
+        sun_sets[k] = sets->set[k].solar_irradiance *
+                      ph::transmittance_to_sun(sets->set[k], samplers.spectral_optical_depth, r, mu_s);
+      ph::vec3 sky;
+      ph::sun_and_sky_irradiance(params, *sets, samplers.spectral_optical_depth, samplers.indirect_irradiance, point,
+                                 n, s, sky);
+      float cosine;
+      const float factor =
+          ph::water_glint_geometry(spectrum->set[0].slope_variance, n, glm::vec3(upwind_at(camera, *p / glm::length(*p), 30.0)),
+                                   v, s, cosine) *
+          std::max(glm::dot(s, n), 0.0f);
+      glm::vec3 glint;
+      const glm::vec3 below = ph::water_spectral_radiance(*spectrum, sun_sets, sky, factor, cosine, n, v, s,
+                                                          float(sea_level), albedo, glint);
+      const glm::vec3 expected = float(atmos::kMaxLuminousEfficacy / view.nits_per_unit) * (glint + below);
+      for (int c = 0; c < 3; ++c) {
+        if (expected[c] < 0.01f * peak) continue;
+        ++compared;
+        worst = std::max(worst, std::abs(double(g[c]) - double(expected[c])) / double(expected[c]));
+      }
+    }
+  EXPECT_GT(compared, 300);
+  EXPECT_LT(worst, 2e-3) << "over " << compared << " channels";
+  std::printf("15 wavelengths, glint and light from below vs CPU twin: %d channels, worst relative difference %.2e\n",
+              compared, worst);
 }
 
 TEST_F(OceanGpu, RejectsBadInput) {

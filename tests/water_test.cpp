@@ -17,10 +17,14 @@
 #include <vector>
 
 #include "atmos/atmosphere.hpp"
+#include "atmos/colour.hpp"
+#include "atmos/planet_file.hpp"
+#include "atmos/water.hpp"
 #include "atmos/renderer.hpp"
 #include "data/embedded_files.hpp"
 #include "fullscreen_program.hpp"
 #include "gpu/shader_source.hpp"
+#include "physics/parameters.hpp"
 #include "physics/water.hpp"
 
 namespace {
@@ -588,6 +592,169 @@ TEST(WaterParameters, BadInputGetsAClearError) {
 // The GLSL: water.glsl compiled with definitions.glsl and the subset macros
 // in a full-screen fragment shader on the GPU, evaluating the functions at
 // the same inputs as their C++ twins.
+// --- At the atmosphere's working wavelengths (water_spectral_radiance) ---------
+
+atmos::Atmosphere earth_at(int wavelengths) {
+  atmos::Atmosphere earth = atmos::load_atmosphere("earth");
+  if (wavelengths != 3) earth.wavelengths_nm = atmos::spectral_wavelengths(wavelengths);
+  return earth;
+}
+
+// The sun's irradiance at wavelength λ after a vertical path through a
+// Rayleigh atmosphere of optical depth 0.1 at 550 nm (a smooth stand-in for
+// the tables' transmittance), per triple of `spectrum`'s wavelengths.
+double test_sun(const atmos::Atmosphere& a, double l) {
+  return a.solar_irradiance.at(l) * std::exp(-0.1 * std::pow(550.0 / l, 4.0));
+}
+
+// With three working wavelengths the channels are the wavelengths: one
+// triple, the identity both ways, the water at those wavelengths, and the
+// spectral sum is water_leaving_radiance and F g E_sun themselves.
+TEST(WaterSpectral, ThreeWavelengthsAreTheChannels) {
+  const atmos::Atmosphere earth = earth_at(3);
+  ph::Water water;
+  water.chlorophyll_mg_m3 = 0.5;
+  const std::unique_ptr<ph::WaterSpectrum> s = ph::make_water_spectrum(water, earth);
+  ASSERT_EQ(s->count, 1);
+  const ph::WaterParams w = ph::make_water_params(water, ph::water_channel_wavelengths(earth));
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) {
+      EXPECT_EQ(s->to_channels[0][c][r], c == r ? 1.0f : 0.0f);
+      EXPECT_EQ(s->from_channels[0][c][r], c == r ? 1.0f : 0.0f);
+    }
+  EXPECT_EQ(s->set[0].absorption, w.absorption);
+  EXPECT_EQ(s->set[0].refractive_index, w.refractive_index);
+  const glm::vec3 view = glm::vec3(direction(radians(40.0), 0.3)), sun = glm::vec3(direction(radians(30.0), 2.9));
+  const glm::vec3 e_sun(1.6f, 1.8f, 1.9f), e_sky(0.2f, 0.3f, 0.5f), albedo(0.4f, 0.35f, 0.3f);
+  ph::vec3 sun_sets[SPECTRAL_SET_CAPACITY] = {};
+  sun_sets[0] = e_sun;
+  for (float depth : {0.5f, 4.0f, 1e4f}) {
+    glm::vec3 glint;
+    const glm::vec3 below = ph::water_spectral_radiance(*s, sun_sets, e_sky, 0.7f, 0.9f, kNormal, view, sun, depth,
+                                                        albedo, glint);
+    const glm::vec3 expected = ph::water_leaving_radiance(w, kNormal, view, sun, e_sun, e_sky, depth, albedo);
+    const glm::vec3 expected_glint = ph::fresnel_reflectance(0.9f, w.refractive_index) * 0.7f * e_sun;
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(below[c], expected[c], 2e-6 * expected[c]) << depth << " " << c;
+      EXPECT_NEAR(glint[c], expected_glint[c], 2e-6 * expected_glint[c]) << c;
+    }
+  }
+}
+
+// At 14 working wavelengths (five triples, the last padded), the spectral
+// sum against its definition evaluated wavelength by wavelength in double:
+// the water's optics at each λ_j alone, E_sky(λ_j) = E_0(λ_j) times the
+// channels' sky-to-sun ratio interpolated linearly in ln λ between 680, 550
+// and 440 nm, the seabed's albedo likewise, and the channels
+// Σ_j w_j L(λ_j) / 683 with the atmosphere's own weights w_j
+// (spectral_to_srgb_weights, the CIE 1931 functions to linear sRGB).
+TEST(WaterSpectral, EveryWavelengthIsConvertedAsTheAtmosphere) {
+  const atmos::Atmosphere earth = earth_at(14);
+  ph::Water water;
+  water.chlorophyll_mg_m3 = 1.0;
+  const std::unique_ptr<ph::WaterSpectrum> s = ph::make_water_spectrum(water, earth);
+  ASSERT_EQ(s->count, 5);
+  const std::vector<double>& lambda = earth.wavelengths_nm;
+  const std::vector<glm::dvec3> weights = atmos::spectral_to_srgb_weights(lambda);
+  ph::vec3 sun_sets[SPECTRAL_SET_CAPACITY] = {};
+  glm::dvec3 solar(0.0);
+  for (size_t j = 0; j < lambda.size(); ++j) {
+    sun_sets[j / 3][int(j % 3)] = float(test_sun(earth, lambda[j]));
+    solar += weights[j] * earth.solar_irradiance.at(lambda[j]) / atmos::kMaxLuminousEfficacy;
+  }
+  for (int i = int(lambda.size()); i < 15; ++i) sun_sets[4][i % 3] = sun_sets[4][1];  // the padding's
+  const glm::dvec3 sky = 0.12 * solar * glm::dvec3(0.7, 0.9, 1.3);
+  const glm::dvec3 albedo(0.45, 0.3, 0.15);
+  // Linear in ln λ between the channels' 680, 550, 440 nm, held beyond.
+  const auto interpolate = [](double l, const glm::dvec3& v) {
+    if (l >= 680.0) return v.x;
+    if (l <= 440.0) return v.z;
+    if (l >= 550.0) return v.y + (v.x - v.y) * std::log(l / 550.0) / std::log(680.0 / 550.0);
+    return v.z + (v.y - v.z) * std::log(l / 440.0) / std::log(550.0 / 440.0);
+  };
+  const glm::vec3 view = glm::vec3(direction(radians(25.0), 0.3)), sun = glm::vec3(direction(radians(35.0), 2.9));
+  for (float depth : {0.5f, 3.0f, 30.0f, 1e4f}) {
+    glm::vec3 glint;
+    const glm::vec3 below = ph::water_spectral_radiance(*s, sun_sets, glm::vec3(sky), 0.6f, 0.8f, kNormal, view, sun,
+                                                        depth, glm::vec3(albedo), glint);
+    glm::dvec3 expected(0.0), expected_glint(0.0);
+    for (size_t j = 0; j < lambda.size(); ++j) {
+      const double l = std::clamp(lambda[j], 300.0, 830.0);
+      const ph::WaterParams w = ph::make_water_params(water, {l, l, l});
+      const double e_sun = test_sun(earth, lambda[j]);
+      const double e_sky = earth.solar_irradiance.at(lambda[j]) * std::exp(interpolate(lambda[j], glm::log(sky / solar)));
+      const double a = interpolate(lambda[j], albedo);
+      const double radiance = ph::water_leaving_radiance(w, kNormal, view, sun, glm::vec3(float(e_sun)),
+                                                         glm::vec3(float(e_sky)), depth, glm::vec3(float(a)))
+                                  .x;
+      expected += weights[j] * radiance / atmos::kMaxLuminousEfficacy;
+      expected_glint += weights[j] * double(ph::fresnel_reflectance(0.8f, w.refractive_index.x)) * 0.6 * e_sun /
+                        atmos::kMaxLuminousEfficacy;
+    }
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(below[c], expected[c], 1e-4 * std::abs(expected[c])) << "depth " << depth << " channel " << c;
+      EXPECT_NEAR(glint[c], expected_glint[c], 1e-4 * std::abs(expected_glint[c])) << c;
+    }
+  }
+}
+
+// What the working wavelengths change. Deep clear water (0.05 mg m^-3)
+// under the sun's spectrum above the atmosphere, seen from the zenith with
+// the sun 30 degrees from it, at 15 wavelengths against the three-channel
+// evaluation (the water's optics at 680, 550 and 440 nm applied to the
+// sRGB of the same light, water_optics). Its light is a spectrum that falls
+// by 100x from 440 to 600 nm; at 15 wavelengths its sRGB red is negative:
+// the colour lies outside the sRGB gamut, beyond the blue-green edge
+// (chromaticity printed), which three positive channels cannot show, and
+// where pure water's absorption grows eightfold across the red channel
+// (580-700 nm; Pope & Fry 1997) the red at 680 nm alone is no measure of
+// it. The blue, where absorption is flat, agrees within 10 %; the glint,
+// whose Fresnel reflectance changes by 0.4 % per channel, within 1 %.
+TEST(WaterSpectral, DeepWaterDiffersWhereAbsorptionChangesAcrossAChannel) {
+  const atmos::Atmosphere earth = earth_at(15);
+  ph::Water water;
+  water.chlorophyll_mg_m3 = 0.05;
+  const std::unique_ptr<ph::WaterSpectrum> s = ph::make_water_spectrum(water, earth);
+  const std::vector<double>& lambda = earth.wavelengths_nm;
+  const std::vector<glm::dvec3> weights = atmos::spectral_to_srgb_weights(lambda);
+  ph::vec3 sun_sets[SPECTRAL_SET_CAPACITY] = {};
+  glm::dvec3 solar(0.0);
+  for (size_t j = 0; j < lambda.size(); ++j) {
+    sun_sets[j / 3][int(j % 3)] = float(earth.solar_irradiance.at(lambda[j]));
+    solar += weights[j] * earth.solar_irradiance.at(lambda[j]) / atmos::kMaxLuminousEfficacy;
+  }
+  const glm::vec3 view = kNormal, sun = glm::vec3(direction(radians(30.0), 0.0));
+  const glm::vec3 sky(0.0f), albedo(0.0f);
+  glm::vec3 glint;
+  const glm::vec3 spectral =
+      ph::water_spectral_radiance(*s, sun_sets, sky, 0.5f, 0.95f, kNormal, view, sun, 1e4f, albedo, glint);
+  const atmos::WaterOptics o = atmos::water_optics(water, earth);
+  ph::WaterParams w = ph::make_water_params(water, o.wavelengths_nm);
+  const glm::vec3 three =
+      ph::water_leaving_radiance(w, kNormal, view, sun, glm::vec3(solar), sky, 1e4f, albedo);
+  const glm::vec3 three_glint = ph::fresnel_reflectance(0.95f, w.refractive_index) * 0.5f * glm::vec3(solar);
+  const glm::vec3 ratio = spectral / three, glint_ratio = glint / three_glint;
+  // CIE xy from linear sRGB (IEC 61966-2-1's matrix).
+  const auto xy = [](const glm::vec3& rgb) {
+    const glm::dvec3 c(rgb);
+    const glm::dvec3 xyz(0.4124 * c.x + 0.3576 * c.y + 0.1805 * c.z, 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z,
+                         0.0193 * c.x + 0.1192 * c.y + 0.9505 * c.z);
+    return glm::dvec2(xyz.x, xyz.y) / (xyz.x + xyz.y + xyz.z);
+  };
+  const glm::dvec2 xy_spectral = xy(spectral), xy_three = xy(three);
+  std::printf("deep water, 15 wavelengths over 3 channels: rgb %.4f %.4f %.4f (xy %.3f %.3f against %.3f %.3f); "
+              "glint %.4f %.4f %.4f\n",
+              ratio.x, ratio.y, ratio.z, xy_spectral.x, xy_spectral.y, xy_three.x, xy_three.y, glint_ratio.x,
+              glint_ratio.y, glint_ratio.z);
+  EXPECT_LT(spectral.x, 0.0f);
+  EXPECT_GT(three.x, 0.0f);
+  EXPECT_NEAR(ratio.z, 1.0f, 0.1f);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(glint_ratio[c], 1.0f, 0.01f) << c;
+  // Still blue: blue over green over red.
+  EXPECT_GT(spectral.z, spectral.y);
+  EXPECT_GT(spectral.y, spectral.x);
+}
+
 class WaterGpu : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -607,6 +774,37 @@ class WaterGpu : public ::testing::Test {
 std::string glsl_vec3(const glm::vec3& v) {
   return "vec3(" + atmos::gpu::glsl_float(v.x) + ", " + atmos::gpu::glsl_float(v.y) + ", " +
          atmos::gpu::glsl_float(v.z) + ")";
+}
+
+std::string glsl_params(const ph::WaterParams& w) {
+  return "WaterParams(" + glsl_vec3(w.refractive_index) + ", " + glsl_vec3(w.absorption) + ", " +
+         glsl_vec3(w.backscattering) + ", " + glsl_vec3(w.diffuse_reflectance) + ", vec2(" +
+         atmos::gpu::glsl_float(w.slope_variance.x) + ", " + atmos::gpu::glsl_float(w.slope_variance.y) + "))";
+}
+
+std::string glsl_mat3(const glm::mat3& m) {
+  return "mat3(" + glsl_vec3(m[0]) + ", " + glsl_vec3(m[1]) + ", " + glsl_vec3(m[2]) + ")";
+}
+
+// A WaterSpectrum as a GLSL constant, and an array of vec3 per triple.
+std::string glsl_spectrum(const ph::WaterSpectrum& s) {
+  std::string params, solar, to, from;
+  for (int k = 0; k < SPECTRAL_SET_CAPACITY; ++k) {
+    const std::string comma = k + 1 < SPECTRAL_SET_CAPACITY ? ", " : "";
+    params += glsl_params(s.set[k]) + comma;
+    solar += glsl_vec3(s.solar_irradiance[k]) + comma;
+    to += glsl_mat3(s.to_channels[k]) + comma;
+    from += glsl_mat3(s.from_channels[k]) + comma;
+  }
+  const std::string n = std::to_string(SPECTRAL_SET_CAPACITY);
+  return "const WaterSpectrum SPECTRUM = WaterSpectrum(" + std::to_string(s.count) + ", WaterParams[" + n + "](" +
+         params + "), vec3[" + n + "](" + solar + "), mat3[" + n + "](" + to + "), mat3[" + n + "](" + from + "));\n";
+}
+
+std::string glsl_vec3_array(const ph::vec3* v, const char* name) {
+  std::string text = "const vec3 " + std::string(name) + "[" + std::to_string(SPECTRAL_SET_CAPACITY) + "] = vec3[](";
+  for (int k = 0; k < SPECTRAL_SET_CAPACITY; ++k) text += glsl_vec3(v[k]) + (k + 1 < SPECTRAL_SET_CAPACITY ? ", " : ");\n");
+  return text;
 }
 
 // The inputs of pixel (x, y) of the twin test, computed the same way on
@@ -648,9 +846,21 @@ TEST_F(WaterGpu, GlslCompilesAndMatchesTheCppTwins) {
                              glsl_vec3(w.absorption) + ", " + glsl_vec3(w.backscattering) + ", " +
                              glsl_vec3(w.diffuse_reflectance) + ", vec2(" + atmos::gpu::glsl_float(w.slope_variance.x) +
                              ", " + atmos::gpu::glsl_float(w.slope_variance.y) + "));\n";
+  // The water at 15 working wavelengths (five triples), lit by the sun
+  // through a Rayleigh-like transmittance and a sky of the channels.
+  const atmos::Atmosphere earth = earth_at(15);
+  const std::unique_ptr<ph::WaterSpectrum> spectrum = ph::make_water_spectrum(water, earth);
+  ph::vec3 sun_sets[SPECTRAL_SET_CAPACITY] = {};
+  for (size_t j = 0; j < earth.wavelengths_nm.size(); ++j)
+    sun_sets[j / 3][int(j % 3)] = float(test_sun(earth, earth.wavelengths_nm[j]));
+  glm::vec3 solar(0.0f);
+  for (int k = 0; k < spectrum->count; ++k) solar += spectrum->to_channels[k] * spectrum->solar_irradiance[k];
+  const glm::vec3 sky = 0.15f * solar * glm::vec3(0.6f, 0.8f, 1.2f);
   const std::string fragment = std::string("#version 450 core\n") +
                                "#define IN(T) in T\n#define OUT(T) out T\n#define INOUT(T) inout T\n#define INLINE\n" +
-                               definitions + water_glsl + params + kTwinInputs + R"(
+                               definitions + water_glsl + params + glsl_spectrum(*spectrum) +
+                               glsl_vec3_array(sun_sets, "SUN_SETS") + "const vec3 SKY = " + glsl_vec3(sky) + ";\n" +
+                               kTwinInputs + R"(
 layout(location = 0) uniform int which;
 layout(location = 0) out vec4 result;
 void main() {
@@ -668,6 +878,14 @@ void main() {
   if (which == 3) value = water_leaving_radiance(WATER, normal, view, sun, vec3(1.9, 1.8, 1.7), vec3(0.3, 0.4, 0.5),
                                                  depth, vec3(0.3, 0.25, 0.2));
   if (which == 4) value = fresnel_reflectance(view.z, WATER.refractive_index);
+  if (which == 5 || which == 6) {
+    float cosine;
+    float factor = water_glint_geometry(WATER.slope_variance, normal, upwind, view, sun, cosine) * sun.z;
+    vec3 glint;
+    value = water_spectral_radiance(SPECTRUM, SUN_SETS, SKY, factor, cosine, normal, view, sun, depth,
+                                    vec3(0.3, 0.25, 0.2), glint);
+    if (which == 6) value = glint;
+  }
   result = vec4(value, 1.0);
 }
 )";
@@ -686,8 +904,10 @@ void main() {
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
   glViewport(0, 0, kTwinWidth, kTwinHeight);
   glBindVertexArray(vao);
-  const char* names[] = {"glint BRDF", "sky reflectance", "mean sky direction", "water-leaving radiance", "Fresnel"};
-  for (int which = 0; which < 5; ++which) {
+  const char* names[] = {"glint BRDF",      "sky reflectance", "mean sky direction", "water-leaving radiance",
+                         "Fresnel",         "water-leaving radiance at 15 wavelengths",
+                         "glint at 15 wavelengths"};
+  for (int which = 0; which < 7; ++which) {
     glProgramUniform1i(program, 0, which);
     glDrawArrays(GL_TRIANGLES, 0, 3);
     std::vector<float> pixels(size_t(kTwinWidth * kTwinHeight * 4));
@@ -710,6 +930,14 @@ void main() {
           cpu = ph::water_leaving_radiance(w, kNormal, view, sun, glm::vec3(1.9f, 1.8f, 1.7f),
                                            glm::vec3(0.3f, 0.4f, 0.5f), depth, glm::vec3(0.3f, 0.25f, 0.2f));
         if (which == 4) cpu = ph::fresnel_reflectance(view.z, w.refractive_index);
+        if (which == 5 || which == 6) {
+          float cosine;
+          const float factor = ph::water_glint_geometry(w.slope_variance, kNormal, upwind, view, sun, cosine) * sun.z;
+          glm::vec3 glint;
+          cpu = ph::water_spectral_radiance(*spectrum, sun_sets, sky, factor, cosine, kNormal, view, sun, depth,
+                                            glm::vec3(0.3f, 0.25f, 0.2f), glint);
+          if (which == 6) cpu = glint;
+        }
         const float* gpu = &pixels[size_t((y * kTwinWidth + x) * 4)];
         for (int c = 0; c < 3; ++c) {
           ASSERT_TRUE(std::isfinite(gpu[c])) << names[which] << " at " << x << ", " << y;

@@ -7,7 +7,10 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include <glm/mat3x3.hpp>
+
 #include <array>
+#include <vector>
 
 #include "atmos/atmosphere.hpp"
 
@@ -41,5 +44,22 @@ struct WaterOptics {
 // use too. Throws atmos::Error with one line naming the first input
 // outside its range (or not finite).
 WaterOptics water_optics(const Water& water, const Atmosphere& atmosphere);
+
+// The water at every working wavelength of `atmosphere`, in its triples of
+// wavelengths as its tables are computed (docs/water.md, "Wavelengths and
+// channels"): per triple, the optics (wavelengths outside 300-830 nm take
+// the pure-water table's end values), the solar irradiance the tables take
+// there, the matrix from the triple's radiance to the tables' channels (the
+// atmosphere's own; the identity with three wavelengths) and the weights
+// that spread channel values over the triple's wavelengths (linear
+// interpolation in ln λ between water_optics's wavelengths; the identity
+// with three). Throws atmos::Error as water_optics does.
+struct WaterTriples {
+  std::vector<WaterOptics> optics;
+  std::vector<glm::dvec3> solar_irradiance;  // the tables' units
+  std::vector<glm::dmat3> to_channels;
+  std::vector<glm::dmat3> from_channels;
+};
+WaterTriples water_triples(const Water& water, const Atmosphere& atmosphere);
 
 }  // namespace atmos

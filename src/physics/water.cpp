@@ -3,6 +3,7 @@
 // shared functions (src/physics/water.glsl).
 #include "physics/water.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "atmos/atmosphere.hpp"
+#include "physics/parameters.hpp"
 #include "data/embedded_files.hpp"
 
 namespace atmos::physics {
@@ -153,6 +155,60 @@ WaterParams make_water_params(const Water& water, const std::array<double, 3>& w
   }
   p.slope_variance = cox_munk_slope_variance(float(water.wind_speed_m_s));
   return p;
+}
+
+std::array<double, 3> water_channel_wavelengths(const Atmosphere& atmosphere) {
+  if (atmosphere.wavelengths_nm.size() == 3)
+    return {atmosphere.wavelengths_nm[0], atmosphere.wavelengths_nm[1], atmosphere.wavelengths_nm[2]};
+  return kRenderPhaseWavelengths;
+}
+
+std::unique_ptr<WaterSpectrum> make_water_spectrum(const Water& water, const Atmosphere& atmosphere) {
+  const int count = spectral_set_count(atmosphere.wavelengths_nm);
+  if (count < 1 || count > SPECTRAL_SET_CAPACITY)
+    throw Error("water: " + std::to_string(atmosphere.wavelengths_nm.size()) +
+                " working wavelengths, not 1 to " + std::to_string(3 * SPECTRAL_SET_CAPACITY));
+  const std::array<double, 3> channels = water_channel_wavelengths(atmosphere);
+  // The channels in increasing wavelength, for the interpolation.
+  std::array<int, 3> order = {0, 1, 2};
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return channels[size_t(a)] < channels[size_t(b)]; });
+  // w_c(λ): linear in ln λ between the neighbouring channels' wavelengths.
+  const auto weights = [&](double l) {
+    glm::dvec3 w(0.0);
+    const double lo = channels[size_t(order[0])], hi = channels[size_t(order[2])];
+    if (l <= lo) {
+      w[order[0]] = 1.0;
+    } else if (l >= hi) {
+      w[order[2]] = 1.0;
+    } else {
+      const int i = l <= channels[size_t(order[1])] ? 0 : 1;
+      const double a = channels[size_t(order[size_t(i)])], b = channels[size_t(order[size_t(i) + 1])];
+      const double t = b > a ? std::log(l / a) / std::log(b / a) : 0.0;
+      w[order[size_t(i)]] = 1.0 - t;
+      w[order[size_t(i) + 1]] = t;
+    }
+    return w;
+  };
+  auto spectrum = std::make_unique<WaterSpectrum>();
+  *spectrum = WaterSpectrum{};
+  spectrum->count = count;
+  for (int k = 0; k < count; ++k) {
+    const std::array<double, 3> w = set_wavelengths(atmosphere.wavelengths_nm, k);
+    const std::array<double, 3> clamped = {std::clamp(w[0], 300.0, 830.0), std::clamp(w[1], 300.0, 830.0),
+                                           std::clamp(w[2], 300.0, 830.0)};
+    spectrum->set[k] = make_water_params(water, clamped);
+    spectrum->solar_irradiance[k] = vec3(float(atmosphere.solar_irradiance.at(w[0])),
+                                         float(atmosphere.solar_irradiance.at(w[1])),
+                                         float(atmosphere.solar_irradiance.at(w[2])));
+    spectrum->to_channels[k] = set_to_channels(atmosphere.wavelengths_nm, k);
+    mat3 from(0.0f);
+    for (int i = 0; i < 3; ++i) {
+      const glm::dvec3 wi = weights(w[size_t(i)]);
+      for (int c = 0; c < 3; ++c) from[c][i] = float(wi[c]);
+    }
+    spectrum->from_channels[k] = from;
+  }
+  return spectrum;
 }
 
 }  // namespace atmos::physics

@@ -2,7 +2,8 @@
 // wind-driven slopes of Cox & Munk 1954, the sun glint and the reflected sky
 // of a rough sea) and the light that leaves the water from below (the water
 // column and the seabed seen through it), per working wavelength (three at a
-// time, one per vec3 channel).
+// time, one per vec3 channel; with N working wavelengths, triple by triple:
+// water_spectral_radiance below).
 //
 // Needs: definitions.glsl.
 //
@@ -155,17 +156,31 @@ INLINE float water_masking_shadowing(vec3 normal, vec3 upwind, vec2 variance, ve
 // of the mirrored directions (twice the facets' tilt: 1.1° for calm water
 // with the upwind floor of cox_munk_slope_variance, 14° at 5 m/s), so the
 // glint is not convolved with it.
-INLINE vec3 water_glint_brdf(IN(WaterParams) water, vec3 normal, vec3 upwind, vec3 view, vec3 light) {
+// The glint's factors but for the Fresnel reflectance: p(s) G₂ / (4 μ_v μ_l μ_h⁴)
+// (0 for a view or light below the surface), and in `view_half_cosine` the
+// cosine v·h at which F is taken; water_glint_brdf is their product with F
+// at the water's three wavelengths, water_spectral_radiance with F at every
+// working wavelength of the atmosphere.
+INLINE float water_glint_geometry(vec2 slope_variance, vec3 normal, vec3 upwind, vec3 view, vec3 light,
+                                  OUT(float) view_half_cosine) {
+  view_half_cosine = 1.0f;
   float mu_v = dot(view, normal);
   float mu_l = dot(light, normal);
-  if (mu_v <= 0.0f || mu_l <= 0.0f) return vec3(0.0f);
+  if (mu_v <= 0.0f || mu_l <= 0.0f) return 0.0f;
   vec3 h = normalize(view + light);
   float mu_h = dot(h, normal);
   vec3 crosswind = cross(normal, upwind);
   vec2 slope = -vec2(dot(h, upwind), dot(h, crosswind)) / mu_h;
-  float density = water_slope_pdf(slope, water.slope_variance) / (mu_h * mu_h * mu_h * mu_h);
-  float g = water_masking_shadowing(normal, upwind, water.slope_variance, view, light);
-  return fresnel_reflectance(dot(view, h), water.refractive_index) * (density * g / (4.0f * mu_v * mu_l));
+  float density = water_slope_pdf(slope, slope_variance) / (mu_h * mu_h * mu_h * mu_h);
+  float g = water_masking_shadowing(normal, upwind, slope_variance, view, light);
+  view_half_cosine = dot(view, h);
+  return density * g / (4.0f * mu_v * mu_l);
+}
+
+INLINE vec3 water_glint_brdf(IN(WaterParams) water, vec3 normal, vec3 upwind, vec3 view, vec3 light) {
+  float view_half_cosine;
+  float geometry = water_glint_geometry(water.slope_variance, normal, upwind, view, light, view_half_cosine);
+  return fresnel_reflectance(view_half_cosine, water.refractive_index) * geometry;
 }
 
 // --- The reflected sky ---------------------------------------------------------
@@ -403,4 +418,61 @@ INLINE vec3 water_leaving_radiance(IN(WaterParams) water, vec3 normal, vec3 view
   vec3 internal = 1.0f - (1.0f - water.diffuse_reflectance) / (n * n);
   upwelling = upwelling / (1.0f - internal * PI * r_mean);
   return upwelling * (1.0f - fresnel_reflectance(mu_v, n)) / (n * n);
+}
+
+// --- At the atmosphere's working wavelengths -----------------------------------
+//
+// The atmosphere works at N wavelengths in triples (definitions.glsl,
+// SpectralSets) and converts each triple's radiance to the tables' channels
+// with its matrix `to_channels` (the identity with three wavelengths, a
+// share of linear sRGB / 683 otherwise; parameters.hpp, set_to_channels);
+// the renderer then takes the channels to colour with one matrix
+// (radiance_to_srgb). The water does the same: its optics at every working
+// wavelength, triple by triple, its radiance summed into the channels
+// through the same matrices.
+//
+// The light the water receives is known per wavelength where the tables
+// keep it so: the sun's irradiance (the solar spectrum times the
+// transmittance of triple k's tile, the caller's `sun_irradiance[k]`). The
+// sky's irradiance is kept in the channels only; at wavelength λ it is taken
+// as the solar spectrum above the atmosphere times the sky-to-sun ratio of
+// the channels, interpolated linearly in ln λ between the channels'
+// wavelengths (ln E_sky(λ) / E_0(λ) = Σ_c w_c(λ) ln (E_sky,c / E_0,c), a
+// power law in λ between them, as Rayleigh's λ⁻⁴ sky is): `from_channels`
+// holds those weights, the identity with three wavelengths, where the
+// channels are the wavelengths and the sky's light is exact. The seabed's
+// albedo, given per channel, is interpolated with the same weights.
+struct WaterSpectrum {
+  int count;                                      // triples of working wavelengths
+  WaterParams set[SPECTRAL_SET_CAPACITY];         // the water at triple k's wavelengths
+  vec3 solar_irradiance[SPECTRAL_SET_CAPACITY];   // E_0 above the atmosphere at them (the tables' units)
+  mat3 to_channels[SPECTRAL_SET_CAPACITY];        // triple k's radiance -> the tables' channels
+  mat3 from_channels[SPECTRAL_SET_CAPACITY];      // channel values -> triple k's wavelengths (weights w_c(λ))
+};
+
+// The sun's glint and (returned) the light leaving the water, in the tables'
+// channels, summed over the working wavelengths: per triple k,
+//   glint_k = F(v·h, n_k) g E_sun,k,   below_k = water_leaving_radiance(water_k, E_sun,k, E_sky,k),
+// and Σ_k to_channels[k] of each. `glint_factor` g is water_glint_geometry's
+// factor times the facet's cosine to the sun, `view_half_cosine` its v·h;
+// `sun_irradiance[k]` the sun's irradiance normal to it at triple k's
+// wavelengths; `sky_irradiance` the sky's on the horizontal and
+// `seabed_albedo` the seabed's, in the channels.
+INLINE vec3 water_spectral_radiance(IN(WaterSpectrum) water, vec3 sun_irradiance[SPECTRAL_SET_CAPACITY],
+                                    vec3 sky_irradiance, float glint_factor, float view_half_cosine, vec3 normal,
+                                    vec3 view, vec3 sun, float depth, vec3 seabed_albedo, OUT(vec3) glint) {
+  vec3 solar = vec3(0.0f);
+  for (int k = 0; k < water.count; ++k) solar += water.to_channels[k] * water.solar_irradiance[k];
+  vec3 sky_ratio = log(max(sky_irradiance, vec3(1e-30f)) / max(solar, vec3(1e-30f)));
+  vec3 below = vec3(0.0f);
+  glint = vec3(0.0f);
+  for (int k = 0; k < water.count; ++k) {
+    vec3 sky_k = water.solar_irradiance[k] * exp(water.from_channels[k] * sky_ratio);
+    vec3 albedo_k = clamp(water.from_channels[k] * seabed_albedo, vec3(0.0f), vec3(1.0f));
+    glint += water.to_channels[k] *
+             (fresnel_reflectance(view_half_cosine, water.set[k].refractive_index) * glint_factor * sun_irradiance[k]);
+    below += water.to_channels[k] *
+             water_leaving_radiance(water.set[k], normal, view, sun, sun_irradiance[k], sky_k, depth, albedo_k);
+  }
+  return below;
 }

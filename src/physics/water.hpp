@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <memory>
 
 #include "atmos/water.hpp"
 #include "physics/water_cpp.hpp"
@@ -65,5 +66,21 @@ double diffuse_fresnel_reflectance(double eta);
 // backscattering (pure water + phytoplankton + CDOM; water + particles),
 // r_e, and the Cox & Munk 1954 up/crosswind slope variances.
 WaterParams make_water_params(const Water& water, const std::array<double, 3>& wavelengths_nm);
+
+// The wavelengths (nm) whose optics the water takes in each of the tables'
+// channels: the working wavelengths with three of them (the channels are
+// those wavelengths); in the spectral mode (channels linear sRGB) 680, 550
+// and 440 nm, the representative wavelengths of the sRGB primaries that
+// the renderer's phase functions use too (kRenderPhaseWavelengths).
+std::array<double, 3> water_channel_wavelengths(const Atmosphere& atmosphere);
+
+// The water at every working wavelength of `atmosphere`, in its triples
+// (water.glsl, WaterSpectrum): the water's optics at each (wavelengths
+// outside the pure-water table's 300-830 nm take its ends' values; the
+// colour matching functions are below 1e-4 of their peak there), the solar
+// irradiance as the tables take it, set_to_channels, and the weights of
+// linear interpolation in ln λ between water_channel_wavelengths (held at
+// the ends beyond them). Large (~2 KB): allocate, don't copy.
+std::unique_ptr<WaterSpectrum> make_water_spectrum(const Water& water, const Atmosphere& atmosphere);
 
 }  // namespace atmos::physics

@@ -191,6 +191,8 @@ struct Ocean::Impl {
   std::unique_ptr<planet::Surface> surface;
   std::unique_ptr<planet::RasterSource> lake_mask;
   WaterOptics water;
+  // The water at every working wavelength, in the atmosphere's triples.
+  WaterTriples spectrum;
   std::vector<Wave> waves;
   // The waves' anchor: the unit direction of the sea below the camera where
   // the wind's frame was last set, and that frame (upwind, crosswind).
@@ -245,6 +247,27 @@ struct Ocean::Impl {
     glProgramUniform1i(p.id, p.sky_map, settings.first_unit + 6);
     glProgramUniform1i(p.id, p.light_map, settings.first_unit + 7);
     glProgramUniform1i(p.id, p.reflectance_map, settings.first_unit + 8);
+    // The water at every working wavelength (water.glsl, WaterSpectrum):
+    // constant for the ocean.
+    const auto at = [&](const std::string& name) { return glGetUniformLocation(p.id, ("sea_spectrum." + name).c_str()); };
+    const auto vector = [&](const std::string& name, const glm::dvec3& v) {
+      glProgramUniform3f(p.id, at(name), float(v.x), float(v.y), float(v.z));
+    };
+    const int count = int(spectrum.optics.size());
+    glProgramUniform1i(p.id, at("count"), count);
+    for (int k = 0; k < count; ++k) {
+      const std::string i = "[" + std::to_string(k) + "]";
+      const WaterOptics& w = spectrum.optics[size_t(k)];
+      vector("set" + i + ".refractive_index", w.refractive_index);
+      vector("set" + i + ".absorption", w.absorption_per_m);
+      vector("set" + i + ".backscattering", w.backscattering_per_m);
+      vector("set" + i + ".diffuse_reflectance", w.diffuse_reflectance);
+      glProgramUniform2f(p.id, at("set" + i + ".slope_variance"), float(w.slope_variance.x), float(w.slope_variance.y));
+      vector("solar_irradiance" + i, spectrum.solar_irradiance[size_t(k)]);
+      const glm::mat3 to(spectrum.to_channels[size_t(k)]), from(spectrum.from_channels[size_t(k)]);
+      glProgramUniformMatrix3fv(p.id, at("to_channels" + i), 1, GL_FALSE, glm::value_ptr(to));
+      glProgramUniformMatrix3fv(p.id, at("from_channels" + i), 1, GL_FALSE, glm::value_ptr(from));
+    }
     return p;
   }
 
@@ -267,8 +290,9 @@ struct Ocean::Impl {
   bool present(int level) const { return level == kSea ? has_sea : has_lakes; }
 
   // Fills the light maps from the pass's tables (ocean_light_maps.frag.glsl):
-  // per level drawn, 64 layers of 64 x 64 of the sky's radiance and 512 x 2
-  // irradiances, 267,000 evaluations of the pass's functions, once (and
+  // per level drawn, 64 layers of 64 x 64 of the sky's radiance and 512 x
+  // (1 + triples) irradiances (the sky's, the sun's per triple of working
+  // wavelengths), 267,000 evaluations of the pass's functions, once (and
   // again when the pass's ground albedo, hence its tables, changes).
   // Restores the draw framebuffer binding and the viewport.
   void fill_light_maps() {
@@ -287,7 +311,7 @@ struct Ocean::Impl {
         glCreateTextures(GL_TEXTURE_3D, 1, &sky_map[size_t(level)]);
         glTextureStorage3D(sky_map[size_t(level)], 1, GL_RGBA32F, kSkyMapSize, kSkyMapSize, kSkyMapSize);
         glCreateTextures(GL_TEXTURE_2D, 1, &light_map[size_t(level)]);
-        glTextureStorage2D(light_map[size_t(level)], 1, GL_RGBA32F, kLightMapSize, 2);
+        glTextureStorage2D(light_map[size_t(level)], 1, GL_RGBA32F, kLightMapSize, 1 + int(spectrum.optics.size()));
         maps.insert(maps.end(), {sky_map[size_t(level)], light_map[size_t(level)]});
       }
       glCreateTextures(GL_TEXTURE_3D, 1, &reflectance_map);
@@ -321,7 +345,7 @@ struct Ocean::Impl {
       if (!present(level)) continue;
       glUniform1f(glGetUniformLocation(map_program, "sea_radius"), float(level_radius_m[size_t(level)]));
       fill_map(0, sky_map[size_t(level)], kSkyMapSize, kSkyMapSize, kSkyMapSize);
-      fill_map(1, light_map[size_t(level)], kLightMapSize, 2, 0);
+      fill_map(1, light_map[size_t(level)], kLightMapSize, 1 + int(spectrum.optics.size()), 0);
     }
     glBindFramebuffer(GL_DRAW_FRAMEBUFFER, GLuint(framebuffer));
     glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
@@ -472,12 +496,16 @@ Ocean::Ocean(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
   // The channels' wavelengths (water_optics): the working ones, or in the
   // spectral mode representative wavelengths of the sRGB primaries.
   p.water = optics;
+  p.spectrum = water_triples(settings.water, atmosphere);
   p.waves = make_waves(settings.water.wind_speed_m_s, optics.slope_variance);
   p.surface = std::make_unique<planet::Surface>(surface, atmosphere.bottom_radius_m);
   p.bake_bathymetry();
   glCreateVertexArrays(1, &p.vertex_array);
   p.programs[0] = p.link(false, false, false, false);
-  p.fill_light_maps();
+  // The maps at construction, but for the tests' program that reads the
+  // pass's functions instead (kOceanDirectLight): then at the first draw
+  // that reads them.
+  if ((terms_drawn.load(std::memory_order_relaxed) & planet::kOceanDirectLight) == 0) p.fill_light_maps();
 }
 
 Ocean::~Ocean() = default;
@@ -575,7 +603,7 @@ void Ocean::draw(const GlobeView& view, double time_s) {
   OceanProgram* program =
       &p.programs[size_t((moons ? 1 : 0) + (eclipse ? 2 : 0) + (direct_light ? 4 : 0) + (stars ? 8 : 0))];
   if (program->id == 0) *program = p.link(moons, eclipse, direct_light, stars);
-  if (p.pass->ground_albedo() != p.maps_albedo) p.fill_light_maps();
+  if (!direct_light && p.pass->ground_albedo() != p.maps_albedo) p.fill_light_maps();
   const OceanProgram& g = *program;
   glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
   glEnable(GL_DEPTH_TEST);

@@ -38,8 +38,13 @@
 // direction times the rough surface's reflectance); and the light leaving
 // the water (Lee et al. 1999) through the flat surface, with the seabed at
 // the bathymetry's depth. E_sun is the sun's irradiance normal to it at the
-// point (transmittance and the planet's shadow), E_sky the sky's on the
-// horizontal; with OCEAN_ECLIPSE the moons' factors dim the sun's part and
+// point (transmittance and the planet's shadow) at each triple of the
+// atmosphere's working wavelengths, E_sky the sky's on the horizontal; the
+// glint and the light from below are evaluated at every working wavelength
+// and summed into the tables' channels (water_spectral_radiance), the
+// reflected sky and the moons' and stars' glints in the channels with the
+// water's optics at the channels' wavelengths (water_optics); the sum is
+// converted to colour with the pass's matrix (ATMOS_RADIANCE_TO_SRGB); with OCEAN_ECLIPSE the moons' factors dim the sun's part and
 // the sky's (atmos_eclipse), as for the terrain; with OCEAN_MOONS the
 // moons' own light is mirrored through the glint's BRDF. The sky's radiance, E_sun
 // and E_sky are read from the light maps (ocean_light_maps.glsl), which
@@ -61,11 +66,15 @@ uniform float pixel_angle;        // rad per pixel near the image centre
 uniform vec3 sun_direction;       // unit, planet axes
 uniform float light_scale;        // (sun illuminance / the atmosphere's own) / nits_per_unit
 
+// The water's optics at the channels' wavelengths (the reflected sky, the
+// moons' and stars' glints) and at every working wavelength (the sun's
+// glint, the light from below).
 uniform vec3 sea_refractive_index;
 uniform vec3 sea_absorption;
 uniform vec3 sea_backscattering;
 uniform vec3 sea_diffuse_reflectance;
 uniform vec2 sea_slope_variance;  // Cox & Munk's, upwind and crosswind
+uniform WaterSpectrum sea_spectrum;
 
 uniform vec3 wind_upwind;  // unit, tangent at the waves' anchor
 #define OCEAN_MAX_WAVES 32
@@ -77,7 +86,7 @@ uniform float wave_phase[OCEAN_MAX_WAVES];  // k · camera + phase − ω t, mod
 uniform samplerCube bathymetry;  // r: the ground's height (m above the datum), g: its least over 3 x 3 texels,
                                  // b: the lake mask (1 lake, 0 not)
 uniform sampler3D sky_map;       // the sky's radiance at sea level (ocean_light_maps.glsl): azimuth, view, sun
-uniform sampler2D light_map;     // row 0: E_sun, row 1: E_sky on the horizontal, along the sun's parameter
+uniform sampler2D light_map;     // row 0: E_sky on the horizontal, row 1 + k: E_sun at triple k, along the sun's parameter
 uniform sampler3D reflectance_map;  // the rough surface's reflectance of the sky (rgb) and its mean direction (a)
 uniform float sea_level;         // m above the datum: the level drawn, the sea's or the lakes'
 uniform int lakes;               // 1: the lakes' level, drawn where the lake mask is at least one half
@@ -124,8 +133,7 @@ vec3 sky_seen_from_sea(vec3 point, vec3 n, vec3 direction, vec3 sun) {
   float below = dot(direction, n);
   if (below < kOceanLeastSkyCosine) direction = normalize(direction + (kOceanLeastSkyCosine - below) * n);
 #if defined(OCEAN_DIRECT_LIGHT)
-  vec3 transmittance;
-  return atmos_sky_radiance(point, direction, sun, transmittance);
+  return ocean_sky_radiance(point, direction, sun);
 #else
   float mu = dot(direction, n), mu_s = dot(sun, n);
   float sines = sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 1e-12));
@@ -164,17 +172,19 @@ vec3 sea_sky_reflectance(IN(WaterParams) water, vec3 normal, vec3 upwind, vec3 v
 #endif
 }
 
-// E_sun (normal to the sun) and E_sky (on the horizontal) at sea point
-// `point` of zenith n.
-vec3 sun_and_sky_at_sea(vec3 point, vec3 n, vec3 sun, out vec3 sky_irradiance) {
+// E_sun (normal to the sun) at each triple of working wavelengths and E_sky
+// (on the horizontal, the tables' channels) at sea point `point` of zenith
+// n.
+void sun_and_sky_at_sea(vec3 point, vec3 n, vec3 sun, out vec3 sun_irradiance[SPECTRAL_SET_CAPACITY],
+                        out vec3 sky_irradiance) {
 #if defined(OCEAN_DIRECT_LIGHT)
-  vec3 unused;
-  atmos_sun_and_sky_irradiance(point, n, sun, sky_irradiance);
-  return atmos_sun_and_sky_irradiance(point, sun, sun, unused);
+  sky_irradiance = ocean_sky_irradiance(point, sun);
+  for (int k = 0; k < SPECTRAL_SET_CAPACITY; ++k) sun_irradiance[k] = ocean_set_sun_irradiance(k, point, sun);
 #else
   float u = ocean_map_coordinate(ocean_sun_parameter(dot(sun, n)), OCEAN_LIGHT_MAP_SIZE);
-  sky_irradiance = exp(textureLod(light_map, vec2(u, 0.75), 0.0).rgb);
-  return exp(textureLod(light_map, vec2(u, 0.25), 0.0).rgb);
+  sky_irradiance = exp(textureLod(light_map, vec2(u, 0.5 / float(OCEAN_LIGHT_MAP_ROWS)), 0.0).rgb);
+  for (int k = 0; k < SPECTRAL_SET_CAPACITY; ++k)
+    sun_irradiance[k] = exp(textureLod(light_map, vec2(u, (float(k) + 1.5) / float(OCEAN_LIGHT_MAP_ROWS)), 0.0).rgb);
 #endif
 }
 
@@ -250,15 +260,26 @@ void main() {
   // The light at the point.
   vec3 sun = sun_direction;
   vec3 sky_irradiance;
-  vec3 sun_irradiance = sun_and_sky_at_sea(point, n, sun, sky_irradiance);
+  vec3 sun_irradiance[SPECTRAL_SET_CAPACITY];
+  sun_and_sky_at_sea(point, n, sun, sun_irradiance, sky_irradiance);
   float sun_factor = 1.0, sky_factor = 1.0;
 #if defined(OCEAN_ECLIPSE)
   atmos_eclipse(point, sun, moon_count, moon_spheres, sun_factor, sky_factor);
 #endif
-  sun_irradiance *= sun_factor;
+  vec3 sun_channels = vec3(0.0);
+  for (int k = 0; k < SPECTRAL_SET_CAPACITY; ++k) {
+    sun_irradiance[k] *= sun_factor;
+    sun_channels += sea_spectrum.to_channels[k] * sun_irradiance[k];
+  }
   sky_irradiance *= sky_factor;
 
-  vec3 glint = water_glint_brdf(water, normal, wave_upwind, view, sun) * sun_irradiance * max(dot(sun, normal), 0.0);
+  // The sun's glint and the light from below at every working wavelength.
+  float view_half_cosine;
+  float glint_factor = water_glint_geometry(water.slope_variance, normal, wave_upwind, view, sun, view_half_cosine) *
+                       max(dot(sun, normal), 0.0);
+  vec3 glint;
+  vec3 below = water_spectral_radiance(sea_spectrum, sun_irradiance, sky_irradiance, glint_factor, view_half_cosine,
+                                       n, view, sun, water_depth, seabed_albedo, glint);
 #if defined(OCEAN_MOONS)
   // The moons' light mirrored by the waves (a moon's glade), through the
   // glint's BRDF as the sun's. A moon, a Lambertian sphere of albedo
@@ -275,18 +296,17 @@ void main() {
     float alpha = acos(clamp(-dot(sun, l), -1.0, 1.0));
     float size = moon_spheres[i].w / moon_distance;
     float lambert = MOON_ALBEDO * size * size * (2.0 / (3.0 * PI)) * (sin(alpha) + (PI - alpha) * cos(alpha));
-    vec3 moon_irradiance = (ATMOS_RADIANCE_TO_SRGB * ATMOSPHERE.solar_irradiance) * lambert *
-                           atmos_transmittance_to_sun(point, l);
+    vec3 moon_irradiance = ATMOSPHERE.solar_irradiance * lambert * ocean_transmittance_to_light(point, l);
     glint += water_glint_brdf(water, normal, wave_upwind, view, l) * moon_irradiance * max(dot(l, normal), 0.0);
   }
 #endif
 #if defined(OCEAN_STARS)
   // The brightest stars' light mirrored by the waves, as the sun's: each a
-  // point of irradiance E above the atmosphere (the tables' channels, in
-  // linear sRGB as the sun's) attenuated towards it.
+  // point of irradiance E above the atmosphere (the tables' channels)
+  // attenuated towards it.
   for (int i = 0; i < star_count; ++i) {
     vec3 l = star_directions[i].xyz;
-    vec3 star_irradiance = (ATMOS_RADIANCE_TO_SRGB * star_irradiances[i].rgb) * atmos_transmittance_to_sun(point, l);
+    vec3 star_irradiance = star_irradiances[i].rgb * ocean_transmittance_to_light(point, l);
     glint += water_glint_brdf(water, normal, wave_upwind, view, l) * star_irradiance * max(dot(l, normal), 0.0);
   }
 #endif
@@ -326,11 +346,11 @@ void main() {
     float radius = length(point), height = eclipse_top_radius - radius;
     float rise = 2.0 * radius * height + height * height;
     float top_distance = rise / (sqrt(radius * radius * mu_r * mu_r + rise) + radius * mu_r);
-    vec3 to_top = atmos_transmittance_to_sun(point, mirror);
+    vec3 to_top = ocean_transmittance_to_light(point, mirror);
     vec3 previous = vec3(1.0), lit = vec3(0.0);
     for (int k = 1; k <= 8; ++k) {
       float t = top_distance * float(k * k) / 64.0, middle = top_distance * (float(k) - 0.5) * (float(k) - 0.5) / 64.0;
-      vec3 transmittance = min(to_top / max(atmos_transmittance_to_sun(point + t * mirror, mirror), vec3(1e-30)), previous);
+      vec3 transmittance = min(to_top / max(ocean_transmittance_to_light(point + t * mirror, mirror), vec3(1e-30)), previous);
       float air_sun, air_sky;
       atmos_eclipse(point + middle * mirror, sun, moon_count, moon_spheres, air_sun, air_sky);
       lit += (previous - transmittance) * air_sun;
@@ -341,13 +361,14 @@ void main() {
 #else
   sky *= sky_factor;
 #endif
-  vec3 below = water_leaving_radiance(water, n, view, sun, sun_irradiance, sky_irradiance, water_depth, seabed_albedo);
 
+  // The channels to colour, as the pass converts its own light.
   vec3 radiance = ((terms & 1) != 0 ? glint : vec3(0.0)) + ((terms & 2) != 0 ? sky : vec3(0.0)) +
                   ((terms & 4) != 0 ? below : vec3(0.0));
-  if ((terms & 8) != 0) radiance = sun_irradiance;
-  if ((terms & 16) != 0 && (terms & 8) == 0) radiance = sky / light_scale;
-  colour = vec4(max(radiance * light_scale, vec3(0.0)), 1.0);
+  if ((terms & 8) != 0) radiance = sun_channels;
+  colour = vec4(max(ATMOS_RADIANCE_TO_SRGB * radiance * light_scale, vec3(0.0)), 1.0);
+  // The uniform sky's test: the rough surface's reflectance itself.
+  if ((terms & 16) != 0 && (terms & 8) == 0) colour = vec4(max(sky, vec3(0.0)), 1.0);
   float lead = clamp(kHeightTolerance / (t * max(dot(view, n), 1e-9)), kRelativeLead, 0.1);
   gl_FragDepth = min(depth * (1.0 + lead), 1.0);
 }

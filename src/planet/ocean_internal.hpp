@@ -20,7 +20,8 @@ enum OceanTerms : unsigned {
   kOceanUniformSky = 16u,
   // The sky's radiance and the irradiances from the pass's functions at
   // every pixel instead of the sea's light maps (ocean_light_maps.glsl),
-  // to check the maps against them.
+  // to check the maps against them. Set when an Ocean is constructed, its
+  // maps are filled at its first draw without it instead.
   kOceanDirectLight = 32u,
 };
 void set_ocean_terms(unsigned mask);

@@ -2,7 +2,8 @@
 // appended after "#version 450 core", AtmospherePass::glsl_library(),
 // physics/water.glsl and ocean_light_maps.glsl. One draw per layer of the sky's map, one for the
 // irradiances; each pixel evaluates the pass's own functions at a point of
-// the sea-level sphere (the z axis here) for its texel's parameters.
+// the sea-level sphere (the z axis here) for its texel's parameters, in
+// the tables' channels.
 
 layout(location = 0) out vec4 colour;
 
@@ -21,8 +22,7 @@ void main() {
     float sin_v = sqrt(max(1.0 - mu * mu, 0.0));
     vec3 view = vec3(sin_v * cos(phi), sin_v * sin(phi), mu);
     vec3 sun = vec3(sqrt(max(1.0 - mu_s * mu_s, 0.0)), 0.0, mu_s);
-    vec3 transmittance;
-    colour = vec4(log(max(atmos_sky_radiance(point, view, sun, transmittance), vec3(kOceanLeastRadiance))), 1.0);
+    colour = vec4(log(max(ocean_sky_radiance(point, view, sun), vec3(kOceanLeastRadiance))), 1.0);
   } else if (map == 2) {
     float mu_v = ocean_elevation_cosine(ocean_map_parameter(texel.x, OCEAN_REFLECTANCE_MAP_SIZE));
     float sigma_along = ocean_deviation(ocean_map_parameter(texel.y, OCEAN_REFLECTANCE_MAP_SIZE));
@@ -40,8 +40,7 @@ void main() {
   } else {
     float mu_s = ocean_sun_cosine(ocean_map_parameter(texel.x, OCEAN_LIGHT_MAP_SIZE));
     vec3 sun = vec3(sqrt(max(1.0 - mu_s * mu_s, 0.0)), 0.0, mu_s);
-    vec3 sky_irradiance;
-    vec3 irradiance = atmos_sun_and_sky_irradiance(point, texel.y == 0 ? sun : vec3(0.0, 0.0, 1.0), sun, sky_irradiance);
-    colour = vec4(log(max(texel.y == 0 ? irradiance : sky_irradiance, vec3(kOceanLeastRadiance))), 1.0);
+    vec3 irradiance = texel.y == 0 ? ocean_sky_irradiance(point, sun) : ocean_set_sun_irradiance(texel.y - 1, point, sun);
+    colour = vec4(log(max(irradiance, vec3(kOceanLeastRadiance))), 1.0);
   }
 }

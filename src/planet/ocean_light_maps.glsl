@@ -33,6 +33,44 @@
 const float kOceanLeastRadiance = 1e-30;  // the floor of the light maps (of their logarithm)
 #define OCEAN_REFLECTANCE_MAP_SIZE 32  // texels per axis of the reflectance (view, two slope deviations)
 #define OCEAN_LIGHT_MAP_SIZE 512   // texels of the irradiances along μ_s
+// The irradiances' rows: E_sky, then E_sun at each triple of working
+// wavelengths (SPECTRAL_SET_CAPACITY, the pass's count of triples).
+#define OCEAN_LIGHT_MAP_ROWS (1 + SPECTRAL_SET_CAPACITY)
+
+// The atmosphere's light at a sea point `point` (planet-centred, m), from the
+// pass's functions (engine_library.glsl) but in the tables' channels, as
+// the water's radiance is summed (water.glsl, water_spectral_radiance) and
+// converted to colour at the end with ATMOS_RADIANCE_TO_SRGB, as the pass
+// converts its own. The sky's radiance in `direction`:
+vec3 ocean_sky_radiance(vec3 point, vec3 direction, vec3 sun) {
+  vec3 transmittance;
+  return sky_radiance(ATMOSPHERE, SPECTRAL, atmos_optical_depth_texture, atmos_scattering_texture,
+                      atmos_single_aerosol_texture, atmos_multiple_scattering_texture,
+                      camera_above_ground(ATMOSPHERE, point), direction, sun, transmittance);
+}
+// the sky's irradiance on the horizontal;
+vec3 ocean_sky_irradiance(vec3 point, vec3 sun) {
+  vec3 sky;
+  sun_and_sky_irradiance(ATMOSPHERE, SPECTRAL, atmos_optical_depth_texture, atmos_irradiance_texture, point,
+                         normalize(point), sun, sky);
+  return sky;
+}
+// the sun's irradiance normal to it at the wavelengths of triple k (its
+// solar irradiance times its transmittance to the sun, with the planet's
+// shadow, as channel_transmittance sums them);
+vec3 ocean_set_sun_irradiance(int k, vec3 point, vec3 sun) {
+  float r = length(point);
+  return SPECTRAL.set[k].solar_irradiance * transmittance_to_sun(SPECTRAL.set[k], atmos_optical_depth_texture,
+                                                                  clamp_radius(ATMOSPHERE, r),
+                                                                  clamp_cosine(dot(point, sun) / r));
+}
+// and the transmittance towards a light in direction l, per channel, for a
+// light of the sun's spectrum.
+vec3 ocean_transmittance_to_light(vec3 point, vec3 l) {
+  float r = length(point);
+  return channel_transmittance(ATMOSPHERE, SPECTRAL, atmos_optical_depth_texture, PATH_TO_SUN,
+                               clamp_radius(ATMOSPHERE, r), clamp_cosine(dot(point, l) / r));
+}
 
 // The texture coordinate of parameter u on an axis of n texels, and back.
 float ocean_map_coordinate(float u, int n) { return (clamp(u, 0.0, 1.0) * float(n - 1) + 0.5) / float(n); }
