@@ -34,7 +34,7 @@
 // radiance does not change where waves fade into the BRDF.
 //
 // Threading and GL state: as Globe (globe.hpp). draw() changes the bound
-// program and vertex array, texture units first_unit..first_unit+8, the
+// program and vertex array, texture units first_unit..first_unit+9, the
 // viewport, the clip control (GL_LOWER_LEFT, GL_ZERO_TO_ONE), the depth function
 // (GL_GREATER), test (enabled) and mask (GL_TRUE), enables
 // GL_TEXTURE_CUBE_MAP_SEAMLESS, and disables blending and face culling;
@@ -77,8 +77,8 @@ struct OceanSettings {
   // sky's map per pixel.
   bool sky_quadrature = false;
   // The texture units of the atmosphere's GLSL library: first_unit..first_unit+4,
-  // first_unit+5 the bathymetry, first_unit+6..first_unit+8 the sea's maps
-  // of the sky, the irradiances and the reflectance.
+  // first_unit+5 the bathymetry, first_unit+6..first_unit+9 the sea's maps
+  // of the sky, the irradiances, the reflectance and the light from below.
   int first_unit = 0;
 };
 

@@ -442,6 +442,13 @@ INLINE vec3 water_leaving_radiance(IN(WaterParams) water, vec3 normal, vec3 view
 // holds those weights, the identity with three wavelengths, where the
 // channels are the wavelengths and the sky's light is exact. The seabed's
 // albedo, given per channel, is interpolated with the same weights.
+// The loops over the triples run to WATER_SET_COUNT(water): its `count` by
+// default; a shader whose count is a constant defines it as that constant
+// (the sea's: SPECTRAL_SET_CAPACITY, the pass's count), which lets the
+// compiler unroll them and index the arrays with constants.
+#ifndef WATER_SET_COUNT
+#define WATER_SET_COUNT(w) ((w).count)
+#endif
 struct WaterSpectrum {
   int count;                                      // triples of working wavelengths
   WaterParams set[SPECTRAL_SET_CAPACITY];         // the water at triple k's wavelengths
@@ -450,29 +457,38 @@ struct WaterSpectrum {
   mat3 from_channels[SPECTRAL_SET_CAPACITY];      // channel values -> triple k's wavelengths (weights w_c(λ))
 };
 
-// The sun's glint and (returned) the light leaving the water, in the tables'
-// channels, summed over the working wavelengths: per triple k,
-//   glint_k = F(v·h, n_k) g E_sun,k,   below_k = water_leaving_radiance(water_k, E_sun,k, E_sky,k),
-// and Σ_k to_channels[k] of each. `glint_factor` g is water_glint_geometry's
-// factor times the facet's cosine to the sun, `view_half_cosine` its v·h;
-// `sun_irradiance[k]` the sun's irradiance normal to it at triple k's
-// wavelengths; `sky_irradiance` the sky's on the horizontal and
-// `seabed_albedo` the seabed's, in the channels.
+// The sun's glint in the tables' channels, summed over the working
+// wavelengths: per triple k, F(v·h, n_k) g E_sun,k, and Σ_k to_channels[k]
+// of it. `glint_factor` g is water_glint_geometry's factor times the
+// facet's cosine to the sun, `view_half_cosine` its v·h; `sun_irradiance[k]`
+// the sun's irradiance normal to it at triple k's wavelengths.
+INLINE vec3 water_spectral_glint(IN(WaterSpectrum) water, vec3 sun_irradiance[SPECTRAL_SET_CAPACITY],
+                                 float glint_factor, float view_half_cosine) {
+  vec3 glint = vec3(0.0f);
+  for (int k = 0; k < WATER_SET_COUNT(water); ++k)
+    glint += water.to_channels[k] *
+             (fresnel_reflectance(view_half_cosine, water.set[k].refractive_index) * glint_factor * sun_irradiance[k]);
+  return glint;
+}
+
+// The sun's glint (water_spectral_glint) and (returned) the light leaving
+// the water, in the tables' channels, summed over the working wavelengths:
+// per triple k, below_k = water_leaving_radiance(water_k, E_sun,k, E_sky,k),
+// and Σ_k to_channels[k] below_k. `sky_irradiance` is the sky's irradiance
+// on the horizontal and `seabed_albedo` the seabed's, in the channels.
 INLINE vec3 water_spectral_radiance(IN(WaterSpectrum) water, vec3 sun_irradiance[SPECTRAL_SET_CAPACITY],
                                     vec3 sky_irradiance, float glint_factor, float view_half_cosine, vec3 normal,
                                     vec3 view, vec3 sun, float depth, vec3 seabed_albedo, OUT(vec3) glint) {
   vec3 solar = vec3(0.0f);
-  for (int k = 0; k < water.count; ++k) solar += water.to_channels[k] * water.solar_irradiance[k];
+  for (int k = 0; k < WATER_SET_COUNT(water); ++k) solar += water.to_channels[k] * water.solar_irradiance[k];
   vec3 sky_ratio = log(max(sky_irradiance, vec3(1e-30f)) / max(solar, vec3(1e-30f)));
   vec3 below = vec3(0.0f);
-  glint = vec3(0.0f);
-  for (int k = 0; k < water.count; ++k) {
+  for (int k = 0; k < WATER_SET_COUNT(water); ++k) {
     vec3 sky_k = water.solar_irradiance[k] * exp(water.from_channels[k] * sky_ratio);
     vec3 albedo_k = clamp(water.from_channels[k] * seabed_albedo, vec3(0.0f), vec3(1.0f));
-    glint += water.to_channels[k] *
-             (fresnel_reflectance(view_half_cosine, water.set[k].refractive_index) * glint_factor * sun_irradiance[k]);
     below += water.to_channels[k] *
              water_leaving_radiance(water.set[k], normal, view, sun, sun_irradiance[k], sky_k, depth, albedo_k);
   }
+  glint = water_spectral_glint(water, sun_irradiance, glint_factor, view_half_cosine);
   return below;
 }

@@ -35,6 +35,11 @@ constexpr int kMaxWaves = 32;      // OCEAN_MAX_WAVES of ocean.frag.glsl
 constexpr int kSkyMapSize = 64;    // OCEAN_SKY_MAP_SIZE of ocean_light_maps.glsl
 constexpr int kLightMapSize = 512; // OCEAN_LIGHT_MAP_SIZE
 constexpr int kReflectanceMapSize = 32;  // OCEAN_REFLECTANCE_MAP_SIZE
+constexpr int kBelowMapWidth = 64, kBelowMapHeight = 257, kBelowMapDepth = 32;  // OCEAN_BELOW_MAP_WIDTH, ...
+
+// The sea's shaders loop over the working wavelengths' triples to the
+// pass's count, a constant of its GLSL library (water.glsl, WATER_SET_COUNT).
+constexpr const char* kConstantSetCount = "#define WATER_SET_COUNT(w) SPECTRAL_SET_CAPACITY\n";
 
 // set_ocean_terms (ocean_internal.hpp).
 std::atomic<unsigned> terms_drawn{planet::kOceanAllTerms};
@@ -121,7 +126,7 @@ struct OceanProgram {
         pixel_angle = -1, sun = -1, light = -1, refractive = -1, absorption = -1, backscattering = -1,
         diffuse = -1, slope_variance = -1, upwind = -1, wave_count = -1, wave_vector = -1, wave_in_wind = -1,
         wave_phase = -1,
-        bathymetry = -1, sky_map = -1, light_map = -1, reflectance_map = -1, sea_level = -1, seabed = -1, moon_count = -1,
+        bathymetry = -1, sky_map = -1, light_map = -1, reflectance_map = -1, below_map = -1, deep = -1, sea_level = -1, seabed = -1, moon_count = -1,
         moon_spheres = -1, terms = -1, lakes = -1, eclipse_top_radius = -1, star_count = -1, star_directions = -1,
         star_irradiances = -1;
   void locate() {
@@ -150,6 +155,8 @@ struct OceanProgram {
     sky_map = at("sky_map");
     light_map = at("light_map");
     reflectance_map = at("reflectance_map");
+    below_map = at("below_map");
+    deep = at("deep_water_depth");
     sea_level = at("sea_level");
     seabed = at("seabed_albedo");
     moon_count = at("moon_count");
@@ -162,6 +169,40 @@ struct OceanProgram {
     star_irradiances = at("star_irradiances");
   }
 };
+
+// The water at every working wavelength (water.glsl, WaterSpectrum) into
+// `program`'s uniform sea_spectrum.
+void set_water_spectrum(GLuint program, const WaterTriples& spectrum) {
+  const auto at = [&](const std::string& name) { return glGetUniformLocation(program, ("sea_spectrum." + name).c_str()); };
+  const auto vector = [&](const std::string& name, const glm::dvec3& v) {
+    glProgramUniform3f(program, at(name), float(v.x), float(v.y), float(v.z));
+  };
+  const int count = int(spectrum.optics.size());
+  glProgramUniform1i(program, at("count"), count);
+  for (int k = 0; k < count; ++k) {
+    const std::string i = "[" + std::to_string(k) + "]";
+    const WaterOptics& w = spectrum.optics[size_t(k)];
+    vector("set" + i + ".refractive_index", w.refractive_index);
+    vector("set" + i + ".absorption", w.absorption_per_m);
+    vector("set" + i + ".backscattering", w.backscattering_per_m);
+    vector("set" + i + ".diffuse_reflectance", w.diffuse_reflectance);
+    glProgramUniform2f(program, at("set" + i + ".slope_variance"), float(w.slope_variance.x),
+                       float(w.slope_variance.y));
+    vector("solar_irradiance" + i, spectrum.solar_irradiance[size_t(k)]);
+    const glm::mat3 to(spectrum.to_channels[size_t(k)]), from(spectrum.from_channels[size_t(k)]);
+    glProgramUniformMatrix3fv(program, at("to_channels" + i), 1, GL_FALSE, glm::value_ptr(to));
+    glProgramUniformMatrix3fv(program, at("from_channels" + i), 1, GL_FALSE, glm::value_ptr(from));
+  }
+}
+
+// H_deep (ocean_light_maps.glsl): the depth beyond which e^{−2 κ H} < 1e-5
+// at every working wavelength, κ = a + b_b.
+double deep_water_depth(const WaterTriples& spectrum) {
+  double kappa = std::numeric_limits<double>::infinity();
+  for (const WaterOptics& w : spectrum.optics)
+    for (int c = 0; c < 3; ++c) kappa = std::min(kappa, w.absorption_per_m[c] + w.backscattering_per_m[c]);
+  return std::log(1e5) / (2.0 * kappa);
+}
 
 void require_range(double value, double lo, double hi, const char* name) {
   if (!(value >= lo && value <= hi))
@@ -213,7 +254,7 @@ struct Ocean::Impl {
   // The light maps (ocean_light_maps.glsl; the sky's and the irradiances'
   // per level, at its radius), the program that fills them and the pass's
   // ground albedo they were filled with (the tables follow it).
-  std::array<GLuint, kLevels> sky_map{}, light_map{};
+  std::array<GLuint, kLevels> sky_map{}, light_map{}, below_map{};
   GLuint reflectance_map = 0, map_program = 0, map_framebuffer = 0;
   glm::dvec3 maps_albedo{-1.0};
 
@@ -223,7 +264,8 @@ struct Ocean::Impl {
     if (map_program != 0) glDeleteProgram(map_program);
     if (map_framebuffer != 0) glDeleteFramebuffers(1, &map_framebuffer);
     if (vertex_array != 0) glDeleteVertexArrays(1, &vertex_array);
-    const GLuint textures[] = {bathymetry, sky_map[kSea], light_map[kSea], sky_map[kLakes], light_map[kLakes],
+    const GLuint textures[] = {bathymetry, sky_map[kSea], light_map[kSea], below_map[kSea], sky_map[kLakes],
+                               light_map[kLakes], below_map[kLakes],
                                reflectance_map};
     for (GLuint t : textures)
       if (t != 0) glDeleteTextures(1, &t);
@@ -236,6 +278,7 @@ struct Ocean::Impl {
     if (eclipse) head += "#define OCEAN_ECLIPSE 1\n";
     if (direct_light) head += "#define OCEAN_DIRECT_LIGHT 1\n";
     if (!settings.sky_quadrature) head += "#define OCEAN_SKY_MEAN_DIRECTION 1\n";
+    head += kConstantSetCount;
     OceanProgram p;
     p.id = planet::link_program(
         "ocean", std::string("#version 450 core\n") + planet::shader_text("ocean", "src/planet/ocean.vert.glsl"),
@@ -247,27 +290,10 @@ struct Ocean::Impl {
     glProgramUniform1i(p.id, p.sky_map, settings.first_unit + 6);
     glProgramUniform1i(p.id, p.light_map, settings.first_unit + 7);
     glProgramUniform1i(p.id, p.reflectance_map, settings.first_unit + 8);
-    // The water at every working wavelength (water.glsl, WaterSpectrum):
-    // constant for the ocean.
-    const auto at = [&](const std::string& name) { return glGetUniformLocation(p.id, ("sea_spectrum." + name).c_str()); };
-    const auto vector = [&](const std::string& name, const glm::dvec3& v) {
-      glProgramUniform3f(p.id, at(name), float(v.x), float(v.y), float(v.z));
-    };
-    const int count = int(spectrum.optics.size());
-    glProgramUniform1i(p.id, at("count"), count);
-    for (int k = 0; k < count; ++k) {
-      const std::string i = "[" + std::to_string(k) + "]";
-      const WaterOptics& w = spectrum.optics[size_t(k)];
-      vector("set" + i + ".refractive_index", w.refractive_index);
-      vector("set" + i + ".absorption", w.absorption_per_m);
-      vector("set" + i + ".backscattering", w.backscattering_per_m);
-      vector("set" + i + ".diffuse_reflectance", w.diffuse_reflectance);
-      glProgramUniform2f(p.id, at("set" + i + ".slope_variance"), float(w.slope_variance.x), float(w.slope_variance.y));
-      vector("solar_irradiance" + i, spectrum.solar_irradiance[size_t(k)]);
-      const glm::mat3 to(spectrum.to_channels[size_t(k)]), from(spectrum.from_channels[size_t(k)]);
-      glProgramUniformMatrix3fv(p.id, at("to_channels" + i), 1, GL_FALSE, glm::value_ptr(to));
-      glProgramUniformMatrix3fv(p.id, at("from_channels" + i), 1, GL_FALSE, glm::value_ptr(from));
-    }
+    glProgramUniform1i(p.id, p.below_map, settings.first_unit + 9);
+    // The water at every working wavelength: constant for the ocean.
+    set_water_spectrum(p.id, spectrum);
+    glProgramUniform1f(p.id, p.deep, float(deep_water_depth(spectrum)));
     return p;
   }
 
@@ -292,7 +318,8 @@ struct Ocean::Impl {
   // Fills the light maps from the pass's tables (ocean_light_maps.frag.glsl):
   // per level drawn, 64 layers of 64 x 64 of the sky's radiance and 512 x
   // (1 + triples) irradiances (the sky's, the sun's per triple of working
-  // wavelengths), 267,000 evaluations of the pass's functions, once (and
+  // wavelengths) and 64 x 257 x 32 of the light from below, 0.8 million
+  // evaluations of the pass's functions, once (and
   // again when the pass's ground albedo, hence its tables, changes).
   // Restores the draw framebuffer binding and the viewport.
   void fill_light_maps() {
@@ -301,7 +328,7 @@ struct Ocean::Impl {
     if (first) {
       map_program = planet::link_program(
           "ocean", std::string("#version 450 core\n") + planet::shader_text("ocean", "src/planet/ocean.vert.glsl"),
-          std::string("#version 450 core\n") + pass->glsl_library(settings.first_unit) + "\n" +
+          std::string("#version 450 core\n") + kConstantSetCount + pass->glsl_library(settings.first_unit) + "\n" +
               planet::shader_text("ocean", "src/physics/water.glsl") + "\n" +
               planet::shader_text("ocean", "src/planet/ocean_light_maps.glsl") + "\n" +
               planet::shader_text("ocean", "src/planet/ocean_light_maps.frag.glsl"));
@@ -312,7 +339,9 @@ struct Ocean::Impl {
         glTextureStorage3D(sky_map[size_t(level)], 1, GL_RGBA32F, kSkyMapSize, kSkyMapSize, kSkyMapSize);
         glCreateTextures(GL_TEXTURE_2D, 1, &light_map[size_t(level)]);
         glTextureStorage2D(light_map[size_t(level)], 1, GL_RGBA32F, kLightMapSize, 1 + int(spectrum.optics.size()));
-        maps.insert(maps.end(), {sky_map[size_t(level)], light_map[size_t(level)]});
+        glCreateTextures(GL_TEXTURE_3D, 1, &below_map[size_t(level)]);
+        glTextureStorage3D(below_map[size_t(level)], 1, GL_RGBA32F, kBelowMapWidth, kBelowMapHeight, kBelowMapDepth);
+        maps.insert(maps.end(), {sky_map[size_t(level)], light_map[size_t(level)], below_map[size_t(level)]});
       }
       glCreateTextures(GL_TEXTURE_3D, 1, &reflectance_map);
       glTextureStorage3D(reflectance_map, 1, GL_RGBA32F, kReflectanceMapSize, kReflectanceMapSize,
@@ -326,6 +355,12 @@ struct Ocean::Impl {
         glTextureParameteri(t, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
       }
       glCreateFramebuffers(1, &map_framebuffer);
+      set_water_spectrum(map_program, spectrum);
+      glProgramUniform3f(map_program, glGetUniformLocation(map_program, "seabed_albedo"),
+                         float(settings.seabed_albedo.x), float(settings.seabed_albedo.y),
+                         float(settings.seabed_albedo.z));
+      glProgramUniform1f(map_program, glGetUniformLocation(map_program, "deep_water_depth"),
+                         float(deep_water_depth(spectrum)));
     }
     GLint framebuffer = 0, viewport[4] = {0, 0, 0, 0};
     glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &framebuffer);
@@ -346,6 +381,7 @@ struct Ocean::Impl {
       glUniform1f(glGetUniformLocation(map_program, "sea_radius"), float(level_radius_m[size_t(level)]));
       fill_map(0, sky_map[size_t(level)], kSkyMapSize, kSkyMapSize, kSkyMapSize);
       fill_map(1, light_map[size_t(level)], kLightMapSize, 1 + int(spectrum.optics.size()), 0);
+      fill_map(3, below_map[size_t(level)], kBelowMapWidth, kBelowMapHeight, kBelowMapDepth);
     }
     glBindFramebuffer(GL_DRAW_FRAMEBUFFER, GLuint(framebuffer));
     glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
@@ -468,8 +504,8 @@ Ocean::Ocean(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
   if (!std::isfinite(sea) && !lakes) return;
   GLint units = 0;
   glGetIntegerv(GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS, &units);
-  if (settings.first_unit + 9 > units)
-    throw Error("ocean settings: first_unit + 8 (the sea's light maps) is beyond the context's " +
+  if (settings.first_unit + 10 > units)
+    throw Error("ocean settings: first_unit + 9 (the sea's light maps) is beyond the context's " +
                 std::to_string(units) + " texture units");
   p.has_sea = std::isfinite(sea);
   p.sea_level_m = sea;
@@ -618,7 +654,7 @@ void Ocean::draw(const GlobeView& view, double time_s) {
   p.pass->bind_textures(p.settings.first_unit);
   glBindTextureUnit(GLuint(p.settings.first_unit + 5), p.bathymetry);
   glBindTextureUnit(GLuint(p.settings.first_unit + 8), p.reflectance_map);
-  for (int unit = 5; unit < 9; ++unit) glBindSampler(GLuint(p.settings.first_unit + unit), 0);
+  for (int unit = 5; unit < 10; ++unit) glBindSampler(GLuint(p.settings.first_unit + unit), 0);
 
   const glm::mat4 clip_f(clip_from_offset), inverse_f(offset_from_clip);
   glUniformMatrix4fv(g.clip, 1, GL_FALSE, glm::value_ptr(clip_f));
@@ -671,6 +707,7 @@ void Ocean::draw(const GlobeView& view, double time_s) {
     glUniform1i(g.lakes, level == kLakes ? 1 : 0);
     glBindTextureUnit(GLuint(p.settings.first_unit + 6), p.sky_map[size_t(level)]);
     glBindTextureUnit(GLuint(p.settings.first_unit + 7), p.light_map[size_t(level)]);
+    glBindTextureUnit(GLuint(p.settings.first_unit + 9), p.below_map[size_t(level)]);
     glDrawArrays(GL_TRIANGLES, 0, 3);
   }
   glBindVertexArray(0);

@@ -48,8 +48,10 @@
 // the sky's (atmos_eclipse), as for the terrain; with OCEAN_MOONS the
 // moons' own light is mirrored through the glint's BRDF. The sky's radiance, E_sun
 // and E_sky are read from the light maps (ocean_light_maps.glsl), which
-// tabulate the pass's functions at sea level, and the rough surface's
-// reflectance of the sky from a map of water_sky_reflectance; with
+// tabulate the pass's functions at sea level, the rough surface's
+// reflectance of the sky from a map of water_sky_reflectance, and the light
+// from below from a map of water_spectral_radiance over the downwelling
+// irradiance (but in the eclipse's program); with
 // OCEAN_DIRECT_LIGHT (a test's program) the shader evaluates those
 // functions instead.
 
@@ -88,6 +90,8 @@ uniform samplerCube bathymetry;  // r: the ground's height (m above the datum), 
 uniform sampler3D sky_map;       // the sky's radiance at sea level (ocean_light_maps.glsl): azimuth, view, sun
 uniform sampler2D light_map;     // row 0: E_sky on the horizontal, row 1 + k: E_sun at triple k, along the sun's parameter
 uniform sampler3D reflectance_map;  // the rough surface's reflectance of the sky (rgb) and its mean direction (a)
+uniform sampler3D below_map;     // the light from below over the downwelling irradiance (rgb): view, sun, depth
+uniform float deep_water_depth;  // m: H_deep (ocean_light_maps.glsl), the below map's deepest layer
 uniform float sea_level;         // m above the datum: the level drawn, the sea's or the lakes'
 uniform int lakes;               // 1: the lakes' level, drawn where the lake mask is at least one half
 uniform vec3 seabed_albedo;
@@ -278,8 +282,21 @@ void main() {
   float glint_factor = water_glint_geometry(water.slope_variance, normal, wave_upwind, view, sun, view_half_cosine) *
                        max(dot(sun, normal), 0.0);
   vec3 glint;
-  vec3 below = water_spectral_radiance(sea_spectrum, sun_irradiance, sky_irradiance, glint_factor, view_half_cosine,
-                                       n, view, sun, water_depth, seabed_albedo, glint);
+  vec3 below;
+#if !defined(OCEAN_ECLIPSE) && !defined(OCEAN_DIRECT_LIGHT)
+  // From the map (ocean_light_maps.glsl), times the downwelling
+  // irradiance. The moons' eclipse, which dims the sun's and the sky's
+  // light by different factors, evaluates it.
+  float mu_s = dot(sun, n);
+  vec3 uvw = vec3(ocean_map_coordinate(ocean_elevation_parameter(dot(view, n)), OCEAN_BELOW_MAP_WIDTH),
+                  ocean_map_coordinate(ocean_sun_parameter(mu_s), OCEAN_BELOW_MAP_HEIGHT),
+                  ocean_map_coordinate(ocean_depth_parameter(water_depth, deep_water_depth), OCEAN_BELOW_MAP_DEPTH));
+  below = textureLod(below_map, uvw, 0.0).rgb * (sun_channels * max(mu_s, 0.0) + sky_irradiance);
+  glint = water_spectral_glint(sea_spectrum, sun_irradiance, glint_factor, view_half_cosine);
+#else
+  below = water_spectral_radiance(sea_spectrum, sun_irradiance, sky_irradiance, glint_factor, view_half_cosine, n,
+                                  view, sun, water_depth, seabed_albedo, glint);
+#endif
 #if defined(OCEAN_MOONS)
   // The moons' light mirrored by the waves (a moon's glade), through the
   // glint's BRDF as the sun's. A moon, a Lambertian sphere of albedo

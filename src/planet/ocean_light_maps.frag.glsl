@@ -7,10 +7,13 @@
 
 layout(location = 0) out vec4 colour;
 
-uniform int map;    // 0: the sky's radiance, 1: the irradiances, 2: the reflectance
-uniform int layer;  // the sun's texel (the sky's map), the across deviation's (the reflectance's)
+uniform int map;    // 0: the sky's radiance, 1: the irradiances, 2: the reflectance, 3: the light from below
+uniform int layer;  // the sun's texel (the sky's map), the across deviation's (the reflectance's), the depth's (below)
 uniform float sea_radius;  // R, m
 uniform vec3 sea_refractive_index;
+uniform WaterSpectrum sea_spectrum;  // the below map's water (ocean.frag.glsl)
+uniform vec3 seabed_albedo;
+uniform float deep_water_depth;  // m: H_deep
 
 void main() {
   ivec2 texel = ivec2(gl_FragCoord.xy);
@@ -37,6 +40,25 @@ void main() {
     vec3 reflectance = water_sky_reflectance(water, vec3(0.0, 0.0, 1.0), vec3(1.0, 0.0, 0.0),
                                              vec3(sqrt(max(1.0 - mu_v * mu_v, 0.0)), 0.0, mu_v), mean_direction);
     colour = vec4(reflectance, mean_direction.z);
+  } else if (map == 3) {
+    float mu_v = ocean_elevation_cosine(ocean_map_parameter(texel.x, OCEAN_BELOW_MAP_WIDTH));
+    float mu_s = ocean_sun_cosine(ocean_map_parameter(texel.y, OCEAN_BELOW_MAP_HEIGHT));
+    vec3 view = vec3(sqrt(max(1.0 - mu_v * mu_v, 0.0)), 0.0, mu_v);
+    vec3 sun = vec3(sqrt(max(1.0 - mu_s * mu_s, 0.0)), 0.0, mu_s);
+    vec3 sun_irradiance[SPECTRAL_SET_CAPACITY];
+    vec3 sun_channels = vec3(0.0);
+    for (int k = 0; k < SPECTRAL_SET_CAPACITY; ++k) {
+      sun_irradiance[k] = ocean_set_sun_irradiance(k, point, sun);
+      sun_channels += sea_spectrum.to_channels[k] * sun_irradiance[k];
+    }
+    vec3 sky_irradiance = ocean_sky_irradiance(point, sun);
+    vec3 glint;
+    vec3 below = water_spectral_radiance(sea_spectrum, sun_irradiance, sky_irradiance, 0.0, 1.0, vec3(0.0, 0.0, 1.0),
+                                         view, sun,
+                                         ocean_depth(ocean_map_parameter(layer, OCEAN_BELOW_MAP_DEPTH), deep_water_depth),
+                                         seabed_albedo, glint);
+    vec3 downwelling = sun_channels * max(mu_s, 0.0) + sky_irradiance;
+    colour = vec4(below / max(downwelling, vec3(kOceanLeastRadiance)), 1.0);
   } else {
     float mu_s = ocean_sun_cosine(ocean_map_parameter(texel.x, OCEAN_LIGHT_MAP_SIZE));
     vec3 sun = vec3(sqrt(max(1.0 - mu_s * mu_s, 0.0)), 0.0, mu_s);

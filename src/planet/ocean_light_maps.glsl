@@ -36,6 +36,10 @@ const float kOceanLeastRadiance = 1e-30;  // the floor of the light maps (of the
 // The irradiances' rows: E_sky, then E_sun at each triple of working
 // wavelengths (SPECTRAL_SET_CAPACITY, the pass's count of triples).
 #define OCEAN_LIGHT_MAP_ROWS (1 + SPECTRAL_SET_CAPACITY)
+// The light from below over the downwelling irradiance (below).
+#define OCEAN_BELOW_MAP_WIDTH 64    // along √μ_v
+#define OCEAN_BELOW_MAP_HEIGHT 257  // along ½ + ½ sgn(μ_s) √|μ_s| (odd: a texel centre at μ_s = 0, the kink of max(μ_s, 0))
+#define OCEAN_BELOW_MAP_DEPTH 32    // along ln(1 + H / 1 m) / ln(1 + H_deep / 1 m)
 
 // The atmosphere's light at a sea point `point` (planet-centred, m), from the
 // pass's functions (engine_library.glsl) but in the tables' channels, as
@@ -111,3 +115,19 @@ float ocean_deviation(float u) {
 // are lifted to it (ocean.frag.glsl, sky_seen_from_sea), as the map's
 // first row is filled.
 const float kOceanLeastSkyCosine = 1e-4;
+
+// The light from below. Over water deeper than H_deep, where e^{−2 κ H}
+// < 1e-5 at every working wavelength (κ = a + b_b; the exponents of the
+// column and of the seabed, κ (1/μ_d + D_u/μ_u), are at least 2.03 κ), the
+// light leaving the water (water_spectral_radiance) is the deep column's;
+// at every depth it depends on μ_v, μ_s and H only, through the sun's and
+// the sky's irradiance at the level's radius, the water and the seabed's
+// albedo (constant for an Ocean). The map holds it over the channels'
+// downwelling irradiance D = Σ_k to_channels[k] E_sun,k max(μ_s, 0) + E_sky,
+// a ratio that varies slowly (the surface's transmittance, the refracted
+// cosines, the sun's share of the light) where D itself falls by orders of
+// magnitude (the twilight); the sea's shader multiplies it by D from the
+// light map. Depths on a log scale up to H_deep (deep_water_depth), where
+// the seabed's light falls off fastest.
+float ocean_depth_parameter(float depth, float deep) { return log(1.0 + max(depth, 0.0)) / log(1.0 + deep); }
+float ocean_depth(float u, float deep) { return exp(u * log(1.0 + deep)) - 1.0; }
