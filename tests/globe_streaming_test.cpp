@@ -194,7 +194,7 @@ class GlobeStreaming : public atmos_test::EarthGpuTest {
   static void SetUpTestSuite() {
     EarthGpuTest::SetUpTestSuite();
     if (context_ == nullptr) return;
-    pass_ = std::make_unique<atmos::AtmospherePass>(*earth_, *tables_, atmos::PlanetFrame{});
+    pass_ = std::make_unique<atmos::AtmospherePass>(*earth_, *tables_, atmos::PlanetFrame{}, atmos::PassPrograms::none);
   }
   static void TearDownTestSuite() {
     pass_.reset();
@@ -301,7 +301,7 @@ TEST_F(GlobeStreamingMars, DescentLeavesNoHoleAndItsTilesAllArrive) {
   atmos::PrecomputeOptions options;
   options.sizes = atmos_test::small_gpu_sizes();
   const atmos::Tables tables = atmos::precompute_tables(air, options);
-  const atmos::AtmospherePass pass(air, tables, atmos::PlanetFrame{});
+  const atmos::AtmospherePass pass(air, tables, atmos::PlanetFrame{}, atmos::PassPrograms::none);
   atmos::GlobeSettings settings;
   settings.memory_cap_bytes = std::size_t(32) << 20;
   // Coarser than on Earth: the Mars style's craters make fine tiles slow to build.

@@ -538,7 +538,7 @@ class GlobeGpu : public atmos_test::EarthGpuTest {
   static void SetUpTestSuite() {
     EarthGpuTest::SetUpTestSuite();
     if (context_ == nullptr) return;
-    pass_ = std::make_unique<atmos::AtmospherePass>(*earth_, *tables_, atmos::PlanetFrame{});
+    pass_ = std::make_unique<atmos::AtmospherePass>(*earth_, *tables_, atmos::PlanetFrame{}, atmos::PassPrograms::none);
   }
   static void TearDownTestSuite() {
     pass_.reset();
@@ -742,7 +742,7 @@ TEST_F(GlobeGpu, RebindDrawsAsANewGlobeWithTheNewPass) {
   atmos::PrecomputeOptions options;
   options.sizes = atmos_test::small_gpu_sizes();
   const atmos::Tables dense_tables = atmos::precompute_tables(dense, options);
-  const atmos::AtmospherePass dense_pass(dense, dense_tables, atmos::PlanetFrame{});
+  const atmos::AtmospherePass dense_pass(dense, dense_tables, atmos::PlanetFrame{}, atmos::PassPrograms::none);
   atmos::GlobeSettings settings;
   settings.complete_every_frame = true;
   const atmos::PlanetSurface surface = surface_of(atmos::SurfaceStyle::earth, 3);
@@ -795,7 +795,7 @@ TEST_F(GlobeGpu, GroundBelowTheDatumIsLitByTheExtendedAtmosphere) {
   atmos::PrecomputeOptions options;
   options.sizes = atmos_test::small_gpu_sizes();
   const atmos::Tables tables = atmos::precompute_tables(air, options);
-  const atmos::AtmospherePass pass(air, tables, atmos::PlanetFrame{});
+  const atmos::AtmospherePass pass(air, tables, atmos::PlanetFrame{}, atmos::PassPrograms::none);
   atmos::GlobeSettings settings;
   settings.complete_every_frame = true;
   // A coarse mesh (4 px): the light below the datum is what is tested, and
@@ -957,7 +957,7 @@ TEST_F(GlobeGpu, ShadowsOfAMountainDarkenTheGroundBehindItAtALowSun) {
   const auto planet = [&](const glm::dvec3& world_point) {
     return (world_point - frame.centre) / frame.units_per_metre;
   };
-  atmos::AtmospherePass pass(*earth_, *tables_, frame);
+  atmos::AtmospherePass pass(*earth_, *tables_, frame, atmos::PassPrograms::none);
   const atmos::PlanetSurface surface = mountain_surface(earth_->bottom_radius_m);
   atmos::Globe off(*earth_, surface, pass, shadow_settings(0));
   atmos::Globe on(*earth_, surface, pass, shadow_settings(4));
@@ -1362,7 +1362,7 @@ TEST_F(GlobeGpu, SlowDollyOverMarsDoesNotPop) {
   atmos::PrecomputeOptions options;
   options.sizes = atmos_test::small_gpu_sizes();
   const atmos::Tables tables = atmos::precompute_tables(air, options);
-  const atmos::AtmospherePass pass(air, tables, atmos::PlanetFrame{});
+  const atmos::AtmospherePass pass(air, tables, atmos::PlanetFrame{}, atmos::PassPrograms::none);
   atmos::GlobeSettings settings;
   settings.complete_every_frame = true;
   atmos::Globe globe(mars, surface, pass, settings);

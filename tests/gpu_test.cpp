@@ -319,7 +319,7 @@ TEST_F(Gpu, EveryGlClassNeedsACurrentContext) {
       renderer_error = e.what();
     }
     try {
-      atmos::AtmospherePass pass(*earth_, *tables_, atmos::PlanetFrame{});
+      atmos::AtmospherePass pass(*earth_, *tables_, atmos::PlanetFrame{}, atmos::PassPrograms::none);
     } catch (const atmos::Error& e) {
       pass_error = e.what();
     }
@@ -337,7 +337,7 @@ TEST_F(Gpu, EveryGlClassNeedsACurrentContext) {
       << post_error;
   // On the fixture's thread, where its context is current, all three work.
   atmos::Renderer renderer(*earth_, *tables_);
-  atmos::AtmospherePass pass(*earth_, *tables_, atmos::PlanetFrame{});
+  atmos::AtmospherePass pass(*earth_, *tables_, atmos::PlanetFrame{}, atmos::PassPrograms::none);
   atmos::PostProcess post;
 }
 

@@ -313,7 +313,7 @@ class GroundAlbedoGpu : public ::testing::Test {
 // sky, and going back to the planet's albedo gives the first frame again.
 TEST_F(GroundAlbedoGpu, PassFollowsTheGroundAlbedo) {
   const atmos::PlanetFrame frame;
-  atmos::AtmospherePass pass(*earth_, *tables_, frame);
+  atmos::AtmospherePass pass(*earth_, *tables_, frame, atmos::PassPrograms::none);
   EXPECT_EQ(pass.ground_albedo(), glm::dvec3(glm::vec3(0.1f)));
   const std::vector<glm::vec3> planet = render_sky(pass);
   pass.set_ground_albedo(glm::dvec3(0.8));
@@ -323,7 +323,7 @@ TEST_F(GroundAlbedoGpu, PassFollowsTheGroundAlbedo) {
   atmos::Tables blended = *tables_;
   blended.set = atmos::tables_for_ground_albedo(*tables_, glm::vec3(0.8f));
   blended.ground_response = atmos::GroundAlbedoResponse();
-  atmos::AtmospherePass direct(*earth_, blended, frame);
+  atmos::AtmospherePass direct(*earth_, blended, frame, atmos::PassPrograms::none);
   EXPECT_EQ(render_sky(direct), snow);
 
   double planet_sum = 0.0, snow_sum = 0.0;
@@ -352,7 +352,7 @@ TEST_F(GroundAlbedoGpu, PassFollowsTheGroundAlbedo) {
 // hemisphere, between the extremes. The pass takes it.
 TEST_F(GroundAlbedoGpu, GlobeRegionalAlbedoFollowsTheGround) {
   const atmos::PlanetFrame frame;
-  atmos::AtmospherePass pass(*earth_, *tables_, frame);
+  atmos::AtmospherePass pass(*earth_, *tables_, frame, atmos::PassPrograms::none);
   atmos::GlobeSettings settings;
   settings.complete_every_frame = true;
   const atmos::Globe globe(*earth_, atmos::load_surface("earth"), pass, settings);

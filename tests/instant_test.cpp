@@ -192,7 +192,7 @@ class InstantGpu : public ::testing::Test {
         atmos::compute_instant_tables(*earth_, atmos_test::small_gpu_sizes()));
     try {
       context_ = atmos::GlContext::create_headless();
-      pass_ = std::make_unique<atmos::AtmospherePass>(*earth_, *tables_, engine_frame());
+      pass_ = std::make_unique<atmos::AtmospherePass>(*earth_, *tables_, engine_frame(), atmos::PassPrograms::none);
     } catch (const atmos::Error& e) {
       error_ = e.what();
     }

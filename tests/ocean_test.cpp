@@ -69,7 +69,7 @@ class OceanGpu : public atmos_test::EarthGpuTest {
   static void SetUpTestSuite() {
     EarthGpuTest::SetUpTestSuite();
     if (context_ == nullptr) return;
-    pass_ = std::make_unique<atmos::AtmospherePass>(*earth_, *tables_, atmos::PlanetFrame{});
+    pass_ = std::make_unique<atmos::AtmospherePass>(*earth_, *tables_, atmos::PlanetFrame{}, atmos::PassPrograms::none);
   }
   static void TearDownTestSuite() {
     pass_.reset();
@@ -385,7 +385,7 @@ TEST_F(OceanGpu, LightMapsFollowThePassGroundAlbedo) {
   options.sizes = atmos_test::small_gpu_sizes();
   options.ground_albedo_response = true;
   const atmos::Tables tables = atmos::precompute_tables(*earth_, options);
-  atmos::AtmospherePass pass(*earth_, tables, atmos::PlanetFrame{});
+  atmos::AtmospherePass pass(*earth_, tables, atmos::PlanetFrame{}, atmos::PassPrograms::none);
   pass.set_ground_albedo(glm::dvec3(0.0));
   atmos::OceanSettings settings;
   settings.bathymetry_texels = 16;
@@ -889,7 +889,7 @@ TEST_F(OceanGpu, SpectralGlintAndLightFromBelowMatchTheCpuTwin) {
   atmos::PrecomputeOptions options;
   options.sizes = atmos_test::small_gpu_sizes();
   const atmos::Tables tables = atmos::precompute_tables(earth, options);
-  atmos::AtmospherePass pass(earth, tables, atmos::PlanetFrame{});
+  atmos::AtmospherePass pass(earth, tables, atmos::PlanetFrame{}, atmos::PassPrograms::none);
   atmos::OceanSettings settings;
   settings.water.wind_speed_m_s = 6.0;
   settings.water.chlorophyll_mg_m3 = 0.3;

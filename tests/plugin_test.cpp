@@ -130,7 +130,7 @@ class Plugin : public atmos_test::EarthGpuTest {
     EarthGpuTest::SetUpTestSuite();
     if (context_ == nullptr) return;
     try {
-      pass_ = std::make_unique<atmos::AtmospherePass>(*earth_, *tables_, engine_frame());
+      pass_ = std::make_unique<atmos::AtmospherePass>(*earth_, *tables_, engine_frame(), atmos::PassPrograms::none);
     } catch (const atmos::Error& e) {
       error_ = e.what();
     }

@@ -214,7 +214,7 @@ TEST_F(StarCatalogueGpu, ThePluginDrawsTheCatalogueWhereTheRendererDoes) {
   const Image rendered = renderer.render(camera, sun);
 
   // The plugin's, rows turned top-down.
-  atmos::AtmospherePass pass(*earth_, *tables_, atmos::PlanetFrame{});
+  atmos::AtmospherePass pass(*earth_, *tables_, atmos::PlanetFrame{}, atmos::PassPrograms::none);
   pass.set_star_catalogue(equatorial);
   const int w = camera.width, h = camera.height;
   GLuint depth = 0, colour = 0;

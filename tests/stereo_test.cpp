@@ -219,7 +219,7 @@ TEST_F(StereoGpu, SunDiscCentreInEachEyeIsWhereItsFrustumPutsIt) {
   const int w = head.width, h = head.height;
   atmos::Renderer renderer(*earth_, *tables_);
   atmos::PlanetFrame frame;  // the engine's world in planet-centred metres
-  atmos::AtmospherePass pass(*earth_, *tables_, frame);
+  atmos::AtmospherePass pass(*earth_, *tables_, frame, atmos::PassPrograms::none);
 
   GLuint colour = 0, depth = 0;
   glCreateTextures(GL_TEXTURE_2D, 1, &colour);

@@ -261,7 +261,7 @@ TEST_F(HeadsetGpu, SunDiscCentreInEachEyeIsWhereItsOwnAnglesPutIt) {
 // distance error, 8e-8 and 3e-6 here; an eye drawn through the other's
 // matrices would be off by ~0.2).
 TEST_F(HeadsetGpu, GlobeChoosesTheTilesOnceAndEachEyesDepthReprojects) {
-  atmos::AtmospherePass pass(*earth_, *tables_, atmos::PlanetFrame{});
+  atmos::AtmospherePass pass(*earth_, *tables_, atmos::PlanetFrame{}, atmos::PassPrograms::none);
   atmos::GlobeSettings settings;
   settings.complete_every_frame = true;
   atmos::Globe globe(*earth_, atmos::PlanetSurface{}, pass, settings);

@@ -123,7 +123,9 @@ struct GlobeRenderer::Impl {
 
   Impl(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, const atmos::PlanetSurface& surface)
       : air(atmos::extend_below_datum(atmosphere, surface)),
-        pass(air, tables, atmos::PlanetFrame{}),
+        // Each of `atmos render`'s images compiles the programs it draws
+        // with at its first use: no warm-up of others.
+        pass(air, tables, atmos::PlanetFrame{}, atmos::PassPrograms::none),
         globe(atmosphere, surface, pass, settings()),
         regional_albedo(!tables.ground_response.empty()) {}
 

@@ -204,8 +204,10 @@ int run(const Options& o, const engine::SceneOverrides& overrides) {
   // 4. The atmosphere pass, in the engine's current context. Its GLSL
   //    library goes into the engine's fragment shader, which lights the
   //    terrain with the atmosphere's sun and sky.
+  //    Its programs compile at their first use, in the first frame
+  //    (PassPrograms::none: the timings below skip that frame), not ahead.
   const auto pass_start = std::chrono::steady_clock::now();
-  atmos::AtmospherePass pass(planet, cached.tables, world.planet_frame());
+  atmos::AtmospherePass pass(planet, cached.tables, world.planet_frame(), atmos::PassPrograms::none);
   const double pass_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_start).count();
   engine::RenderSettings settings;
   settings.width = o.width;

@@ -383,7 +383,8 @@ SweepResult run_sweep(const SweepOptions& options) {
                                                                state->planet.precision);
                 if (needs_plugin)
                   state->pass =
-                      std::make_unique<AtmospherePass>(state->planet.atmosphere, state->tables, state->planet.frame);
+                      std::make_unique<AtmospherePass>(state->planet.atmosphere, state->tables, state->planet.frame,
+                                                       PassPrograms::none);
               },
               kind, message);
           result.setup_seconds += seconds_since(t0);
