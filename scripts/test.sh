@@ -18,11 +18,14 @@
 #                                 (tests/data/reference/) and the installed
 #                                 package. Each build compiles only the test
 #                                 files it runs;
-#   bash scripts/test.sh --full   the full tier (at most 45 minutes): everything,
-#                                 the unit tests in both builds, the references
-#                                 recomputed and checked bit for bit against the
-#                                 stored ones, Venus, the dense atmospheres and
-#                                 the convergence of the orders.
+#   bash scripts/test.sh --full   the full tier (at most 45 minutes): everything
+#                                 in the release build, a quarter of the
+#                                 references recomputed and checked bit for bit
+#                                 against the stored ones, Venus, the dense
+#                                 atmospheres and the convergence of the orders;
+#                                 in the sanitizer build the unit tests but for
+#                                 the CLI's and the example's and the longest
+#                                 GPU suites (see below).
 #
 # Each run prints the 10 slowest tests of each build. OpenGL runs headless
 # (EGL; Mesa llvmpipe on machines without a GPU).
@@ -76,19 +79,28 @@ unset ATMOS_REFERENCE_MODE
 sanitize="$root/build-sanitize"
 # Figures for the generated docs (scripts/docs.sh) come from the release build.
 unset ATMOS_FIGURES_FILE
-test_apps=OFF
 test_files=sanitizer-tier
-[ "$tier" = full ] && test_apps=ON && test_files=all
+[ "$tier" = full ] && test_files=all
 cmake -S "$root" -B "$sanitize" -G Ninja -DCMAKE_BUILD_TYPE=Release \
-  -DATMOS_SANITIZE=ON -DATMOS_WERROR=ON -DATMOS_KERNEL_CLONES=OFF -DATMOS_TEST_APPS="$test_apps" \
+  -DATMOS_SANITIZE=ON -DATMOS_WERROR=ON -DATMOS_KERNEL_CLONES=OFF -DATMOS_TEST_APPS=OFF \
   -DATMOS_TEST_FILES="$test_files" > /dev/null
 cmake --build "$sanitize" --parallel "$jobs" --target atmos_tests
 echo "test.sh: sanitizer build done at $(( $(date +%s) - start )) s"
 sanitize_labels=(-L '^unit$' -L "^$tier$")
-# The default tier leaves the slow and gpu suites to the release build; the full
-# tier runs them here too, but leaves to the release build four suites of
-# minutes each at -O1 whose code the sanitizers see in shorter suites:
-#  - the sweep's 500-run subset (SweepLong; here the 60-run subset, Sweep);
+# The default tier leaves the slow and gpu suites to the release build. The
+# full tier runs the slow ones here too and the GPU suites of the library's
+# host code (the plugin, post-processing, stereo, eclipses, stars, the
+# instant mode, the light maps, tile streaming), but leaves to the release
+# build the suites of many minutes at -O1 whose code the sanitizers see in
+# shorter suites, and the command-line tool and the example (their processes
+# recompute tables and recompile programs; this build leaves them out,
+# ATMOS_TEST_APPS=OFF):
+#  - the GPU against the CPU twins (Gpu), the globe's and the sea's draws
+#    (GlobeGpu, OceanGpu, WaterGpu): their CPU code is the twins', the
+#    globe's and the sea's, which other suites run here (Tables, Spectral,
+#    SpectralSky..., Relief, GlobeMesh, GlobeLod, GlobeStreaming, WaterFresnel,
+#    WaterGlint, WaterColumn...);
+#  - the random sweep's 500 runs (SweepLong);
 #  - the streamed descent onto Mars (GlobeStreamingMars; here the same
 #    streaming on Earth, GlobeStreaming, and the Mars relief in the Relief
 #    and GlobeMesh suites);
@@ -98,7 +110,7 @@ sanitize_labels=(-L '^unit$' -L "^$tier$")
 #    here the same solver on Earth and a dense Earth, Convergence and
 #    DenseEarth).
 if [ "$tier" = full ]; then
-  sanitize_labels+=(-E '^(SweepLong|GlobeStreamingMars|ThickPresets|ConvergenceTail)$')
+  sanitize_labels+=(-E '^(Gpu|GlobeGpu|OceanGpu|WaterGpu|SweepLong|GlobeStreamingMars|ThickPresets|ConvergenceTail)$')
 else
   sanitize_labels+=(-LE '^(slow|gpu)$')
 fi

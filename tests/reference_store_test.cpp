@@ -3,6 +3,7 @@
 // nothing else does, so a stored result is never used for other inputs.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <set>
 #include <string>
 
@@ -65,6 +66,28 @@ TEST(ReferenceStore, EveryInputChangesTheKey) {
   o = options;
   o.sun_limb_darkening_u = 0.6;
   expect_new(radiance_key(earth, observer, view, sun, o), "the limb darkening");
+}
+
+// Verify mode recomputes the first entry of each suite and a quarter of the
+// others, chosen by the key alone.
+TEST(ReferenceStore, VerifyModeRecomputesAFixedQuarterOfTheEntries) {
+  using atmos_test::oracle::verified_entry;
+  const atmos::Atmosphere earth = atmos::load_atmosphere("earth");
+  const glm::dvec3 observer(0.0, 0.0, earth.bottom_radius_m + 2.0), sun(0.0, 0.0, 1.0);
+  int verified = 0;
+  const int keys = 2000;
+  for (int i = 0; i < keys; ++i) {
+    const double elevation = -1.5 + 3.0 * i / keys;
+    const glm::dvec3 view(0.0, std::cos(elevation), std::sin(elevation));
+    const std::string key = radiance_key(earth, observer, view, sun, atmos::ReferenceOptions{});
+    EXPECT_TRUE(verified_entry(key, true));
+    EXPECT_EQ(verified_entry(key, false), verified_entry(key, false));
+    verified += verified_entry(key, false) ? 1 : 0;
+  }
+  EXPECT_GT(verified, keys / 5);
+  EXPECT_LT(verified, keys * 3 / 10);
+  EXPECT_TRUE(verified_entry("0123456789abcdef0123456789abcdec", false));
+  EXPECT_FALSE(verified_entry("0123456789abcdef0123456789abcded", false));
 }
 
 }  // namespace
