@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -32,12 +33,14 @@
 #include "atmos/renderer.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "data/glsl_prune.hpp"
 #include "gpu/camera_cpp.hpp"
 #include "gpu/gl_util.hpp"
 #include "gpu/shader_source.hpp"
 #include "physics/parameters.hpp"
 #include "physics/stars_cpp.hpp"
 #include "figures.hpp"
+#include "fullscreen_program.hpp"
 #include "gpu_fixture.hpp"
 
 namespace {
@@ -651,6 +654,43 @@ TEST_F(Gpu, RejectsBadSunDirection) {
   atmos::Renderer renderer(*earth_, *tables_);
   EXPECT_THROW(renderer.render(scenes()[0].camera, {0.0, 0.0, 0.0}), atmos::Error);
   EXPECT_THROW(renderer.render(scenes()[0].camera, {std::nan(""), 0.0, 1.0}), atmos::Error);
+}
+
+// Programs go to the driver pruned to the functions they use
+// (data/glsl_prune.hpp, in gpu::link_program): the sky-view table drawn by
+// its pruned program and by one of the whole assembled source holds the same
+// bits.
+TEST_F(Gpu, PrunedProgramDrawsTheBitsOfTheWholeSource) {
+  atmos::gpu::GpuTables gpu_tables(*earth_, *tables_, atmos::TexturePrecision::full);
+  const glm::vec3 camera(0.0f, gpu_tables.params().bottom_radius + 1000.0f, 0.0f);
+  const glm::vec3 sun = glm::normalize(glm::vec3(0.3f, 0.8f, 0.2f));
+  ASSERT_FALSE(atmos::physics::sun_may_be_low_on_view_rays(gpu_tables.params(), camera, sun));
+  const std::string whole =
+      atmos::gpu::sky_view_fragment_shader_source(gpu_tables.params(), gpu_tables.spectral(), false, false).text;
+  ASSERT_LT(atmos::data::prune_unreferenced_functions(whole).size(), whole.size());
+  const atmos::physics::SkyViewFrame frame = gpu_tables.sky_view_frame(camera, sun);
+  const auto draw = [&] {
+    gpu_tables.update_sky_view(camera, sun, frame, nullptr);
+    std::vector<float> texels(size_t(3 * 4 * SKY_VIEW_WIDTH * SKY_VIEW_HEIGHT));
+    const size_t one = texels.size() / 3;
+    for (int i = 0; i < 3; ++i)
+      glGetTextureImage(gpu_tables.sky_view_texture(i), 0, GL_RGBA, GL_FLOAT, GLsizei(one * sizeof(float)),
+                        texels.data() + size_t(i) * one);
+    return texels;
+  };
+  const std::vector<float> pruned = draw();
+  GLuint& slot = gpu_tables.sky_view_program(camera, sun, atmos::physics::no_moons());
+  const GLuint pruned_program = slot;
+  slot = atmos_test::fullscreen_program(whole);
+  const std::vector<float> unpruned = draw();
+  glDeleteProgram(slot);
+  slot = pruned_program;
+  atmos::gpu::check_gl("while drawing the sky-view table");
+  ASSERT_EQ(pruned.size(), unpruned.size());
+  EXPECT_EQ(std::memcmp(pruned.data(), unpruned.data(), pruned.size() * sizeof(float)), 0);
+  // Not a table of zeros or NaNs.
+  EXPECT_GT(*std::max_element(pruned.begin(), pruned.end()), 0.0f);
+  EXPECT_TRUE(std::all_of(pruned.begin(), pruned.end(), [](float x) { return std::isfinite(x); }));
 }
 
 // --- Camera model (gpu/camera.glsl, the same code on both sides) ----------

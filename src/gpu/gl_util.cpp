@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "atmos/colour.hpp"
+#include "data/glsl_prune.hpp"
 #include "physics/parameters.hpp"
 
 namespace atmos::gpu {
@@ -63,7 +64,11 @@ std::string summarize_log(const std::string& log, const AssembledSource* source)
 
 GLuint compile_shader(GLenum type, const AssembledSource& source, const char* what) {
   GLuint shader = glCreateShader(type);
-  const char* text = source.text.c_str();
+  // Only the functions the program uses: the driver's front end parses and
+  // optimises every function it is given. The lines keep their numbers, so
+  // the log still maps back through `source`.
+  const std::string pruned = data::prune_unreferenced_functions(source.text);
+  const char* text = pruned.c_str();
   glShaderSource(shader, 1, &text, nullptr);
   glCompileShader(shader);
   GLint ok = GL_FALSE;

@@ -8,6 +8,7 @@
 
 #include "atmos/atmosphere.hpp"
 #include "data/embedded_files.hpp"
+#include "data/glsl_prune.hpp"
 
 namespace atmos::planet {
 
@@ -15,7 +16,9 @@ namespace {
 
 GLuint compile(const char* who, GLenum stage, const std::string& source, const char* name) {
   const GLuint shader = glCreateShader(stage);
-  const char* text = source.c_str();
+  // Only the functions the shader uses (of the pass's whole library).
+  const std::string pruned = data::prune_unreferenced_functions(source);
+  const char* text = pruned.c_str();
   glShaderSource(shader, 1, &text, nullptr);
   glCompileShader(shader);
   GLint ok = 0;
