@@ -96,7 +96,7 @@ sanitize_labels=(-L '^unit$' -L "^$tier$")
 # recompute tables and recompile programs; this build leaves them out,
 # ATMOS_TEST_APPS=OFF):
 #  - the GPU against the CPU twins (Gpu), the globe's and the sea's draws
-#    (GlobeGpu, OceanGpu, WaterGpu): their CPU code is the twins', the
+#    (GlobeGpu, OceanGpu, OceanSpectralGpu, WaterGpu): their CPU code is the twins', the
 #    globe's and the sea's, which other suites run here (Tables, Spectral,
 #    SpectralSky..., Relief, GlobeMesh, GlobeLod, GlobeStreaming, WaterFresnel,
 #    WaterGlint, WaterColumn...);
@@ -110,7 +110,7 @@ sanitize_labels=(-L '^unit$' -L "^$tier$")
 #    here the same solver on Earth and a dense Earth, Convergence and
 #    DenseEarth).
 if [ "$tier" = full ]; then
-  sanitize_labels+=(-E '^(Gpu|GlobeGpu|OceanGpu|WaterGpu|SweepLong|GlobeStreamingMars|ThickPresets|ConvergenceTail)$')
+  sanitize_labels+=(-E '^(Gpu|GlobeGpu|OceanGpu|OceanSpectralGpu|WaterGpu|SweepLong|GlobeStreamingMars|ThickPresets|ConvergenceTail)$')
 else
   sanitize_labels+=(-LE '^(slow|gpu)$')
 fi

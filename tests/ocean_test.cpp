@@ -883,7 +883,13 @@ TEST_F(OceanGpu, BrightStarGlintIsTheSunsScaledByItsIrradiance) {
 // times the channels). Drawn with the pass's functions (kOceanDirectLight)
 // rather than the light maps, which the ocean then does not fill: at 15
 // wavelengths the sky's map alone takes minutes on llvmpipe.
-TEST_F(OceanGpu, SpectralGlintAndLightFromBelowMatchTheCpuTwin) {
+// A suite of its own, in the full tier only: its programs at five triples
+// take longer to compile than the rest of OceanGpu together. The default
+// tier checks the same functions at 15 wavelengths in WaterGpu (GLSL
+// against the C++) and WaterSpectral (against their definition).
+class OceanSpectralGpu : public OceanGpu {};
+
+TEST_F(OceanSpectralGpu, GlintAndLightFromBelowMatchTheCpuTwin) {
   atmos::Atmosphere earth = *earth_;
   earth.wavelengths_nm = atmos::spectral_wavelengths(15);
   atmos::PrecomputeOptions options;
