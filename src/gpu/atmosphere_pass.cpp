@@ -567,14 +567,15 @@ void AtmospherePass::bind_textures(int first_unit) const {
 
 namespace {
 
-// The frame of an input whose textures are not read (link_programs,
-// programs_linked): its numbers checked as render() checks them.
-physics::PassFrame frame_without_textures(const AtmospherePass::Impl& p, const FrameInput& input) {
+void check_frame_size(const FrameInput& input) {
   if (input.width < 1 || input.height < 1 || input.width > kMaxImageSize || input.height > kMaxImageSize)
     throw Error("plugin input: frame size " + std::to_string(input.width) + "x" + std::to_string(input.height) +
                 " outside 1.." + std::to_string(kMaxImageSize));
-  gpu::validate_frame_numbers(input);
-  gpu::validate_star_orientation(input.world_from_star_catalogue, "plugin input");
+}
+
+// The frame's PassFrame from its numbers (checked before), in the pass's
+// mode: the instant mode has no volume of its own and draws no eclipses.
+physics::PassFrame pass_frame_of(const AtmospherePass::Impl& p, const FrameInput& input) {
   physics::PassFrame frame =
       gpu::make_pass_frame(input, p.frame, p.tables->params(), p.tables->radiance_to_srgb(), p.own_sun_lux);
   if (p.instant) {
@@ -584,6 +585,15 @@ physics::PassFrame frame_without_textures(const AtmospherePass::Impl& p, const F
     gpu::make_instant_frame(p.tables->params(), frame);
   }
   return frame;
+}
+
+// The frame of an input whose textures are not read (link_programs,
+// programs_linked): its numbers checked as render() checks them.
+physics::PassFrame frame_without_textures(const AtmospherePass::Impl& p, const FrameInput& input) {
+  check_frame_size(input);
+  gpu::validate_frame_numbers(input);
+  gpu::validate_star_orientation(input.world_from_star_catalogue, "plugin input");
+  return pass_frame_of(p, input);
 }
 
 }  // namespace
@@ -646,9 +656,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   Impl& p = *impl_;
   gpu::require_gl_context("the engine plugin (atmos::AtmospherePass)");
   // --- Validation: everything before the first state change. ---
-  if (input.width < 1 || input.height < 1 || input.width > kMaxImageSize || input.height > kMaxImageSize)
-    throw Error("plugin input: frame size " + std::to_string(input.width) + "x" + std::to_string(input.height) +
-                " outside 1.." + std::to_string(kMaxImageSize));
+  check_frame_size(input);
   if (input.depth == 0) throw Error("plugin input: no depth texture (FrameInput::depth is 0)");
   gpu::clear_gl_errors();
   const TextureInfo depth = texture_info(input.depth, "depth");
@@ -681,17 +689,10 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
                   "GL_DEPTH*_STENCIL8: it is read with depth comparison)");
   }
 
-  physics::PassFrame frame =
-      gpu::make_pass_frame(input, p.frame, p.tables->params(), p.tables->radiance_to_srgb(), p.own_sun_lux);
+  physics::PassFrame frame = pass_frame_of(p, input);
   if (shadows) {
     const TextureInfo shadow = texture_info(input.shadow_map, "shadow map");
     gpu::set_shadow_depth_bias(input, shadow.width, shadow.height, frame);
-  }
-  if (p.instant) {
-    if (frame.moons.count > 0)
-      throw Error("plugin input: the instant mode draws no eclipses, and a moon hides part of the sun from the "
-                  "atmosphere (use Tables)");
-    gpu::make_instant_frame(p.tables->params(), frame);
   }
   const glm::vec3 camera_f = frame.camera;
   const glm::vec3 sun_f = frame.sun_direction;
