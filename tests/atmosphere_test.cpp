@@ -1,4 +1,5 @@
 // Planet files: presets load, and every kind of bad input is a clear error.
+#include <filesystem>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -18,7 +19,7 @@ std::string read_file(const std::string& path) {
   return ss.str();
 }
 
-std::string earth_text() { return read_file(std::string(ATMOS_SOURCE_DIR) + "/data/planets/earth.json"); }
+std::string earth_text() { return read_file(std::filesystem::path(ATMOS_SOURCE_DIR) / "data" / "planets" / "earth.json"); }
 
 // Expects parse_atmosphere to throw an atmos::Error whose one-line message contains `needle`.
 void expect_error(const std::string& text, const std::string& needle) {
@@ -76,7 +77,7 @@ TEST(Presets, UnknownNameIsAClearError) {
 TEST(PlanetFile, UserFilesLoadLikePresets) {
   const atmos::Atmosphere a = atmos::parse_atmosphere(earth_text(), "copy.json");
   EXPECT_EQ(a.name, "earth");
-  const atmos::Atmosphere b = atmos::load_atmosphere(std::string(ATMOS_SOURCE_DIR) + "/data/planets/mars.json");
+  const atmos::Atmosphere b = atmos::load_atmosphere(std::filesystem::path(ATMOS_SOURCE_DIR) / "data" / "planets" / "mars.json");
   EXPECT_EQ(b.name, "mars");
 }
 

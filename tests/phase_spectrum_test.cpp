@@ -3,6 +3,7 @@
 // truncation of the scattering density's Legendre expansion for peaked
 // lobes (delta-M), the multiple scattering of a peaked lobe away from the sun
 // and the sky near the sun against the Monte Carlo reference.
+#include <filesystem>
 #include <gtest/gtest.h>
 #include <tbb/parallel_for.h>
 
@@ -34,7 +35,7 @@ atmos::TableSizes small_sizes() { return atmos::TableSizes{64, 16, 32, 8, 4, 16,
 
 // The Mars preset (gas + dust) with the dust's phase function replaced.
 json mars_with_dust_phase(const json& phase) {
-  std::ifstream in(std::string(ATMOS_SOURCE_DIR) + "/data/planets/mars.json");
+  std::ifstream in(std::filesystem::path(ATMOS_SOURCE_DIR) / "data" / "planets" / "mars.json");
   std::stringstream ss;
   ss << in.rdbuf();
   json doc = json::parse(ss.str());
@@ -510,7 +511,7 @@ TEST(PhaseSpectrumAccuracy, SkyNearTheSunMatchesTheSpectralReference) {
 // scattering no longer dominates and the light scattered again matters.
 
 atmos::Atmosphere earth_with_peaked_aerosol() {
-  std::ifstream in(std::string(ATMOS_SOURCE_DIR) + "/data/planets/earth.json");
+  std::ifstream in(std::filesystem::path(ATMOS_SOURCE_DIR) / "data" / "planets" / "earth.json");
   std::stringstream ss;
   ss << in.rdbuf();
   json doc = json::parse(ss.str());

@@ -2,6 +2,7 @@
 // the derived quantities are those of the files' "sources", the dense ones
 // (Venus, Titan) converge with auto orders, and the dusty Mars sky has the
 // colours it is made for. Small tables throughout, so each test takes seconds.
+#include <filesystem>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -34,7 +35,7 @@ std::vector<std::string> all_presets() {
 }
 
 nlohmann::json preset_json(const std::string& name) {
-  std::ifstream in(std::string(ATMOS_SOURCE_DIR) + "/data/planets/" + name + ".json");
+  std::ifstream in(std::filesystem::path(ATMOS_SOURCE_DIR) / "data" / "planets" / (name + ".json"));
   std::stringstream ss;
   ss << in.rdbuf();
   return nlohmann::json::parse(ss.str());

@@ -4,6 +4,7 @@
 // conservation, partial visibility of the sun disc, solar eclipses by moons
 // and the limb-darkened disc; plus plausibility of the Earth preset. Monte Carlo comparisons allow a few standard errors (all runs
 // are seeded, hence repeatable) plus a stated deterministic margin.
+#include <filesystem>
 #include <gtest/gtest.h>
 
 #include <glm/geometric.hpp>
@@ -34,7 +35,7 @@ constexpr double kPi = 3.14159265358979323846;
 
 // A planet file of data/planets, read from the source tree.
 Atmosphere planet_file(const std::string& name) {
-  std::ifstream in(std::string(ATMOS_SOURCE_DIR) + "/data/planets/" + name + ".json", std::ios::binary);
+  std::ifstream in(std::filesystem::path(ATMOS_SOURCE_DIR) / "data" / "planets" / (name + ".json"), std::ios::binary);
   std::stringstream ss;
   ss << in.rdbuf();
   return atmos::parse_atmosphere(ss.str(), name + ".json");

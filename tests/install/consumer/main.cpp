@@ -16,7 +16,7 @@
 
 int main() {
   try {
-    const atmos::Atmosphere mars = atmos::load_atmosphere(std::string(ATMOS_DATA_DIR) + "/planets/mars.json");
+    const atmos::Atmosphere mars = atmos::load_atmosphere(std::filesystem::path(ATMOS_DATA_DIR) / "planets" / "mars.json");
     atmos::PrecomputeOptions options;
     options.sizes = {64, 16, 32, 8, 4, 16, 32, 8};
     options.scattering_orders = 2;
