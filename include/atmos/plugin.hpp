@@ -209,10 +209,11 @@ class AtmospherePass {
   // multiple-scattering table (for cameras in the atmosphere; from above it
   // every pixel's ray is integrated), then composites as the exact mode
   // does. A few per cent off the exact mode by day (docs/instant.md gives
-  // the measured error). Not in this mode: eclipses (render() throws with
-  // moons that hide part of the sun), glsl_library() and bind_textures()
-  // (they read the 4D tables) and set_ground_albedo() (no ground response:
-  // compute the instant tables of an atmosphere with the new albedo).
+  // the measured error). glsl_library() integrates along each call's ray
+  // in this mode (see there). Not in this mode: eclipses (render() throws
+  // with moons that hide part of the sun) and set_ground_albedo() (no
+  // ground response: compute the instant tables of an atmosphere with the
+  // new albedo).
   AtmospherePass(const Atmosphere& atmosphere, const InstantTables& tables, const PlanetFrame& frame,
                  PassPrograms programs = PassPrograms::common);
   ~AtmospherePass();
@@ -260,6 +261,11 @@ class AtmospherePass {
   // directions as unit vectors in the planet's axes, radiance in cd/m²
   // linear sRGB, irradiance in lux-scaled linear sRGB (cd/m² x sr); the sun
   // at the atmosphere's own illuminance. Paste it after "#version 450 core".
+  // A pass of the instant mode gives the same functions: the irradiance and
+  // the transmittance from its tables as in the exact mode, the sky and the
+  // aerial perspective integrated along the ray at each call (24 steps
+  // through its multiple-scattering table: far costlier per call than the
+  // exact mode's lookups), its textures on the same units.
   std::string glsl_library(int first_unit) const;
   // Binds the textures glsl_library() declares.
   void bind_textures(int first_unit) const;

@@ -545,22 +545,22 @@ double AtmospherePass::bottom_radius_m() const { return impl_->bottom_radius_m; 
 double AtmospherePass::sun_illuminance_lux() const { return impl_->own_sun_lux; }
 
 std::string AtmospherePass::glsl_library(int first_unit) const {
-  if (impl_->instant)
-    throw Error("glsl_library: the instant mode has no 4D tables for the library to read (use Tables)");
   GLint units = 0;
   glGetIntegerv(GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS, &units);
   if (first_unit < 0 || (units > 0 && first_unit + 5 > units))
     throw Error("glsl_library: texture units " + std::to_string(first_unit) + ".." + std::to_string(first_unit + 4) +
                 " outside the context's " + std::to_string(units));
   return gpu::engine_library_source(impl_->tables->params(), impl_->tables->spectral(),
-                                    impl_->tables->radiance_to_srgb(), first_unit);
+                                    impl_->tables->radiance_to_srgb(), first_unit, impl_->instant);
 }
 
 void AtmospherePass::bind_textures(int first_unit) const {
-  if (impl_->instant)
-    throw Error("bind_textures: the instant mode has no 4D tables to bind (use Tables)");
+  // The instant mode's library reads its multiple-scattering table on the
+  // second unit and no 4D table (engine_library.glsl, ATMOS_INSTANT).
+  const gpu::GpuTables& tables = *impl_->tables;
   for (int i = 0; i < 5; ++i) {
-    glBindTextureUnit(GLuint(first_unit + i), impl_->tables->texture(i));
+    const GLuint texture = impl_->instant && i == 1 ? tables.instant_multiple_scattering_texture() : tables.texture(i);
+    glBindTextureUnit(GLuint(first_unit + i), texture);
     glBindSampler(GLuint(first_unit + i), 0);
   }
 }

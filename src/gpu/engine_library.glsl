@@ -14,17 +14,44 @@
 //    a radiance in cd/m²).
 // The shared part also defines the functions and macros of atmos's physics
 // (PI, IN, OUT, INLINE, transmittance_along_ray, ...): avoid those names.
+//
+// ATMOS_INSTANT is 1 for a pass of the instant mode (Hillaire 2020,
+// docs/instant.md), whose tables hold no 4D table: the sky and the aerial
+// perspective are then integrated along the ray at each call
+// (instant_atmosphere.glsl: instant_radiance_to_distance, 24 intervals),
+// through the optical depth and the multiple-scattering table; the
+// irradiance, the transmittance and the eclipse factors read the same
+// tables as in the exact mode.
 
 layout(binding = ATMOS_UNIT_0) uniform sampler2D atmos_optical_depth_texture;
+layout(binding = ATMOS_UNIT_3) uniform sampler2D atmos_irradiance_texture;
+#if ATMOS_INSTANT
+layout(binding = ATMOS_UNIT_1) uniform sampler2D atmos_instant_multiple_scattering_texture;
+
+// The march's light in the tables' channels, converted as the exact
+// functions convert theirs (below).
+vec3 atmos_instant_radiance(vec3 camera, vec3 view_ray, vec3 sun, float t_end, out vec3 transmittance) {
+  vec3 channels = instant_radiance_to_distance(ATMOSPHERE, SPECTRAL, atmos_optical_depth_texture,
+                                               atmos_instant_multiple_scattering_texture, camera, view_ray, sun, t_end,
+                                               true, transmittance);
+  vec3 s = ATMOS_RADIANCE_TO_SRGB * ATMOSPHERE.solar_irradiance;
+  transmittance = clamp(ATMOS_RADIANCE_TO_SRGB * (ATMOSPHERE.solar_irradiance * transmittance) / max(s, vec3(1e-30)),
+                        vec3(0.0), vec3(1.0));
+  return max(ATMOS_RADIANCE_TO_SRGB * channels, vec3(0.0));
+}
+#else
 layout(binding = ATMOS_UNIT_1) uniform sampler3D atmos_scattering_texture;
 layout(binding = ATMOS_UNIT_2) uniform sampler3D atmos_single_aerosol_texture;
-layout(binding = ATMOS_UNIT_3) uniform sampler2D atmos_irradiance_texture;
 layout(binding = ATMOS_UNIT_4) uniform sampler3D atmos_multiple_scattering_texture;
+#endif
 
 // Radiance of the sky (or of the atmosphere in front of the planet's sphere)
 // along a view ray from `camera`, excluding the sun disc and the ground
 // itself, and the transmittance of that path (linear sRGB, for sunlight).
 vec3 atmos_sky_radiance(vec3 camera, vec3 view_ray, vec3 sun, out vec3 transmittance) {
+#if ATMOS_INSTANT
+  return atmos_instant_radiance(camera_above_ground(ATMOSPHERE, camera), view_ray, sun, -1.0, transmittance);
+#else
   vec3 channels = sky_radiance(ATMOSPHERE, SPECTRAL, atmos_optical_depth_texture, atmos_scattering_texture,
                                atmos_single_aerosol_texture, atmos_multiple_scattering_texture,
                                camera_above_ground(ATMOSPHERE, camera), view_ray, sun, transmittance);
@@ -32,6 +59,7 @@ vec3 atmos_sky_radiance(vec3 camera, vec3 view_ray, vec3 sun, out vec3 transmitt
   transmittance = clamp(ATMOS_RADIANCE_TO_SRGB * (ATMOSPHERE.solar_irradiance * transmittance) / max(s, vec3(1e-30)),
                         vec3(0.0), vec3(1.0));
   return ATMOS_RADIANCE_TO_SRGB * channels;
+#endif
 }
 
 // In-scattered radiance between `camera` and the point camera + `offset`
@@ -39,6 +67,14 @@ vec3 atmos_sky_radiance(vec3 camera, vec3 view_ray, vec3 sun, out vec3 transmitt
 // a surface of radiance L at the point is seen as L * transmittance + the
 // returned radiance.
 vec3 atmos_radiance_to_point(vec3 camera, vec3 offset, vec3 sun, out vec3 transmittance) {
+#if ATMOS_INSTANT
+  float t = length(offset);
+  if (!(t > 0.0)) {
+    transmittance = vec3(1.0);
+    return vec3(0.0);
+  }
+  return atmos_instant_radiance(camera_above_ground(ATMOSPHERE, camera), offset / t, sun, t, transmittance);
+#else
   float nu;
   PathScattering s = scattering_to_point(ATMOSPHERE, SPECTRAL, atmos_optical_depth_texture, atmos_scattering_texture,
                                          atmos_single_aerosol_texture, atmos_multiple_scattering_texture, camera,
@@ -48,6 +84,7 @@ vec3 atmos_radiance_to_point(vec3 camera, vec3 offset, vec3 sun, out vec3 transm
       clamp(ATMOS_RADIANCE_TO_SRGB * (ATMOSPHERE.solar_irradiance * transmittance) / max(sun_srgb, vec3(1e-30)),
             vec3(0.0), vec3(1.0));
   return max(ATMOS_RADIANCE_TO_SRGB * path_radiance(ATMOSPHERE, s, nu), vec3(0.0));
+#endif
 }
 
 // Irradiance of the sun (returned; with the planet's shadow and the

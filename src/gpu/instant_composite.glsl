@@ -85,24 +85,10 @@ INLINE vec3 instant_space_pixel(IN(AtmosphereParams) atmosphere, IN(SpectralSets
     }
     return max(frame.radiance_to_srgb * radiance, vec3(0.0f)) * frame.light_scale;
   }
-  vec3 in_scatter = vec3(0.0f);
-  vec3 transmittance = vec3(1.0f);
-  float t_start = distance(camera, start);
-  if (inside && t > t_start) {
-    InstantMarch m = instant_march_begin(atmosphere, spectral, transmittance_texture, multiple_scattering_texture,
-                                         start, view_ray, frame.sun_direction, frame.low_sun);
-    float length_in_atmosphere = t - t_start;
-    for (int i = 1; i <= INSTANT_VIEW_RAY_INTERVALS; ++i) {
-      float x = float(i) / float(INSTANT_VIEW_RAY_INTERVALS);
-      instant_march_to(spectral, transmittance_texture, multiple_scattering_texture, m,
-                       length_in_atmosphere * x * x, 1, frame.low_sun);
-    }
-    vec3 single_rayleigh;
-    vec3 multiple;
-    vec3 aerosol;
-    instant_march_light(atmosphere, spectral, m, single_rayleigh, multiple, aerosol, transmittance);
-    in_scatter = phase_weighted_scattering(atmosphere, single_rayleigh + multiple, aerosol, nu);
-  }
+  vec3 transmittance;
+  vec3 in_scatter = instant_radiance_to_distance(atmosphere, spectral, transmittance_texture,
+                                                 multiple_scattering_texture, camera, view_ray,
+                                                 frame.sun_direction, t, frame.low_sun, transmittance);
   vec3 surface = colour;
   if (frame.surface_mode == SURFACE_GBUFFER) {
     vec3 point = frame.camera + offset;

@@ -195,6 +195,11 @@ const std::vector<const char*> kInstantCompositePhysics = {
 const std::vector<const char*> kEngineLibraryPhysics = {
     "eclipse.glsl", "ray_geometry.glsl", "medium.glsl", "table_coordinates.glsl", "table_lookups.glsl",
     "ray_integration.glsl", "view_ray_scattering.glsl", "aerial_perspective.glsl"};
+// The same for a pass of the instant mode, with its march along the rays.
+const std::vector<const char*> kInstantEngineLibraryPhysics = {
+    "eclipse.glsl", "ray_geometry.glsl", "medium.glsl", "table_coordinates.glsl", "table_lookups.glsl",
+    "ray_integration.glsl", "view_ray_scattering.glsl", "sky_view_table.glsl", "aerial_perspective.glsl",
+    "instant_atmosphere.glsl"};
 
 // The part every program that reads the tables starts with: the version, the
 // subset macros, definitions.glsl with the atmosphere's constants, then the
@@ -312,10 +317,12 @@ AssembledSource instant_aerial_perspective_compute_shader_source(const physics::
 }
 
 std::string engine_library_source(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
-                                  const physics::mat3& radiance_to_srgb, int first_unit) {
+                                  const physics::mat3& radiance_to_srgb, int first_unit, bool instant) {
   // The physics without its "#version" line: the engine's shader has its own.
-  AssembledSource shared = physics_shader_source(params, spectral, kEngineLibraryPhysics);
+  AssembledSource shared =
+      physics_shader_source(params, spectral, instant ? kInstantEngineLibraryPhysics : kEngineLibraryPhysics);
   std::string text = shared.text.substr(shared.text.find('\n') + 1);
+  text += std::string("#define ATMOS_INSTANT ") + (instant ? "1" : "0") + "\n";
   text += "#define ATMOS_FIRST_UNIT " + std::to_string(first_unit) + "\n";
   for (int unit = 0; unit < 5; ++unit)
     text += "#define ATMOS_UNIT_" + std::to_string(unit) + " " + std::to_string(first_unit + unit) + "\n";

@@ -133,9 +133,10 @@ AssembledSource instant_aerial_perspective_compute_shader_source(const physics::
 
 // The GLSL library for engines' own shaders (AtmospherePass::glsl_library):
 // the definitions and the physics up to view_ray_scattering.glsl and
-// aerial_perspective.glsl without "#version", the colour matrix, then
+// aerial_perspective.glsl (and the instant mode's march for a pass of that
+// mode, `instant`) without "#version", the colour matrix, then
 // engine_library.glsl with its textures on units first_unit .. first_unit + 4.
 std::string engine_library_source(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
-                                  const physics::mat3& radiance_to_srgb, int first_unit);
+                                  const physics::mat3& radiance_to_srgb, int first_unit, bool instant);
 
 }  // namespace atmos::gpu

@@ -196,6 +196,46 @@ INLINE void instant_march_light(IN(AtmosphereParams) atmosphere, IN(SpectralSets
   transmittance = max(sum / max(atmosphere.solar_irradiance, vec3(1e-30f)), vec3(0.0f));
 }
 
+// The light between `camera` (anywhere: a camera above the atmosphere is
+// moved along the ray to where it enters it) and the point at distance
+// `t_end` along the unit `view_ray` (t_end < 0: to the ray's end in the
+// atmosphere, the ground sphere or the top), in the instant mode: the
+// in-scattered radiance in the tables' channels (single scattering with
+// the phase functions and the isotropic multiple scattering, for the
+// atmosphere's solar irradiance) and the transmittance along the path
+// (sunlight-weighted, instant_march_light). The part inside the atmosphere
+// is marched in INSTANT_VIEW_RAY_INTERVALS intervals with nodes quadratic
+// in the distance, as instant_view_ray_terms does, and ends at the top
+// where the ray leaves the atmosphere; towards a point below the ground
+// sphere (terrain below the atmosphere's bottom) the march goes on through
+// the ground's medium (clamp_radius), as the volume's does.
+INLINE vec3 instant_radiance_to_distance(IN(AtmosphereParams) atmosphere, IN(SpectralSets) spectral,
+                                         IN(sampler2D) transmittance_texture,
+                                         IN(sampler2D) multiple_scattering_texture, vec3 camera, vec3 view_ray,
+                                         vec3 sun_direction, float t_end, bool low_sun, OUT(vec3) transmittance) {
+  transmittance = vec3(1.0f);
+  vec3 start = camera;
+  if (!enter_atmosphere(atmosphere, start, view_ray)) return vec3(0.0f);
+  float r = clamp_radius(atmosphere, length(start));
+  float mu = clamp_cosine(dot(start, view_ray) / r);
+  float length_in_atmosphere =
+      t_end < 0.0f ? distance_to_nearest_atmosphere_boundary(atmosphere, r, mu, ray_intersects_ground(atmosphere, r, mu))
+                   : min(t_end - distance(camera, start), distance_to_top_atmosphere_boundary(atmosphere, r, mu));
+  if (!(length_in_atmosphere > 0.0f)) return vec3(0.0f);
+  InstantMarch m = instant_march_begin(atmosphere, spectral, transmittance_texture, multiple_scattering_texture,
+                                       start, view_ray, sun_direction, low_sun);
+  for (int i = 1; i <= INSTANT_VIEW_RAY_INTERVALS; ++i) {
+    float x = float(i) / float(INSTANT_VIEW_RAY_INTERVALS);
+    instant_march_to(spectral, transmittance_texture, multiple_scattering_texture, m, length_in_atmosphere * x * x,
+                     1, low_sun);
+  }
+  vec3 single_rayleigh;
+  vec3 multiple;
+  vec3 aerosol;
+  instant_march_light(atmosphere, spectral, m, single_rayleigh, multiple, aerosol, transmittance);
+  return phase_weighted_scattering(atmosphere, single_rayleigh + multiple, aerosol, m.nu);
+}
+
 // The instant mode's view_ray_terms (view_ray_scattering.glsl): what its
 // sky-view table holds for one view ray from `camera` (in the atmosphere,
 // at or above the ground), ending at the ground sphere (`ground`) or the

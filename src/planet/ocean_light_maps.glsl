@@ -48,9 +48,15 @@ const float kOceanLeastRadiance = 1e-30;  // the floor of the light maps (of the
 // converts its own. The sky's radiance in `direction`:
 vec3 ocean_sky_radiance(vec3 point, vec3 direction, vec3 sun) {
   vec3 transmittance;
+#if ATMOS_INSTANT
+  return instant_radiance_to_distance(ATMOSPHERE, SPECTRAL, atmos_optical_depth_texture,
+                                      atmos_instant_multiple_scattering_texture, camera_above_ground(ATMOSPHERE, point),
+                                      direction, sun, -1.0, true, transmittance);
+#else
   return sky_radiance(ATMOSPHERE, SPECTRAL, atmos_optical_depth_texture, atmos_scattering_texture,
                       atmos_single_aerosol_texture, atmos_multiple_scattering_texture,
                       camera_above_ground(ATMOSPHERE, point), direction, sun, transmittance);
+#endif
 }
 // the sky's irradiance on the horizontal;
 vec3 ocean_sky_irradiance(vec3 point, vec3 sun) {
