@@ -459,6 +459,37 @@ TEST(ViewCli, TablesOverTheSameGroundRebindTheGlobe) {
   std::printf("swap over the globe: max/median frame time %.2f\n", ratio);
 }
 
+// A planet slider released over the globe, with tables the cache does not
+// hold (a density scale of 1.37): the instant mode's tables
+// (compute_instant_tables) are swapped in first, the globe rebound to their
+// pass and lit through its GLSL library, while the exact tables are
+// computed; then the exact ones replace them. With --no-instant-preview
+// the old tables stay until the exact ones are there.
+TEST(ViewCli, NewTablesShowTheInstantApproximationFirst) {
+  SKIP_WITHOUT_VIEWER();
+  const fs::path script = scratch() / "instant.json";
+  std::ofstream(script) << R"({"events": [{"frame": 2, "frames": 2, "slider": "density_scale", "from": 1.2, "to": 1.37}]})";
+  const fs::path cache = scratch() / "instant-cache";
+  fs::remove_all(cache);
+  const std::string args = "--surface globe --cache-dir " + cache.string() + " --script " + script.string();
+  const CliRun r = view(args);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const size_t instant = r.out.find("tables: instant approximation (exact tables being computed)");
+  const size_t exact = r.out.find("tables: computed and cached", instant == std::string::npos ? 0 : instant);
+  ASSERT_NE(instant, std::string::npos) << r.out;
+  ASSERT_NE(exact, std::string::npos) << r.out;
+  const double instant_frame = figure(r.out.substr(instant), "swapped in at frame ");
+  const double exact_frame = figure(r.out.substr(exact), "swapped in at frame ");
+  std::printf("density scale released at frame 3: the instant approximation on screen at frame %.0f, the exact "
+              "tables at frame %.0f\n", instant_frame, exact_frame);
+  EXPECT_LT(instant_frame, exact_frame);
+  fs::remove_all(cache);
+  const CliRun off = view(args + " --no-instant-preview");
+  ASSERT_EQ(off.code, 0) << off.err;
+  EXPECT_EQ(off.out.find("instant approximation"), std::string::npos) << off.out;
+  EXPECT_NE(off.out.find("tables: computed and cached"), std::string::npos) << off.out;
+}
+
 // The centre of the sun's disc in one channel of a linear image (cd/m²).
 glm::dvec2 channel_disc_centre(const atmos::Image& image, int channel) {
   std::vector<double> values(size_t(image.width) * size_t(image.height));

@@ -31,7 +31,7 @@ struct ViewCommandOptions {
   int width = 1280, height = 720;
   double altitude = 2.0, latitude = 20.0, longitude = 30.0, heading = 90.0, pitch = 0.0;
   double exposure = 13.0, bloom = 0.0, fov = 60.0;
-  bool auto_exposure = false, stars = false, no_ui = false;
+  bool auto_exposure = false, stars = false, no_ui = false, no_instant_preview = false;
   std::string tonemap = "exp";
   int frames = 0;
   std::vector<std::string> screenshots;
@@ -103,6 +103,7 @@ int run_view(const ViewCommandOptions& o) {
   v.cache.disabled = o.cache.disabled;
   v.globe = o.surface.globe(false, false);
   v.planet_albedo = o.surface.planet_albedo;
+  v.instant_preview = !o.no_instant_preview;
   v.width = o.width;
   v.height = o.height;
   v.latitude_deg = o.latitude;
@@ -191,6 +192,8 @@ Command add_view_command(CLI::App& app) {
   cmd->add_option("--bloom", o->bloom, "Bloom strength in [0, 1]")->capture_default_str();
   cmd->add_flag("--stars", o->stars, "Draw the star field also by day");
   cmd->add_flag("--no-ui", o->no_ui, "Hide the panel");
+  cmd->add_flag("--no-instant-preview", o->no_instant_preview,
+                "While new tables are computed, keep the old ones on screen instead of the instant approximation");
   cmd->add_option("--frames", o->frames, "Draw N frames, then exit (0: until the window is closed)")
       ->type_name("N")
       ->capture_default_str();

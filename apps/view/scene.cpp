@@ -34,6 +34,15 @@ atmos::FrameInput frame_input(const SceneFrame& f, int width, int height, const 
   return input;
 }
 
+// The pass of the tables, exact or instant.
+std::unique_ptr<atmos::AtmospherePass> make_pass(const PlanetTables& t, atmos::PassPrograms programs) {
+  if (t.instant) return std::make_unique<atmos::AtmospherePass>(t.air, *t.instant, atmos::PlanetFrame{}, programs);
+  return std::make_unique<atmos::AtmospherePass>(t.air, t.tables, atmos::PlanetFrame{}, programs);
+}
+
+// Whether the tables respond to the ground's albedo (the instant mode's do not).
+bool has_ground_response(const PlanetTables& t) { return !t.instant && !t.tables.ground_response.empty(); }
+
 glm::dmat4 view_of(const SceneFrame& f) {
   return glm::lookAt(f.pose.position, f.pose.position + f.pose.forward, f.pose.up);
 }
@@ -47,7 +56,7 @@ glm::dmat4 projection_of(const SceneFrame& f) {
 Scene::Scene(const PlanetTables& t, bool globe, bool regional_albedo, bool complete_tiles, atmos::PassPrograms programs,
              const EarlyLink* early)
     : params_(t.params), planet_(t.planet), surface_(t.surface), terrain_ms_(std::numeric_limits<double>::quiet_NaN()) {
-  pass_ = std::make_unique<atmos::AtmospherePass>(t.air, t.tables, atmos::PlanetFrame{}, programs);
+  pass_ = make_pass(t, programs);
   if (early) start_linker(*pass_, *early, false);
   try {
     if (globe) globe_ = std::make_unique<atmos::Globe>(t.planet, t.surface, *pass_, globe_settings(complete_tiles));
@@ -56,7 +65,7 @@ Scene::Scene(const PlanetTables& t, bool globe, bool regional_albedo, bool compl
     throw;
   }
   regional_albedo_requested_ = globe && regional_albedo;
-  regional_albedo_ = regional_albedo_requested_ && !t.tables.ground_response.empty();
+  regional_albedo_ = regional_albedo_requested_ && has_ground_response(t);
   glCreateQueries(GL_TIME_ELAPSED, kQueries, queries_.data());
 }
 
@@ -86,12 +95,11 @@ bool Scene::programs_linked(const SceneFrame& f) const {
 
 bool Scene::prepare_rebind(const PlanetTables& t, const EarlyLink* early) {
   if (!globe_ || !(t.surface == surface_) || t.planet.bottom_radius_m != planet_.bottom_radius_m) return false;
-  next_pass_ = std::make_unique<atmos::AtmospherePass>(
-      t.air, t.tables, atmos::PlanetFrame{}, early ? atmos::PassPrograms::none : atmos::PassPrograms::common);
+  next_pass_ = make_pass(t, early ? atmos::PassPrograms::none : atmos::PassPrograms::common);
   if (early) start_linker(*next_pass_, *early, true);
   next_params_ = t.params;
   next_planet_ = t.planet;
-  next_regional_albedo_ = regional_albedo_requested_ && !t.tables.ground_response.empty();
+  next_regional_albedo_ = regional_albedo_requested_ && has_ground_response(t);
   return true;
 }
 

@@ -19,6 +19,7 @@
 #include <exception>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -43,6 +44,10 @@ struct PlanetTables {
   atmos::Atmosphere air;     // the pass's: `planet` continued below the datum to the lowest ground
   atmos::PlanetSurface surface;
   atmos::Tables tables;
+  // The instant mode's tables (Hillaire 2020, docs/instant.md) instead of
+  // `tables` (then empty): what a scene draws while the exact tables are
+  // computed.
+  std::optional<atmos::InstantTables> instant;
   double seconds = 0.0;  // to load or compute them
   std::string status;    // "loaded from cache ..." or "computed ..."
 };
@@ -141,6 +146,8 @@ class Scene {
   const atmos::Atmosphere& planet() const { return planet_; }
   const PlanetParams& params() const { return params_; }
   bool has_globe() const { return globe_ != nullptr; }
+  // Whether the scene draws with the instant mode's tables.
+  bool instant() const { return pass_->instant(); }
   const atmos::GlobeStats* globe_stats() const;
 
   // GPU time of the terrain (a GL_TIME_ELAPSED query, read back a few

@@ -3,6 +3,7 @@
 #include <tbb/task_arena.h>
 
 #include <chrono>
+#include <filesystem>
 #include <utility>
 
 #include "atmos/planet_file.hpp"
@@ -21,10 +22,11 @@ double now_s() {
 
 }  // namespace
 
-PlanetTables load_planet_tables(const PlanetParams& params, bool globe, bool ground_albedo_response,
-                                const CacheConfig& cache,
-                                const std::function<void(const std::string&, double)>& progress) {
-  const double start = now_s();
+namespace {
+
+// The planet of `params` without its tables: its atmosphere, its surface
+// and the pass's air.
+PlanetTables load_planet(const PlanetParams& params, bool globe) {
   PlanetTables out;
   out.params = params;
   out.planet = make_atmosphere(params);
@@ -34,14 +36,27 @@ PlanetTables load_planet_tables(const PlanetParams& params, bool globe, bool gro
   } else {
     out.air = out.planet;
   }
+  return out;
+}
+
+std::string cache_directory(const CacheConfig& cache) {
+  return cache.directory.empty() ? atmos::default_cache_directory() : cache.directory;
+}
+
+}  // namespace
+
+PlanetTables load_planet_tables(const PlanetParams& params, bool globe, bool ground_albedo_response,
+                                const CacheConfig& cache,
+                                const std::function<void(const std::string&, double)>& progress) {
+  const double start = now_s();
+  PlanetTables out = load_planet(params, globe);
   atmos::PrecomputeOptions options = make_precompute_options(params, globe && ground_albedo_response);
   options.progress = progress;
   if (cache.disabled) {
     out.tables = atmos::precompute_tables(out.air, options);
     out.status = "computed (cache disabled)";
   } else {
-    const std::string dir = cache.directory.empty() ? atmos::default_cache_directory() : cache.directory;
-    atmos::CacheResult r = atmos::load_or_precompute_tables(out.air, options, dir);
+    atmos::CacheResult r = atmos::load_or_precompute_tables(out.air, options, cache_directory(cache));
     out.status = r.status == atmos::CacheStatus::hit ? "loaded from the cache" : "computed and cached";
     out.tables = std::move(r.tables);
   }
@@ -49,10 +64,25 @@ PlanetTables load_planet_tables(const PlanetParams& params, bool globe, bool gro
   return out;
 }
 
-TableJob::TableJob(CacheConfig cache, bool globe, bool ground_albedo_response, int threads, WarmUp warm_up)
+std::optional<PlanetTables> instant_planet_tables(const PlanetParams& params, bool globe, bool ground_albedo_response,
+                                                  const CacheConfig& cache) {
+  const double start = now_s();
+  PlanetTables out = load_planet(params, globe);
+  const atmos::PrecomputeOptions options = make_precompute_options(params, globe && ground_albedo_response);
+  if (!cache.disabled && std::filesystem::exists(atmos::tables_cache_path(out.air, options, cache_directory(cache))))
+    return std::nullopt;
+  out.instant = atmos::compute_instant_tables(out.air, options.sizes);
+  out.status = "instant approximation (exact tables being computed)";
+  out.seconds = now_s() - start;
+  return out;
+}
+
+TableJob::TableJob(CacheConfig cache, bool globe, bool ground_albedo_response, int threads, WarmUp warm_up,
+                   bool instant_preview)
     : cache_(std::move(cache)),
       globe_(globe),
       ground_albedo_response_(ground_albedo_response),
+      instant_preview_(instant_preview),
       threads_(threads < 1 ? 1 : threads),
       warm_up_(std::move(warm_up)),
       worker_([this] { run(); }) {}
@@ -131,6 +161,25 @@ void TableJob::run() {
       step_ = step;
       fraction_ = fraction;
     };
+    // The instant mode's tables first, shown instead of the old ones while
+    // the exact ones are computed (not when those are in the cache: reading
+    // them is as quick; nor for the first tables, warm_up false, which
+    // nothing on screen waits for). Their programs are linked by the scene
+    // on the viewer's side; an error here is the exact tables' too, which
+    // report it below.
+    if (instant_preview_ && warm_up) {
+      progress("instant approximation", -1.0);
+      std::optional<PlanetTables> preview;
+      arena.execute([&] {
+        try {
+          preview = instant_planet_tables(params, globe_, ground_albedo_response_, cache_);
+        } catch (const std::exception&) {
+        }
+      });
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (preview && !stop_ && !waiting_) result_ = std::move(preview);
+      step_.clear();
+    }
     std::optional<PlanetTables> tables;
     std::optional<std::string> error;
     arena.execute([&] {

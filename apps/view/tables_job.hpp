@@ -34,6 +34,12 @@ PlanetTables load_planet_tables(const PlanetParams& params, bool globe, bool gro
                                 const CacheConfig& cache,
                                 const std::function<void(const std::string&, double)>& progress = {});
 
+// The planet of `params` with the instant mode's tables (Hillaire 2020,
+// atmos::compute_instant_tables: a fraction of a second), or nothing when
+// its exact tables are in the cache. Throws as load_planet_tables.
+std::optional<PlanetTables> instant_planet_tables(const PlanetParams& params, bool globe, bool ground_albedo_response,
+                                                  const CacheConfig& cache);
+
 class TableJob {
  public:
   // Run on the job's thread after each set of tables is ready, before it is
@@ -44,7 +50,11 @@ class TableJob {
   // compiled. Its exceptions are ignored (the swap then compiles them).
   using WarmUp = std::function<void(const PlanetTables&)>;
 
-  TableJob(CacheConfig cache, bool globe, bool ground_albedo_response, int threads, WarmUp warm_up = {});
+  // `instant_preview`: each request made with `warm_up` (tables that
+  // replace others on screen) first hands over the instant mode's tables
+  // (instant_planet_tables), then the exact ones.
+  TableJob(CacheConfig cache, bool globe, bool ground_albedo_response, int threads, WarmUp warm_up = {},
+           bool instant_preview = false);
   // Waits for the tables being computed (the precomputation cannot be
   // interrupted; their warm-up is skipped) and drops any waiting request.
   ~TableJob();
@@ -54,7 +64,8 @@ class TableJob {
   // `warm_up`: run the WarmUp once the tables are ready (the first tables,
   // with nothing on screen yet, need not).
   void request(const PlanetParams& params, bool warm_up = true);
-  // The newest finished tables, once (then empty until the next ones).
+  // The newest finished tables, once (then empty until the next ones): a
+  // request's instant preview, then its exact tables.
   std::optional<PlanetTables> take_result();
   // The error of the newest failed request, once.
   std::optional<std::string> take_error();
@@ -71,7 +82,7 @@ class TableJob {
   void run();
 
   CacheConfig cache_;
-  bool globe_, ground_albedo_response_;
+  bool globe_, ground_albedo_response_, instant_preview_;
   int threads_;
   WarmUp warm_up_;
   mutable std::mutex mutex_;

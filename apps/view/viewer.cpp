@@ -690,7 +690,8 @@ void Viewer::panel() {
     constituents_panel();
     if (job_->progress().busy) {
       progress_bar();
-      ImGui::TextUnformatted("(the old tables stay on screen)");
+      ImGui::TextUnformatted(scene_->instant() ? "(the instant approximation is on screen)"
+                                               : "(the old tables stay on screen)");
     } else if (last_swap_ms_ > 0.0) {
       ImGui::Text("last tables: %.2f s, swapped in %.0f ms", last_tables_s_, last_swap_ms_);
     }
@@ -878,7 +879,7 @@ int Viewer::run() {
     std::printf("shaders of the new tables compiled in %.2f s\n", now_s() - start);
     std::fflush(stdout);
   };
-  job_ = std::make_unique<TableJob>(o_.cache, o_.globe, regional, threads, warm_up);
+  job_ = std::make_unique<TableJob>(o_.cache, o_.globe, regional, threads, warm_up, o_.instant_preview);
   // Destroyed before the window (the GL objects need its context): the
   // job's thread has no GL, but the scene and the post-processing do.
   struct Release {

@@ -26,6 +26,10 @@ struct ViewOptions {
   CacheConfig cache;
   bool globe = true;           // --surface globe (else the analytic sphere)
   bool planet_albedo = false;  // --planet-albedo
+  // While tables that are not in the cache are computed, draw the instant
+  // mode's (computed in a fraction of a second) instead of the old ones
+  // (--no-instant-preview: off).
+  bool instant_preview = true;
   int width = 1280, height = 720;
   // Where the camera starts: above this ground point, looking along the
   // heading (degrees from north towards east) and pitch.

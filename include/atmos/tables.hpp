@@ -233,5 +233,10 @@ CacheResult load_or_precompute_tables(const Atmosphere& atmosphere, const Precom
 
 // The cache key of these inputs (hex), as used in the file name.
 std::string tables_cache_key(const Atmosphere& atmosphere, const PrecomputeOptions& options);
+// The file in `directory` that load_or_precompute_tables reads these
+// tables from (whether it exists says whether they are cached; a file
+// there may still prove stale or corrupt when read).
+std::string tables_cache_path(const Atmosphere& atmosphere, const PrecomputeOptions& options,
+                              const std::string& directory);
 
 }  // namespace atmos

@@ -364,13 +364,18 @@ std::string write_cache(const std::string& path, const std::string& key, const T
 
 }  // namespace
 
+std::string tables_cache_path(const Atmosphere& atmosphere, const PrecomputeOptions& options,
+                              const std::string& directory) {
+  return (std::filesystem::path(directory) / ("atmos-" + tables_cache_key(atmosphere, options) + ".tables")).string();
+}
+
 CacheResult load_or_precompute_tables(const Atmosphere& atmosphere, const PrecomputeOptions& options,
                                       const std::string& directory) {
   atmosphere.validate();
   options.sizes.validate();
   CacheResult result;
   const std::string key = tables_cache_key(atmosphere, options);
-  result.path = (std::filesystem::path(directory) / ("atmos-" + key + ".tables")).string();
+  result.path = tables_cache_path(atmosphere, options, directory);
   if (std::filesystem::exists(result.path)) {
     const std::string problem = read_cache(result.path, key, options, atmosphere, result.tables);
     if (problem.empty()) {
