@@ -33,6 +33,7 @@
 #include "atmos/renderer.hpp"
 #include "atmos/sky.hpp"
 #include "atmos/tables.hpp"
+#include "data/embedded_files.hpp"
 #include "data/glsl_prune.hpp"
 #include "gpu/camera_cpp.hpp"
 #include "gpu/gl_util.hpp"
@@ -363,7 +364,7 @@ TEST_F(Gpu, SpectralTablesMatchCpu) {
 }
 
 // A double Henyey-Greenstein aerosol whose lobes change with wavelength, in
-// spectral mode: the per-channel phase parameters baked into the shaders and
+// spectral mode: the per-channel phase parameters of the parameter block and
 // the phase ratio of the low-sun integration (spectral_single_scattering);
 // same tolerances.
 TEST_F(Gpu, WavelengthDependentAerosolPhaseMatchesCpu) {
@@ -386,8 +387,8 @@ TEST_F(Gpu, WavelengthDependentAerosolPhaseMatchesCpu) {
 // 550 nm) has its mu axis warped towards log-spaced distances
 // (scattering_mu_log_weight, table_coordinates.glsl scattering_u_mu) and its r axis
 // following the optical depth (scattering_r_optical_depth_weight and the
-// knots of scattering_r_axis, scattering_x_r_from_rho_fraction): both are
-// baked into the shaders, and the GPU must read the tables exactly where the
+// knots of scattering_r_axis, scattering_x_r_from_rho_fraction): both come
+// from the parameter block, and the GPU must read the tables exactly where the
 // CPU does. The RMS bound is 2e-3: measured 1.0e-3 (ground_horizon) and
 // 1.1e-3 (twilight) with the mu warp alone, and the same tables without any
 // warp give the same (1.02e-3, 1.12e-3), so that excess over the Earth
@@ -742,6 +743,201 @@ TEST(ShaderSource, FloatLiteralsAreGlslFloats) {
   EXPECT_EQ(std::stof(atmos::gpu::glsl_float(0.1f)), 0.1f);
   EXPECT_THROW(atmos::gpu::glsl_float(std::numeric_limits<float>::quiet_NaN()), atmos::Error);
   EXPECT_THROW(atmos::gpu::glsl_float(std::numeric_limits<float>::infinity()), atmos::Error);
+}
+
+// Earth with other values and the same structure: a longer Rayleigh scale
+// height, another ground albedo, sun and top radius.
+atmos::Atmosphere other_earth_values(const atmos::Atmosphere& earth) {
+  atmos::Atmosphere other = earth;
+  other.constituents[0].density.scale_height_m *= 1.2;
+  other.ground_albedo = atmos::Spectrum::constant(0.31);
+  other.sun_angular_radius_rad *= 1.1;
+  other.top_radius_m += 5e3;
+  return other;
+}
+
+// The programs' text depends on the atmosphere's structure alone
+// (ParameterBlock): the same for other values, another for another number
+// of wavelength triples or another profile kind.
+TEST(ShaderSource, ProgramsDependOnTheAtmospheresStructureAlone) {
+  const atmos::Atmosphere earth = atmos::load_atmosphere("earth");
+  const atmos::TableSizes sizes = atmos_test::small_gpu_sizes();
+  const auto source = [&](const atmos::Atmosphere& a) {
+    const atmos::physics::AtmosphereParams params = atmos::physics::make_render_params(a, sizes);
+    const auto spectral = atmos::physics::make_spectral_sets(a, sizes);
+    return std::pair{atmos::gpu::atmosphere_pass_fragment_shader_source(params, *spectral, {}).text,
+                     atmos::gpu::parameter_block(params, *spectral, glm::mat3(1.0f)).values};
+  };
+  const auto [earth_text, earth_values] = source(earth);
+  const auto [other_text, other_values] = source(other_earth_values(earth));
+  EXPECT_EQ(earth_text, other_text);
+  EXPECT_NE(earth_values, other_values);
+  atmos::Atmosphere spectral = earth;
+  spectral.wavelengths_nm = atmos::spectral_wavelengths(7);
+  EXPECT_NE(source(spectral).first, earth_text);
+  atmos::Atmosphere layered = earth;
+  layered.constituents[0].density.kind = atmos::DensityProfile::Kind::piecewise_linear;
+  layered.constituents[0].density.knots = {{0.0, 1.0}, {30e3, 0.05}, {60e3, 0.0}};
+  EXPECT_NE(source(layered).first, earth_text);
+}
+
+// A parameter that GLSL cannot hold (NaN, infinity) is an error, not a
+// shader that draws NaN.
+TEST(ShaderSource, NonFiniteParametersAreErrors) {
+  const atmos::Atmosphere earth = atmos::load_atmosphere("earth");
+  const atmos::TableSizes sizes = atmos_test::small_gpu_sizes();
+  atmos::physics::AtmosphereParams params = atmos::physics::make_render_params(earth, sizes);
+  const auto spectral = atmos::physics::make_spectral_sets(earth, sizes);
+  params.solar_irradiance.y = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(atmos::gpu::parameter_block(params, *spectral, glm::mat3(1.0f)), atmos::Error);
+  params = atmos::physics::make_render_params(earth, sizes);
+  spectral->set[0].bottom_radius = std::numeric_limits<float>::infinity();
+  EXPECT_THROW(atmos::gpu::parameter_block(params, *spectral, glm::mat3(1.0f)), atmos::Error);
+  EXPECT_THROW(atmos::gpu::parameter_block(params, *atmos::physics::make_spectral_sets(earth, sizes),
+                                           glm::mat3(std::numeric_limits<float>::quiet_NaN())),
+               atmos::Error);
+}
+
+// The parameter block as the driver lays it out and as the shaders read
+// it: the block's size, the array's offset and stride queried from a
+// program (std140), and every field of ATMOSPHERE, SPECTRAL and the colour
+// matrix written back by a compute shader, equal to the C++ parameters'
+// (the fields the shaders never read are 0). The atmosphere is thick (its
+// table axes' weights and knots are read) and spectral (three triples).
+TEST_F(Gpu, ParameterBlockMatchesTheDriversLayout) {
+  atmos::Atmosphere dense = *earth_;
+  atmos::scale_density(dense, 100.0);
+  dense.wavelengths_nm = atmos::spectral_wavelengths(7);
+  const atmos::TableSizes sizes = atmos_test::small_gpu_sizes();
+  const atmos::physics::AtmosphereParams params = atmos::physics::make_render_params(dense, sizes);
+  const auto spectral = atmos::physics::make_spectral_sets(dense, sizes);
+  ASSERT_EQ(spectral->count, 3);
+  ASSERT_GT(params.scattering_r_optical_depth_weight, 0.0f);
+  glm::mat3 colour;
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) colour[c][r] = 0.1f * float(3 * c + r) - 0.35f;
+  const atmos::gpu::ParameterBlock block = atmos::gpu::parameter_block(params, *spectral, colour, 3);
+
+  // The C++ side of every field, in the order the shader writes them.
+  std::vector<float> expected;
+  const auto put = [&](float x) { expected.push_back(x); };
+  const auto put3 = [&](const glm::vec3& v) { put(v.x), put(v.y), put(v.z); };
+  const auto put_params = [&](const atmos::physics::AtmosphereParams& a) {
+    put(a.bottom_radius), put(a.top_radius), put(float(a.constituent_count));
+    for (int i = 0; i < MAX_CONSTITUENTS; ++i) {
+      const bool used = i < a.constituent_count;
+      const atmos::physics::DensityProfile& d = a.density[i];
+      put(used && d.knot_count == 0 ? d.scale_height : 0.0f), put(used ? float(d.knot_count) : 0.0f);
+      for (int k = 0; k < MAX_DENSITY_KNOTS; ++k) {
+        const bool knot = used && k < d.knot_count;
+        put(knot ? d.knot_altitude[k] : 0.0f), put(knot ? d.knot_density[k] : 0.0f);
+      }
+      put3(used ? a.scattering[i] : glm::vec3(0.0f)), put3(used ? a.absorption[i] : glm::vec3(0.0f));
+      put(used ? float(a.is_aerosol[i]) : 0.0f);
+    }
+    put(float(a.aerosol_phase_kind)), put3(a.aerosol_g), put3(a.aerosol_g_back), put3(a.aerosol_forward_weight);
+    put3(a.ground_albedo), put3(a.solar_irradiance), put(a.sun_angular_radius), put(a.mu_s_min);
+    for (int size : {a.transmittance_mu_size, a.transmittance_r_size, a.irradiance_mu_s_size, a.irradiance_r_size,
+                     a.scattering_nu_size, a.scattering_mu_s_size, a.scattering_mu_size, a.scattering_r_size,
+                     a.transmittance_tile, a.transmittance_tiles, a.single_scattering_tile, a.scattering_nu_in_angle})
+      put(float(size));
+    put(a.scattering_mu_log_weight), put(a.scattering_r_optical_depth_weight);
+    for (int k = 0; k < SCATTERING_R_AXIS_KNOTS; ++k)
+      put(a.scattering_r_optical_depth_weight != 0.0f ? a.scattering_r_axis[k] : 0.0f);
+    put(a.source_flat_optical_depth), put(a.scattering_row_1_height);
+  };
+  put_params(params);
+  for (int k = 0; k < spectral->count; ++k) {
+    put_params(spectral->set[k]);
+    for (int c = 0; c < 3; ++c) put3(spectral->to_channels[k][c]);
+  }
+  for (int c = 0; c < 3; ++c) put3(colour[c]);
+
+  atmos::gpu::AssembledSource source;
+  source.append("header", "#version 450 core\n#define IN(T) in T\n#define OUT(T) out T\n#define INOUT(T) inout T\n"
+                          "#define INLINE\n#define SPECTRAL_SET_CAPACITY 3\n");
+  source.append("definitions.glsl", atmos::data::embedded_file("src/physics/definitions.glsl"));
+  source.append("parameters", block.glsl);
+  source.append("test", R"(
+layout(local_size_x = 1) in;
+layout(std430, binding = 0) writeonly buffer Fields { float fields[]; };
+int n = 0;
+void put(float x) { fields[n++] = x; }
+void put3(vec3 v) { put(v.x); put(v.y); put(v.z); }
+void put_params(AtmosphereParams a) {
+  put(a.bottom_radius); put(a.top_radius); put(float(a.constituent_count));
+  for (int i = 0; i < MAX_CONSTITUENTS; ++i) {
+    put(a.density[i].scale_height); put(float(a.density[i].knot_count));
+    for (int k = 0; k < MAX_DENSITY_KNOTS; ++k) { put(a.density[i].knot_altitude[k]); put(a.density[i].knot_density[k]); }
+    put3(a.scattering[i]); put3(a.absorption[i]); put(float(a.is_aerosol[i]));
+  }
+  put(float(a.aerosol_phase_kind)); put3(a.aerosol_g); put3(a.aerosol_g_back); put3(a.aerosol_forward_weight);
+  put3(a.ground_albedo); put3(a.solar_irradiance); put(a.sun_angular_radius); put(a.mu_s_min);
+  put(float(a.transmittance_mu_size)); put(float(a.transmittance_r_size)); put(float(a.irradiance_mu_s_size));
+  put(float(a.irradiance_r_size)); put(float(a.scattering_nu_size)); put(float(a.scattering_mu_s_size));
+  put(float(a.scattering_mu_size)); put(float(a.scattering_r_size)); put(float(a.transmittance_tile));
+  put(float(a.transmittance_tiles)); put(float(a.single_scattering_tile)); put(float(a.scattering_nu_in_angle));
+  put(a.scattering_mu_log_weight); put(a.scattering_r_optical_depth_weight);
+  for (int k = 0; k < SCATTERING_R_AXIS_KNOTS; ++k) put(a.scattering_r_axis[k]);
+  put(a.source_flat_optical_depth); put(a.scattering_row_1_height);
+}
+void main() {
+  put_params(ATMOSPHERE);
+  SpectralSets sets = SPECTRAL;
+  for (int k = 0; k < sets.count; ++k) {
+    put_params(sets.set[k]);
+    put3(sets.to_channels[k][0]); put3(sets.to_channels[k][1]); put3(sets.to_channels[k][2]);
+  }
+  mat3 m = atmos_radiance_to_srgb();
+  put3(m[0]); put3(m[1]); put3(m[2]);
+}
+)");
+  GLuint program = atmos::gpu::link_compute_program(source);
+
+  // The driver's std140 layout of the block.
+  const GLuint block_index = glGetProgramResourceIndex(program, GL_UNIFORM_BLOCK, atmos::gpu::kParameterBlock);
+  ASSERT_NE(block_index, GL_INVALID_INDEX);
+  const GLenum block_properties[2] = {GL_BUFFER_DATA_SIZE, GL_BUFFER_BINDING};
+  GLint block_values[2] = {0, 0};
+  glGetProgramResourceiv(program, GL_UNIFORM_BLOCK, block_index, 2, block_properties, 2, nullptr, block_values);
+  EXPECT_EQ(block_values[0], GLint(block.values.size() * sizeof(float)));
+  EXPECT_EQ(block_values[1], 3);
+  const std::string array = std::string(atmos::gpu::kParameterArray) + "[0]";
+  const GLuint array_index = glGetProgramResourceIndex(program, GL_UNIFORM, array.c_str());
+  ASSERT_NE(array_index, GL_INVALID_INDEX);
+  const GLenum array_properties[4] = {GL_OFFSET, GL_ARRAY_STRIDE, GL_ARRAY_SIZE, GL_BLOCK_INDEX};
+  GLint array_values[4] = {-1, -1, -1, -1};
+  glGetProgramResourceiv(program, GL_UNIFORM, array_index, 4, array_properties, 4, nullptr, array_values);
+  EXPECT_EQ(array_values[0], 0);
+  EXPECT_EQ(array_values[1], 16);
+  EXPECT_EQ(array_values[2], GLint(block.values.size() / 4));
+  EXPECT_EQ(array_values[3], GLint(block_index));
+
+  // The fields as the shader reads them.
+  GLuint buffers[2] = {0, 0};
+  glCreateBuffers(2, buffers);
+  glNamedBufferStorage(buffers[0], GLsizeiptr(block.values.size() * sizeof(float)), block.values.data(), 0);
+  glNamedBufferStorage(buffers[1], GLsizeiptr(expected.size() * sizeof(float)), nullptr, 0);
+  glBindBufferBase(GL_UNIFORM_BUFFER, 3, buffers[0]);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, buffers[1]);
+  glUseProgram(program);
+  glDispatchCompute(1, 1, 1);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  std::vector<float> fields(expected.size(), -1.0f);
+  glGetNamedBufferSubData(buffers[1], 0, GLsizeiptr(fields.size() * sizeof(float)), fields.data());
+  glBindBufferBase(GL_UNIFORM_BUFFER, 3, 0);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
+  glDeleteBuffers(2, buffers);
+  atmos::gpu::release_program(program);
+  atmos::gpu::check_gl("while reading the parameter block back");
+  size_t differing = 0, first = expected.size();
+  for (size_t i = 0; i < expected.size(); ++i)
+    if (fields[i] != expected[i]) {
+      ++differing;
+      first = std::min(first, i);
+    }
+  EXPECT_EQ(differing, 0u) << "first at field " << first << ": " << fields[std::min(first, fields.size() - 1)]
+                           << " for " << expected[std::min(first, expected.size() - 1)];
 }
 
 // --- Images ---------------------------------------------------------------

@@ -33,6 +33,7 @@
 #include "atmos/renderer.hpp"
 #include "atmos/tables.hpp"
 #include "gpu/atmosphere_pass.hpp"
+#include "gpu/gl_util.hpp"
 #include "physics/parameters.hpp"
 #include "figures.hpp"
 #include "engine_frame.hpp"
@@ -301,6 +302,58 @@ TEST_F(Plugin, LinksAFramesProgramsBeforeItsFirstDraw) {
   size_t differing = 0;
   for (size_t i = 0; i < drawn.size(); ++i) differing += drawn[i] == expected[i] ? 0 : 1;
   EXPECT_EQ(differing, 0u);
+}
+
+// A pass of an atmosphere that differs from the suite's in values only (a
+// longer Rayleigh scale height, another ground albedo, sun and top radius)
+// draws with the programs of the suite's pass (gpu::shared_program): it
+// links none, and draws the image a pass of that atmosphere draws with
+// programs of its own (linked in a context that shares nothing with the
+// suite's), not the suite's image.
+TEST_F(Plugin, AtmosphereOfTheSameStructureLinksNoProgram) {
+  const Shot shot = comparison_shots().front().second;
+  EngineFrame first = make_engine_frame(shot), second = make_engine_frame(shot), third = make_engine_frame(shot);
+  const std::vector<glm::vec3> earth = run(first);
+  atmos::Atmosphere other = *earth_;
+  other.constituents[0].density.scale_height_m *= 1.2;
+  other.ground_albedo = atmos::Spectrum::constant(0.31);
+  other.sun_angular_radius_rad *= 1.1;
+  other.top_radius_m += 5e3;
+  atmos::PrecomputeOptions options;
+  options.sizes = atmos_test::small_gpu_sizes();
+  const atmos::Tables tables = atmos::precompute_tables(other, options);
+  const long linked = atmos::gpu::linked_program_count();
+  std::vector<glm::vec3> shared;
+  {
+    atmos::AtmospherePass pass(other, tables, engine_frame(), atmos::PassPrograms::none);
+    shared = run(second, false, &pass);
+  }
+  EXPECT_EQ(atmos::gpu::linked_program_count(), linked);
+  std::vector<glm::vec3> own;
+  {
+    const std::unique_ptr<atmos::GlContext> unshared = atmos::GlContext::create_headless();
+    unshared->make_current();
+    {
+      atmos::AtmospherePass pass(other, tables, engine_frame(), atmos::PassPrograms::none);
+      own = run(third, false, &pass);
+    }
+    EXPECT_GT(atmos::gpu::linked_program_count(), linked);
+  }
+  context_->make_current();
+  ASSERT_TRUE(all_finite(shared));
+  ASSERT_EQ(shared.size(), own.size());
+  double max_relative = 0.0, sum_squares = 0.0;
+  for (size_t i = 0; i < own.size(); ++i) {
+    const double reference = std::max(luminance(own[i]), 1e-3);
+    max_relative = std::max(max_relative, glm::length(glm::dvec3(shared[i]) - glm::dvec3(own[i])) / reference);
+    const double from_earth = glm::length(glm::dvec3(earth[i]) - glm::dvec3(own[i])) / reference;
+    sum_squares += from_earth * from_earth;
+  }
+  const double earth_rms = std::sqrt(sum_squares / double(own.size()));
+  std::printf("other values: shared programs against their own: max %.3e; the suite's image %.3e RMS from theirs\n",
+              max_relative, earth_rms);
+  EXPECT_LE(max_relative, 1e-6);
+  EXPECT_GT(earth_rms, 0.05);
 }
 
 // From orbit the pass sorts the pixels into classes and draws each with its
@@ -1034,7 +1087,8 @@ TEST_F(Plugin, TotalEclipseDarkensSkyAndGround) {
 // reference — tests/aerial_perspective_accuracy.cpp), and the irradiance and
 // transmittance functions are finite and positive in daylight.
 TEST_F(Plugin, GlslLibraryForEnginesMatchesThePass) {
-  const std::string library = pass_->glsl_library(20);
+  // The parameter block at a binding other than the default.
+  const std::string library = pass_->glsl_library(20, 5);
   EXPECT_NE(library.find("atmos_radiance_to_point"), std::string::npos);
   const std::string fragment = "#version 450 core\n" + library + R"(
 layout(location = 0) uniform vec3 camera_position;
@@ -1084,7 +1138,7 @@ void main() {
   const glm::vec3 sun(glm::normalize(shot.sun));
   glProgramUniform3f(program, 1, sun.x, sun.y, sun.z);
   glProgramUniform3f(program, 2, offset.x, offset.y, offset.z);
-  pass_->bind_textures(20);
+  pass_->bind_textures(20, 5);
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
   glViewport(0, 0, 1, 1);
   glBindVertexArray(vao);

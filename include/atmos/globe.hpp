@@ -182,7 +182,9 @@ class Globe {
   // (new tables: another density, other constituents, other wavelengths),
   // keeping the surface, its open rasters and the resident tiles, so that
   // new tables cost one link of the lit programs (a cache hit once the
-  // driver has compiled them for `pass`) instead of a new globe. `pass`
+  // driver has compiled them for `pass`) instead of a new globe, and none
+  // when `pass`'s glsl_library() is the text the globe's programs were
+  // linked with (an atmosphere of the same structure). `pass`
   // must outlive the globe (the old one may then be destroyed). Throws
   // atmos::Error, with the globe still bound to its old pass, when
   // `atmosphere`'s bottom radius is not the globe's datum (the relief is
@@ -190,7 +192,8 @@ class Globe {
   // or a pass that does not reach the lowest ground, as the constructor.
   void rebind(const Atmosphere& atmosphere, const AtmospherePass& pass);
   // Links the programs rebind(..., pass) needs (the lit programs with
-  // `pass`'s library) for it to take instead of linking them itself: it
+  // `pass`'s library, none when that is the library the globe draws with)
+  // for it to take instead of linking them itself: it
   // may run on another thread whose current context shares the globe's
   // objects (a GL share group) while the globe draws on, but not while
   // rebind() or another link_rebind_programs() runs. Throws atmos::Error on

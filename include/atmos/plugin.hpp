@@ -266,9 +266,18 @@ class AtmospherePass {
   // aerial perspective integrated along the ray at each call (24 steps
   // through its multiple-scattering table: far costlier per call than the
   // exact mode's lookups), its textures on the same units.
-  std::string glsl_library(int first_unit) const;
-  // Binds the textures glsl_library() declares.
-  void bind_textures(int first_unit) const;
+  // The atmosphere's values (radii, coefficients, solar irradiance, ...)
+  // are read from a std140 uniform block that the library declares at
+  // uniform-buffer binding `parameters_binding` (block AtmosParameters), so
+  // that the text depends only on the atmosphere's structure (its
+  // constituents, profile kinds, table sizes and wavelength count): a pass
+  // of another atmosphere with the same structure returns the same text,
+  // and programs linked with it serve that pass too. Throws atmos::Error
+  // for units or a binding outside the context's.
+  std::string glsl_library(int first_unit, int parameters_binding = 0) const;
+  // Binds the textures and the parameter block glsl_library() declares
+  // (the same first_unit and parameters_binding).
+  void bind_textures(int first_unit, int parameters_binding = 0) const;
 
   // The albedo of the ground below the air, per channel of the tables
   // (linear sRGB in spectral mode, the three working wavelengths' in

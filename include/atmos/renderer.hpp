@@ -138,8 +138,10 @@ class GlContext {
 class Renderer {
  public:
   // Uploads the tables (computed for the atmosphere's wavelengths, three or
-  // spectral) and compiles the shader with the atmosphere's parameters built
-  // in. Throws atmos::Error without a current OpenGL 4.5 context, on
+  // spectral) and the atmosphere's parameters; its shaders depend on the
+  // atmosphere's structure alone and are shared with any Renderer or
+  // AtmospherePass of the same structure in the context's share group (see
+  // AtmospherePass::glsl_library), else linked at their first use. Throws atmos::Error without a current OpenGL 4.5 context, on
   // mismatched tables or on shader compile/link errors (with the first lines
   // of the info log).
   Renderer(const Atmosphere& atmosphere, const Tables& tables, TexturePrecision precision = TexturePrecision::full);

@@ -169,22 +169,12 @@ struct AtmospherePass::Impl {
   gpu::StarCatalogueBuffers star_catalogue;
 
   void release() {
-    for (GLuint& program : programs) {
-      if (program != 0) glDeleteProgram(program);
-      program = 0;
-    }
-    for (GLuint& program : volume_programs) {
-      if (program != 0) glDeleteProgram(program);
-      program = 0;
-    }
-    for (GLuint& program : instant_volume_programs) {
-      if (program != 0) glDeleteProgram(program);
-      program = 0;
-    }
+    for (GLuint& program : programs) gpu::release_program(program);
+    for (GLuint& program : volume_programs) gpu::release_program(program);
+    for (GLuint& program : instant_volume_programs) gpu::release_program(program);
     glDeleteTextures(4, volume);
     for (GLuint& texture : volume) texture = 0;
-    if (space_program != 0) glDeleteProgram(space_program);
-    space_program = 0;
+    gpu::release_program(space_program);
     glDeleteTextures(4, space_volume);
     for (GLuint& texture : space_volume) texture = 0;
     if (space_columns != 0) glDeleteBuffers(1, &space_columns);
@@ -330,25 +320,25 @@ FramePrograms frame_programs(AtmospherePass::Impl& p, const physics::PassFrame& 
   const physics::SpectralSets& spectral = p.tables->spectral();
   if (frame.volume && p.instant) {
     out.volume = resolve(p.instant_volume_programs[frame.low_sun ? 1 : 0], [&] {
-      return gpu::link_compute_program(
+      return gpu::shared_compute_program(
           gpu::instant_aerial_perspective_compute_shader_source(params, spectral, frame.low_sun));
     });
   } else if (frame.volume) {
     out.volume = resolve(p.volume_programs[eclipse ? 2 : low_sun ? 1 : 0], [&] {
-      return gpu::link_compute_program(
+      return gpu::shared_compute_program(
           gpu::aerial_perspective_compute_shader_source(params, spectral, low_sun, eclipse, false, true));
     });
   }
   if (frame.space_volume) {
     out.space = resolve(p.space_program, [&] {
-      return gpu::link_compute_program(
+      return gpu::shared_compute_program(
           gpu::aerial_perspective_compute_shader_source(params, spectral, false, false, true, false));
     });
   }
   const auto composite_program = [&](const gpu::PassVariant& v) {
     return resolve(p.programs[v.index()], [&] {
-      return gpu::link_program(gpu::atmosphere_pass_vertex_shader_source(),
-                               gpu::atmosphere_pass_fragment_shader_source(params, spectral, v));
+      return gpu::shared_program(gpu::atmosphere_pass_vertex_shader_source(),
+                                 gpu::atmosphere_pass_fragment_shader_source(params, spectral, v));
     });
   };
   gpu::PassVariant variant;
@@ -544,17 +534,31 @@ double AtmospherePass::bottom_radius_m() const { return impl_->bottom_radius_m; 
 
 double AtmospherePass::sun_illuminance_lux() const { return impl_->own_sun_lux; }
 
-std::string AtmospherePass::glsl_library(int first_unit) const {
+namespace {
+
+void check_parameters_binding(const char* who, int binding) {
+  GLint bindings = 0;
+  glGetIntegerv(GL_MAX_UNIFORM_BUFFER_BINDINGS, &bindings);
+  if (binding < 0 || (bindings > 0 && binding >= bindings))
+    throw Error(std::string(who) + ": uniform-buffer binding " + std::to_string(binding) + " outside the context's " +
+                std::to_string(bindings));
+}
+
+}  // namespace
+
+std::string AtmospherePass::glsl_library(int first_unit, int parameters_binding) const {
   GLint units = 0;
   glGetIntegerv(GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS, &units);
   if (first_unit < 0 || (units > 0 && first_unit + 5 > units))
     throw Error("glsl_library: texture units " + std::to_string(first_unit) + ".." + std::to_string(first_unit + 4) +
                 " outside the context's " + std::to_string(units));
-  return gpu::engine_library_source(impl_->tables->params(), impl_->tables->spectral(),
-                                    impl_->tables->radiance_to_srgb(), first_unit, impl_->instant);
+  check_parameters_binding("glsl_library", parameters_binding);
+  return gpu::engine_library_source(impl_->tables->params(), impl_->tables->spectral(), first_unit,
+                                    parameters_binding, impl_->instant);
 }
 
-void AtmospherePass::bind_textures(int first_unit) const {
+void AtmospherePass::bind_textures(int first_unit, int parameters_binding) const {
+  check_parameters_binding("bind_textures", parameters_binding);
   // The instant mode's library reads its multiple-scattering table on the
   // second unit and no 4D table (engine_library.glsl, ATMOS_INSTANT).
   const gpu::GpuTables& tables = *impl_->tables;
@@ -563,6 +567,7 @@ void AtmospherePass::bind_textures(int first_unit) const {
     glBindTextureUnit(GLuint(first_unit + i), texture);
     glBindSampler(GLuint(first_unit + i), 0);
   }
+  impl_->tables->bind_parameters(GLuint(parameters_binding));
 }
 
 namespace {
@@ -751,6 +756,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     glProgramUniform1f(volume_program, 24, frame.ap_t_far);
     glProgramUniform1f(volume_program, 25, frame.ap_t_min);
     gpu::set_sky_view_frame_uniforms(volume_program, frame.sky_view);
+    p.tables->bind_parameters();
     glBindTextureUnit(0, p.tables->texture(0));
     glBindSampler(0, 0);
     glBindTextureUnit(gpu::kInstantMultipleScatteringUnit, p.tables->instant_multiple_scattering_texture());
@@ -770,6 +776,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     glProgramUniform1f(volume_program, 24, frame.ap_t_far);
     glProgramUniform1f(volume_program, 25, frame.ap_t_min);
     gpu::set_sky_view_frame_uniforms(volume_program, frame.sky_view);
+    p.tables->bind_parameters();
     for (GLuint unit = 0; unit < 5; ++unit) {
       glBindTextureUnit(unit, p.tables->texture(int(unit)));
       glBindSampler(unit, 0);
@@ -795,6 +802,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     if (count > 0) {
       glNamedBufferSubData(p.space_columns, 0, GLsizeiptr(sizeof(GLint)) * count, columns.order.data());
       glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, p.space_columns);
+      p.tables->bind_parameters();
       for (GLuint unit = 0; unit < 5; ++unit) {
         glBindTextureUnit(unit, p.tables->texture(int(unit)));
         glBindSampler(unit, 0);

@@ -2,7 +2,8 @@
 // (AtmospherePass::glsl_library; GLSL only). Appended after the physics it
 // uses (gpu/shader_source.cpp: kEngineLibraryPhysics, up to
 // view_ray_scattering.glsl and aerial_perspective.glsl), with
-// ATMOS_UNIT_0..4 (the texture units) and ATMOS_RADIANCE_TO_SRGB defined.
+// ATMOS_UNIT_0..4 (the texture units) and ATMOS_RADIANCE_TO_SRGB (read from
+// the parameter block, like ATMOSPHERE and SPECTRAL) defined.
 //
 // Conventions of every atmos_* function:
 //  - positions in metres relative to the planet centre, in the engine's world

@@ -4,9 +4,13 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <initializer_list>
+#include <map>
+#include <mutex>
 #include <sstream>
 
 #include "atmos/colour.hpp"
@@ -177,6 +181,8 @@ glm::vec3 half_texel(const glm::vec3& texel, bool srgb_channels) {
 
 namespace {
 
+std::atomic<long> programs_linked{0};
+
 GLuint link_shaders(std::initializer_list<GLuint> shaders) {
   GLuint program = glCreateProgram();
   for (GLuint shader : shaders) glAttachShader(program, shader);
@@ -193,6 +199,7 @@ GLuint link_shaders(std::initializer_list<GLuint> shaders) {
     glDeleteProgram(program);
     throw Error("shader program does not link: " + summarize_log(log.c_str(), nullptr));
   }
+  programs_linked.fetch_add(1, std::memory_order_relaxed);
   return program;
 }
 
@@ -212,6 +219,100 @@ GLuint link_program(const AssembledSource& vertex_source, const AssembledSource&
 
 GLuint link_compute_program(const AssembledSource& compute_source) {
   return link_shaders({compile_shader(GL_COMPUTE_SHADER, compute_source, "compute")});
+}
+
+long linked_program_count() { return programs_linked.load(std::memory_order_relaxed); }
+
+namespace {
+
+// The shared programs. A share group has no name in OpenGL, so each shared
+// program carries a label unique in the process (GL 4.3 object labels):
+// the program of an entry is the current context's when that context has a
+// program of that name with that label, i.e. when it shares objects with the
+// context that linked it. An entry lives while it has owners.
+struct SharedPrograms {
+  struct Entry {
+    std::string key;
+    GLuint program = 0;
+    int owners = 0;
+  };
+  std::mutex mutex;
+  long next_label = 0;
+  std::map<std::string, Entry> by_label;
+  std::multimap<std::string, std::string> labels_of_key;
+};
+
+SharedPrograms& shared_programs() {
+  static SharedPrograms programs;
+  return programs;
+}
+
+// The label of `program` in the current context ("" without one).
+std::string program_label(GLuint program) {
+  if (program == 0 || glIsProgram(program) != GL_TRUE) return "";
+  char label[64] = {};
+  GLsizei length = 0;
+  glGetObjectLabel(GL_PROGRAM, program, GLsizei(sizeof label), &length, label);
+  return std::string(label, size_t(std::max<GLsizei>(length, 0)));
+}
+
+GLuint acquire_program(const std::string& key, const std::function<GLuint()>& link) {
+  SharedPrograms& shared = shared_programs();
+  {
+    std::lock_guard<std::mutex> lock(shared.mutex);
+    const auto [first, last] = shared.labels_of_key.equal_range(key);
+    for (auto i = first; i != last; ++i) {
+      SharedPrograms::Entry& entry = shared.by_label.at(i->second);
+      if (program_label(entry.program) == i->second) {
+        ++entry.owners;
+        return entry.program;
+      }
+    }
+  }
+  // Linking takes seconds on software rasterisers: not under the lock (two
+  // threads may then link the same key; each gets an entry).
+  const GLuint program = link();
+  std::lock_guard<std::mutex> lock(shared.mutex);
+  const std::string label = "atmos program " + std::to_string(shared.next_label++);
+  glObjectLabel(GL_PROGRAM, program, GLsizei(label.size()), label.data());
+  shared.by_label[label] = {key, program, 1};
+  shared.labels_of_key.emplace(key, label);
+  return program;
+}
+
+}  // namespace
+
+GLuint shared_program(const AssembledSource& vertex_source, const AssembledSource& fragment_source) {
+  return acquire_program("vertex\n" + vertex_source.text + "\nfragment\n" + fragment_source.text,
+                         [&] { return link_program(vertex_source, fragment_source); });
+}
+
+GLuint shared_compute_program(const AssembledSource& compute_source) {
+  return acquire_program("compute\n" + compute_source.text, [&] { return link_compute_program(compute_source); });
+}
+
+void release_program(GLuint& program) {
+  if (program == 0) return;
+  bool last = true;
+  {
+    SharedPrograms& shared = shared_programs();
+    std::lock_guard<std::mutex> lock(shared.mutex);
+    const auto entry = shared.by_label.find(program_label(program));
+    if (entry != shared.by_label.end()) {
+      last = --entry->second.owners == 0;
+      if (last) {
+        const auto [first, end] = shared.labels_of_key.equal_range(entry->second.key);
+        for (auto i = first; i != end; ++i)
+          if (i->second == entry->first) {
+            shared.labels_of_key.erase(i);
+            break;
+          }
+        shared.by_label.erase(entry);
+      }
+    }
+  }
+  if (last) glDeleteProgram(program);
+  program = 0;
 }
 
 void set_table_sampling(GLuint texture) {
@@ -347,6 +448,26 @@ void GpuTables::create_sky_view_target() {
   glCreateVertexArrays(1, &vertex_array_);
 }
 
+// The parameter block's values, uploaded once: every program of these
+// tables reads them at draw time (ParameterBlock, shader_source.hpp).
+void GpuTables::create_parameter_buffer() {
+  const ParameterBlock block = parameter_block(*params_, *spectral_, radiance_to_srgb_);
+  const GLsizeiptr bytes = GLsizeiptr(block.values.size() * sizeof(float));
+  GLint max_bytes = 0;
+  glGetIntegerv(GL_MAX_UNIFORM_BLOCK_SIZE, &max_bytes);
+  if (bytes > max_bytes)
+    throw Error("the atmosphere's parameters take " + std::to_string(bytes) +
+                " bytes, more than this driver's GL_MAX_UNIFORM_BLOCK_SIZE " + std::to_string(max_bytes) +
+                " (fewer wavelengths would fit)");
+  glCreateBuffers(1, &parameter_buffer_);
+  glNamedBufferStorage(parameter_buffer_, bytes, block.values.data(), 0);
+  check_gl("while uploading the atmosphere's parameters");
+}
+
+void GpuTables::bind_parameters(GLuint binding) const {
+  glBindBufferBase(GL_UNIFORM_BUFFER, binding, parameter_buffer_);
+}
+
 GpuTables::GpuTables(const Atmosphere& atmosphere, const InstantTables& tables) {
   check_tables_match(atmosphere, tables);
   params_ = std::make_unique<physics::AtmosphereParams>(physics::make_render_params(atmosphere, tables.sizes));
@@ -355,6 +476,7 @@ GpuTables::GpuTables(const Atmosphere& atmosphere, const InstantTables& tables) 
   clear_gl_errors();
   try {
     create_sky_view_target();
+    create_parameter_buffer();
     const TableSizes& s = tables.sizes;
     sizes_ = s;
     format_ = GL_RGB32F;
@@ -380,6 +502,7 @@ GpuTables::GpuTables(const Atmosphere& atmosphere, const Tables& tables, Texture
   clear_gl_errors();
   try {
     create_sky_view_target();
+    create_parameter_buffer();
 
     const TableSizes& s = tables.sizes;
     const TableSet& t = tables.set;
@@ -424,14 +547,10 @@ void GpuTables::replace_ground_dependent_tables(const TableSet& set) {
 }
 
 void GpuTables::release() {
-  for (GLuint& program : sky_view_programs_) {
-    if (program != 0) glDeleteProgram(program);
-    program = 0;
-  }
-  for (GLuint& program : instant_sky_view_programs_) {
-    if (program != 0) glDeleteProgram(program);
-    program = 0;
-  }
+  for (GLuint& program : sky_view_programs_) release_program(program);
+  for (GLuint& program : instant_sky_view_programs_) release_program(program);
+  if (parameter_buffer_ != 0) glDeleteBuffers(1, &parameter_buffer_);
+  parameter_buffer_ = 0;
   if (instant_multiple_scattering_ != 0) glDeleteTextures(1, &instant_multiple_scattering_);
   instant_multiple_scattering_ = 0;
   if (sky_view_framebuffer_ != 0) glDeleteFramebuffers(1, &sky_view_framebuffer_);
@@ -448,6 +567,7 @@ void GpuTables::bind(GLuint first_unit) const {
   glBindTextureUnit(first_unit + kSkyViewRayleighUnit, sky_view_textures_[0]);
   glBindTextureUnit(first_unit + kSkyViewAerosolUnit, sky_view_textures_[1]);
   glBindTextureUnit(first_unit + kSkyViewSurfaceUnit, sky_view_textures_[2]);
+  bind_parameters();
 }
 
 physics::SkyViewFrame GpuTables::sky_view_frame(const glm::vec3& camera, const glm::vec3& sun) const {
@@ -492,8 +612,8 @@ GLuint GpuTables::link_sky_view_program(const glm::vec3& camera, const glm::vec3
   const bool low_sun = sky_view_low_sun(*params_, camera, sun, moons);
   AssembledSource vertex;
   vertex.append("vertex shader", fullscreen_vertex_shader_source());
-  return link_program(vertex, instant() ? instant_sky_view_fragment_shader_source(*params_, *spectral_, low_sun)
-                                        : sky_view_fragment_shader_source(*params_, *spectral_, low_sun, eclipse));
+  return shared_program(vertex, instant() ? instant_sky_view_fragment_shader_source(*params_, *spectral_, low_sun)
+                                          : sky_view_fragment_shader_source(*params_, *spectral_, low_sun, eclipse));
 }
 
 double GpuTables::update_sky_view(const glm::vec3& camera, const glm::vec3& sun, const physics::SkyViewFrame& frame,
@@ -510,6 +630,7 @@ double GpuTables::update_sky_view(const glm::vec3& camera, const glm::vec3& sun,
     glBindTextureUnit(unit, textures_[unit]);
     glBindSampler(unit, 0);
   }
+  bind_parameters();
   if (instant()) {
     glBindTextureUnit(kInstantMultipleScatteringUnit, instant_multiple_scattering_);
     glBindSampler(kInstantMultipleScatteringUnit, 0);

@@ -33,6 +33,21 @@ GLuint link_program(const AssembledSource& vertex_source, const AssembledSource&
 // The same for a compute shader.
 GLuint link_compute_program(const AssembledSource& compute_source);
 
+// Programs shared by source text: the program of these sources that is
+// alive in the current context's share group, else a new link; each call
+// owns one reference, which release_program() drops (deleting the program
+// with the last). Programs depend on the atmosphere's structure alone
+// (ParameterBlock), so passes of atmospheres that differ in values share
+// them.
+GLuint shared_program(const AssembledSource& vertex_source, const AssembledSource& fragment_source);
+GLuint shared_compute_program(const AssembledSource& compute_source);
+// Drops the caller's reference to a program of shared_program (or deletes
+// any other program); sets `program` to 0.
+void release_program(GLuint& program);
+// The programs link_program and link_compute_program have linked in this
+// process.
+long linked_program_count();
+
 // GL_LINEAR + CLAMP_TO_EDGE, no mipmaps: the arithmetic that
 // physics/shader_cpp.hpp reproduces on the CPU.
 void set_table_sampling(GLuint texture);
@@ -140,9 +155,13 @@ class GpuTables {
   // The tables' channels to linear sRGB on the cd/m² scale (column-major).
   const glm::mat3& radiance_to_srgb() const { return radiance_to_srgb_; }
 
-  // Binds the five tables to units first_unit + 0..4 and the sky-view table
-  // to first_unit + 5..7 (see TableUnit).
+  // Binds the five tables to units first_unit + 0..4, the sky-view table
+  // to first_unit + 5..7 (see TableUnit) and the parameter block to
+  // kParametersBinding.
   void bind(GLuint first_unit = 0) const;
+  // Binds the buffer of the programs' parameter block (parameter_block:
+  // ATMOSPHERE, SPECTRAL, the colour matrix) to a uniform-buffer binding.
+  void bind_parameters(GLuint binding = kParametersBinding) const;
   GLuint texture(int index) const { return textures_[index]; }
   // Whether these are the instant mode's tables, and their multiple-scattering table.
   bool instant() const { return instant_multiple_scattering_ != 0; }
@@ -180,6 +199,7 @@ class GpuTables {
  private:
   void release();
   void create_sky_view_target();
+  void create_parameter_buffer();
   std::unique_ptr<physics::AtmosphereParams> params_;
   std::unique_ptr<physics::SpectralSets> spectral_;
   glm::mat3 radiance_to_srgb_{1.0f};
@@ -187,6 +207,7 @@ class GpuTables {
   GLenum format_ = 0;  // of the radiance tables 1..4
   bool srgb_channels_ = false;  // physics::srgb_channels of the tables' wavelengths
   GLuint textures_[5] = {0, 0, 0, 0, 0};
+  GLuint parameter_buffer_ = 0;  // parameter_block's values
   // Without, with the low-sun integration, and eclipsed (compiled on first use).
   GLuint sky_view_programs_[3] = {0, 0, 0};
   GLuint sky_view_framebuffer_ = 0;

@@ -1,6 +1,6 @@
 // atmos — fragment shader of the instant mode's sky-view pass (GLSL only,
-// appended by gpu/shader_source.cpp after the definitions, the ATMOSPHERE
-// constant, the physics up to instant_atmosphere.glsl and
+// appended by gpu/shader_source.cpp after the definitions, the parameter
+// block, the physics up to instant_atmosphere.glsl and
 // table_bindings.glsl, of which it reads the optical depth (unit 0) and the
 // sky irradiance (unit 3)). The exact mode's sky-view pass
 // (sky_view.frag.glsl) with the view rays marched through the

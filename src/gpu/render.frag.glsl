@@ -1,5 +1,5 @@
 // atmos — fragment shader of the renderer (GLSL only, appended by
-// gpu/shader_source.cpp after the definitions, the ATMOSPHERE constant, the
+// gpu/shader_source.cpp after the definitions, the parameter block, the
 // physics up to radiance_to_camera.glsl (kRenderPhysics), table_bindings.glsl
 // and camera.glsl). One full-screen triangle; each fragment is one pixel of
 // the image: its view ray, the radiance reaching the camera along

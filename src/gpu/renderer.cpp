@@ -168,17 +168,14 @@ struct Renderer::Impl {
     if (p == 0) {
       gpu::AssembledSource vertex;
       vertex.append("vertex shader", gpu::fullscreen_vertex_shader_source());
-      p = gpu::link_program(vertex, gpu::render_fragment_shader_source(tables->params(), tables->spectral(),
-                                                                        sky_view_camera, eclipse));
+      p = gpu::shared_program(vertex, gpu::render_fragment_shader_source(tables->params(), tables->spectral(),
+                                                                          sky_view_camera, eclipse));
     }
     return p;
   }
 
   void release() {
-    for (std::uint32_t& p : programs) {
-      if (p != 0) glDeleteProgram(p);
-      p = 0;
-    }
+    for (std::uint32_t& p : programs) gpu::release_program(p);
     if (vertex_array != 0) glDeleteVertexArrays(1, &vertex_array);
     if (framebuffer != 0) glDeleteFramebuffers(1, &framebuffer);
     if (tile_texture != 0) glDeleteTextures(1, &tile_texture);

@@ -15,19 +15,16 @@ namespace {
 // order (GLSL struct constructors are positional). A field added to or
 // removed from definitions.glsl changes the size and stops the build here
 // rather than producing a shader with shifted parameters; a reordering of
-// same-typed fields is caught by the GPU-vs-CPU test.
+// same-typed fields is caught by the GPU's read-back of every field
+// (tests/gpu_test.cpp, Gpu.ParameterBlockMatchesTheDriversLayout).
 static_assert(sizeof(physics::DensityProfile) == 4 * (2 + 2 * MAX_DENSITY_KNOTS),
-              "DensityProfile changed: update atmosphere_params_glsl()");
+              "DensityProfile changed: update glsl_density_profile()");
 static_assert(sizeof(physics::AtmosphereParams) ==
                   4 * (3 + 1 + 3 * 3 + 2 * 3 + 2 + 8 + 6 + SCATTERING_R_AXIS_KNOTS + 2) +
                       MAX_CONSTITUENTS * (sizeof(physics::DensityProfile) + 4 * (3 + 3 + 1)),
-              "AtmosphereParams changed: update atmosphere_params_glsl()");
+              "AtmosphereParams changed: update atmosphere_params_expression()");
 
 std::string glsl_int(int value) { return std::to_string(value); }
-
-std::string glsl_vec3(const physics::vec3& v) {
-  return "vec3(" + glsl_float(v.x) + ", " + glsl_float(v.y) + ", " + glsl_float(v.z) + ")";
-}
 
 // "T[n](a, b, ...)" from n already formatted elements.
 template <typename Format>
@@ -35,12 +32,6 @@ std::string glsl_array(const char* type, int n, Format element) {
   std::string s = std::string(type) + "[" + std::to_string(n) + "](";
   for (int i = 0; i < n; ++i) s += (i > 0 ? ", " : "") + element(i);
   return s + ")";
-}
-
-std::string glsl_density_profile(const physics::DensityProfile& d) {
-  return "DensityProfile(" + glsl_float(d.scale_height) + ", " + glsl_int(d.knot_count) + ", " +
-         glsl_array("float", MAX_DENSITY_KNOTS, [&](int i) { return glsl_float(d.knot_altitude[i]); }) + ", " +
-         glsl_array("float", MAX_DENSITY_KNOTS, [&](int i) { return glsl_float(d.knot_density[i]); }) + ")";
 }
 
 const char* embedded(const char* path) {
@@ -67,54 +58,122 @@ std::string glsl_float(float value) {
 
 namespace {
 
-// "AtmosphereParams(...)", every field in declaration order.
-std::string atmosphere_params_expression(const physics::AtmosphereParams& p) {
+// The float values of a parameter block in the order of their first use,
+// and the GLSL that reads each: value i is component i % 4 of element i / 4
+// of the block's vec4 array (std140 gives a vec4 array a stride of 16 bytes,
+// so the packing is the floats back to back).
+class BlockWriter {
+ public:
+  std::string value(float v) {
+    if (!std::isfinite(v)) throw Error("atmosphere parameter is not finite (" + std::to_string(v) + ")");
+    const size_t i = values.size();
+    values.push_back(v);
+    return std::string(kParameterArray) + "[" + std::to_string(i / 4) + "]." + "xyzw"[i % 4];
+  }
+  // A value whose zero the shaders test for (a weight that switches a
+  // mapping off): zero is a literal, which the compiler folds, and belongs
+  // to the atmosphere's structure; any other value is read from the block.
+  std::string value_or_zero(float v) { return v == 0.0f ? "0.0" : value(v); }
+  std::string vec3(const physics::vec3& v) { return "vec3(" + value(v.x) + ", " + value(v.y) + ", " + value(v.z) + ")"; }
+  // A constituent's coefficients: a literal when all three are zero (an
+  // absorber that does not scatter, a scatterer that does not absorb), so
+  // that the compiler drops their terms from the medium's sums.
+  std::string coefficients(const physics::vec3& v) {
+    return v == physics::vec3(0.0f) ? std::string("vec3(0.0)") : vec3(v);
+  }
+  std::string mat3(const physics::mat3& m) {
+    std::string s = "mat3(";
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) s += value(m[c][r]) + (c == 2 && r == 2 ? ")" : ", ");
+    return s;
+  }
+  // A wavelength triple's conversion to the tables' channels: the identity
+  // of the three-wavelength mode is a literal.
+  std::string to_channels(const physics::mat3& m) {
+    return m == physics::mat3(1.0f) ? std::string("mat3(1.0)") : mat3(m);
+  }
+  std::vector<float> values;
+};
+
+// "DensityProfile(...)": the kind and the knot count are literals; the
+// scale height of an exponential profile and the knots of a piecewise-linear
+// one are values (the other fields are never read and spelt 0).
+std::string glsl_density_profile(const physics::DensityProfile& d, BlockWriter& w) {
+  const bool exponential = d.knot_count == 0;
+  const auto knots = [&](const float* x) {
+    return glsl_array("float", MAX_DENSITY_KNOTS,
+                      [&](int i) { return !exponential && i < d.knot_count ? w.value(x[i]) : std::string("0.0"); });
+  };
+  return "DensityProfile(" + (exponential ? w.value(d.scale_height) : std::string("0.0")) + ", " +
+         glsl_int(d.knot_count) + ", " + knots(d.knot_altitude) + ", " + knots(d.knot_density) + ")";
+}
+
+// "AtmosphereParams(...)", every field in declaration order: the integers
+// (counts, kinds, table sizes, tiles) as literals, the floats as values of
+// the block.
+std::string atmosphere_params_expression(const physics::AtmosphereParams& p, BlockWriter& w) {
   const int n = MAX_CONSTITUENTS;
+  const int count = p.constituent_count;
+  // Constituents beyond the count are never read (CONSTITUENT_COUNT).
+  const auto constituent_vec3 = [&](const physics::vec3* v) {
+    return glsl_array("vec3", n, [&](int i) { return i < count ? w.coefficients(v[i]) : std::string("vec3(0.0)"); });
+  };
   std::string s = "AtmosphereParams(\n";
-  s += "    " + glsl_float(p.bottom_radius) + ", " + glsl_float(p.top_radius) + ", " + glsl_int(p.constituent_count) +
-       ",\n";
-  s += "    " + glsl_array("DensityProfile", n, [&](int i) { return glsl_density_profile(p.density[i]); }) + ",\n";
-  s += "    " + glsl_array("vec3", n, [&](int i) { return glsl_vec3(p.scattering[i]); }) + ",\n";
-  s += "    " + glsl_array("vec3", n, [&](int i) { return glsl_vec3(p.absorption[i]); }) + ",\n";
-  s += "    " + glsl_array("int", n, [&](int i) { return glsl_int(p.is_aerosol[i]); }) + ",\n";
-  s += "    " + glsl_int(p.aerosol_phase_kind) + ", " + glsl_vec3(p.aerosol_g) + ", " + glsl_vec3(p.aerosol_g_back) +
-       ", " + glsl_vec3(p.aerosol_forward_weight) + ",\n";
-  s += "    " + glsl_vec3(p.ground_albedo) + ", " + glsl_vec3(p.solar_irradiance) + ",\n";
-  s += "    " + glsl_float(p.sun_angular_radius) + ", " + glsl_float(p.mu_s_min) + ",\n";
+  s += "    " + w.value(p.bottom_radius) + ", " + w.value(p.top_radius) + ", " + glsl_int(count) + ",\n";
+  s += "    " + glsl_array("DensityProfile", n, [&](int i) {
+         const std::string zeros = glsl_array("float", MAX_DENSITY_KNOTS, [](int) { return std::string("0.0"); });
+         return i < count ? glsl_density_profile(p.density[i], w)
+                          : "DensityProfile(0.0, 0, " + zeros + ", " + zeros + ")";
+       }) + ",\n";
+  s += "    " + constituent_vec3(p.scattering) + ",\n";
+  s += "    " + constituent_vec3(p.absorption) + ",\n";
+  s += "    " + glsl_array("int", n, [&](int i) { return glsl_int(i < count ? p.is_aerosol[i] : 0); }) + ",\n";
+  s += "    " + glsl_int(p.aerosol_phase_kind) + ", " + w.vec3(p.aerosol_g) + ", " + w.vec3(p.aerosol_g_back) + ", " +
+       w.vec3(p.aerosol_forward_weight) + ",\n";
+  s += "    " + w.vec3(p.ground_albedo) + ", " + w.vec3(p.solar_irradiance) + ",\n";
+  s += "    " + w.value(p.sun_angular_radius) + ", " + w.value(p.mu_s_min) + ",\n";
   s += "    " + glsl_int(p.transmittance_mu_size) + ", " + glsl_int(p.transmittance_r_size) + ", " +
        glsl_int(p.irradiance_mu_s_size) + ", " + glsl_int(p.irradiance_r_size) + ", " +
        glsl_int(p.scattering_nu_size) + ", " + glsl_int(p.scattering_mu_s_size) + ", " +
        glsl_int(p.scattering_mu_size) + ", " + glsl_int(p.scattering_r_size) + ",\n";
   s += "    " + glsl_int(p.transmittance_tile) + ", " + glsl_int(p.transmittance_tiles) + ", " +
        glsl_int(p.single_scattering_tile) + ", " + glsl_int(p.scattering_nu_in_angle) + ", " +
-       glsl_float(p.scattering_mu_log_weight) + ",\n";
-  s += "    " + glsl_float(p.scattering_r_optical_depth_weight) + ", " +
-       glsl_array("float", SCATTERING_R_AXIS_KNOTS, [&](int i) { return glsl_float(p.scattering_r_axis[i]); }) +
+       w.value_or_zero(p.scattering_mu_log_weight) + ",\n";
+  // The r axis's knots are read only where its weight is not 0.
+  const bool r_axis = p.scattering_r_optical_depth_weight != 0.0f;
+  s += "    " + w.value_or_zero(p.scattering_r_optical_depth_weight) + ", " +
+       glsl_array("float", SCATTERING_R_AXIS_KNOTS,
+                  [&](int i) { return r_axis ? w.value(p.scattering_r_axis[i]) : std::string("0.0"); }) +
        ",\n";
-  s += "    " + glsl_float(p.source_flat_optical_depth) + ", " + glsl_float(p.scattering_row_1_height) + ")";
-  return s;
-}
-
-std::string glsl_mat3(const physics::mat3& m) {
-  std::string s = "mat3(";
-  for (int c = 0; c < 3; ++c)
-    for (int r = 0; r < 3; ++r) s += glsl_float(m[c][r]) + (c == 2 && r == 2 ? ")" : ", ");
+  s += "    " + w.value_or_zero(p.source_flat_optical_depth) + ", " + w.value(p.scattering_row_1_height) + ")";
   return s;
 }
 
 }  // namespace
 
-std::string atmosphere_params_glsl(const physics::AtmosphereParams& p) {
-  return "const AtmosphereParams ATMOSPHERE = " + atmosphere_params_expression(p) + ";\n";
-}
-
-std::string spectral_sets_glsl(const physics::SpectralSets& sets) {
-  // The shaders' SPECTRAL_SET_CAPACITY is the actual count (see
-  // physics_shader_source).
-  const int n = sets.count;
-  return "const SpectralSets SPECTRAL = SpectralSets(" + glsl_int(n) + ",\n" +
-         glsl_array("AtmosphereParams", n, [&](int i) { return atmosphere_params_expression(sets.set[i]); }) +
-         ",\n" + glsl_array("mat3", n, [&](int i) { return glsl_mat3(sets.to_channels[i]); }) + ");\n";
+// The block's values: the colour matrix of glsl_library, then ATMOSPHERE,
+// then SPECTRAL.
+ParameterBlock parameter_block(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
+                               const physics::mat3& radiance_to_srgb, int binding) {
+  BlockWriter w;
+  const std::string matrix = w.mat3(radiance_to_srgb);
+  const std::string atmosphere = atmosphere_params_expression(params, w);
+  const int n = spectral.count;
+  const std::string sets =
+      glsl_array("AtmosphereParams", n, [&](int i) { return atmosphere_params_expression(spectral.set[i], w); });
+  const std::string to_channels =
+      glsl_array("mat3", n, [&](int i) { return w.to_channels(spectral.to_channels[i]); });
+  const size_t elements = std::max<size_t>(1, (w.values.size() + 3) / 4);
+  ParameterBlock block;
+  block.glsl = "layout(std140, binding = " + std::to_string(binding) + ") uniform " + kParameterBlock + " { vec4 " +
+               kParameterArray + "[" + std::to_string(elements) + "]; };\n" +
+               "mat3 atmos_radiance_to_srgb() { return " + matrix + "; }\n" +
+               "AtmosphereParams atmos_atmosphere() {\n  return " + atmosphere + ";\n}\n" +
+               "SpectralSets atmos_spectral_sets() {\n  return SpectralSets(" + glsl_int(n) + ",\n" + sets + ",\n" +
+               to_channels + ");\n}\n" + "#define ATMOSPHERE atmos_atmosphere()\n#define SPECTRAL atmos_spectral_sets()\n";
+  block.values = std::move(w.values);
+  block.values.resize(elements * 4, 0.0f);
+  return block;
 }
 
 std::string fullscreen_vertex_shader_source() {
@@ -202,11 +261,13 @@ const std::vector<const char*> kInstantEngineLibraryPhysics = {
     "instant_atmosphere.glsl"};
 
 // The part every program that reads the tables starts with: the version, the
-// subset macros, definitions.glsl with the atmosphere's constants, then the
-// parts of the physics `physics` (names in src/physics/).
+// subset macros, definitions.glsl, the atmosphere's parameter block
+// (parameter_block at `parameters_binding`), then the parts of the physics
+// `physics` (names in src/physics/).
 AssembledSource physics_shader_source(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
                                       const std::vector<const char*>& physics,
-                                      const std::string& header = "#version 450 core\n") {
+                                      const std::string& header = "#version 450 core\n",
+                                      int parameters_binding = kParametersBinding) {
   AssembledSource s;
   s.append("header", header);
   s.append("macros", kSubsetMacros);
@@ -216,8 +277,8 @@ AssembledSource physics_shader_source(const physics::AtmosphereParams& params, c
                              "#define CONSTITUENT_COUNT(a) " + std::to_string(params.constituent_count) + "\n" +
                              "#define DENSITY_KNOT_BOUND " + std::to_string(density_knot_bound(params)) + "\n");
   s.append("definitions.glsl", embedded("src/physics/definitions.glsl"));
-  s.append("ATMOSPHERE", atmosphere_params_glsl(params));
-  s.append("SPECTRAL", spectral_sets_glsl(spectral));
+  // The block's text does not depend on the colour matrix's values.
+  s.append("parameters", parameter_block(params, spectral, physics::mat3(1.0f), parameters_binding).glsl);
   for (const char* part : physics) s.append(part, embedded((std::string("src/physics/") + part).c_str()));
   return s;
 }
@@ -317,18 +378,17 @@ AssembledSource instant_aerial_perspective_compute_shader_source(const physics::
 }
 
 std::string engine_library_source(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
-                                  const physics::mat3& radiance_to_srgb, int first_unit, bool instant) {
+                                  int first_unit, int parameters_binding, bool instant) {
   // The physics without its "#version" line: the engine's shader has its own.
   AssembledSource shared =
-      physics_shader_source(params, spectral, instant ? kInstantEngineLibraryPhysics : kEngineLibraryPhysics);
+      physics_shader_source(params, spectral, instant ? kInstantEngineLibraryPhysics : kEngineLibraryPhysics,
+                            "#version 450 core\n", parameters_binding);
   std::string text = shared.text.substr(shared.text.find('\n') + 1);
   text += std::string("#define ATMOS_INSTANT ") + (instant ? "1" : "0") + "\n";
   text += "#define ATMOS_FIRST_UNIT " + std::to_string(first_unit) + "\n";
   for (int unit = 0; unit < 5; ++unit)
     text += "#define ATMOS_UNIT_" + std::to_string(unit) + " " + std::to_string(first_unit + unit) + "\n";
-  text += "const mat3 ATMOS_RADIANCE_TO_SRGB = mat3(";
-  for (int c = 0; c < 3; ++c)
-    for (int r = 0; r < 3; ++r) text += glsl_float(radiance_to_srgb[c][r]) + (c == 2 && r == 2 ? ");\n" : ", ");
+  text += "#define ATMOS_RADIANCE_TO_SRGB atmos_radiance_to_srgb()\n";
   text += embedded("src/gpu/engine_library.glsl");
   return text;
 }

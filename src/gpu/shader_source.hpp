@@ -14,12 +14,31 @@ namespace atmos::gpu {
 // Throws atmos::Error for NaN or infinity, which GLSL cannot spell.
 std::string glsl_float(float value);
 
-// "const AtmosphereParams ATMOSPHERE = AtmosphereParams(...);": the C++
-// parameters as a GLSL constant, so that the shader compiler folds them.
-std::string atmosphere_params_glsl(const physics::AtmosphereParams& params);
+// The uniform binding of the parameter block in atmos's own programs.
+constexpr int kParametersBinding = 0;
+// The block's GLSL names: "uniform AtmosParameters { vec4 atmos_parameter_values[N]; }".
+inline constexpr const char* kParameterBlock = "AtmosParameters";
+inline constexpr const char* kParameterArray = "atmos_parameter_values";
 
-// "const SpectralSets SPECTRAL = ...;" for the wavelength triples.
-std::string spectral_sets_glsl(const physics::SpectralSets& sets);
+// The atmosphere as the shaders see it, split into its structure and its
+// values: `glsl` declares the std140 uniform block at `binding` and defines
+// ATMOSPHERE and SPECTRAL (and atmos_radiance_to_srgb()) as the
+// AtmosphereParams and SpectralSets whose integer fields (counts, kinds,
+// knot counts, table sizes, tiles) are literals, as are the floats whose
+// zero the shaders test for, coefficients that are zero at all three
+// wavelengths, the three-wavelength mode's identity conversion to the
+// channels and the fields never read, while every other float reads the
+// block; `values` is the block's content (the driver's
+// std140 layout of a vec4 array: 16 bytes per element, value i at byte 4 i).
+// The text therefore depends on the structure alone: atmospheres that
+// differ only in values share programs. Throws atmos::Error for a value
+// that is NaN or infinite.
+struct ParameterBlock {
+  std::string glsl;
+  std::vector<float> values;
+};
+ParameterBlock parameter_block(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
+                               const physics::mat3& radiance_to_srgb, int binding = kParametersBinding);
 
 // The vertex shader: one triangle covering the viewport, from gl_VertexID.
 std::string fullscreen_vertex_shader_source();
@@ -132,11 +151,12 @@ AssembledSource instant_aerial_perspective_compute_shader_source(const physics::
                                                                 bool low_sun);
 
 // The GLSL library for engines' own shaders (AtmospherePass::glsl_library):
-// the definitions and the physics up to view_ray_scattering.glsl and
-// aerial_perspective.glsl (and the instant mode's march for a pass of that
-// mode, `instant`) without "#version", the colour matrix, then
-// engine_library.glsl with its textures on units first_unit .. first_unit + 4.
+// the definitions, the parameter block at `parameters_binding` and the
+// physics up to view_ray_scattering.glsl and aerial_perspective.glsl (and
+// the instant mode's march for a pass of that mode, `instant`) without
+// "#version", then engine_library.glsl with its textures on units
+// first_unit .. first_unit + 4.
 std::string engine_library_source(const physics::AtmosphereParams& params, const physics::SpectralSets& spectral,
-                                  const physics::mat3& radiance_to_srgb, int first_unit, bool instant);
+                                  int first_unit, int parameters_binding, bool instant);
 
 }  // namespace atmos::gpu

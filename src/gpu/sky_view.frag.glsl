@@ -1,5 +1,5 @@
 // atmos — fragment shader of the sky-view pass (GLSL only, appended by
-// gpu/shader_source.cpp after the definitions, the ATMOSPHERE constant, the
+// gpu/shader_source.cpp after the definitions, the parameter block, the
 // physics up to sky_view_table.glsl (kSkyViewPhysics) and
 // table_bindings.glsl). One full-screen triangle over a
 // SKY_VIEW_WIDTH x SKY_VIEW_HEIGHT target with three colour attachments;

@@ -57,8 +57,11 @@
 const float PI = 3.14159265358979f;
 
 // Number density of a constituent relative to its reference density, as a
-// function of altitude: exponential (scale_height > 0), else piecewise linear
-// through the knots and zero outside them (ozone-like layers).
+// function of altitude: exponential without knots (knot_count 0, scale_height
+// > 0), else piecewise linear through the knots and zero outside them
+// (ozone-like layers). The kind is the integer knot_count so that shaders
+// know it at compile time while the heights are uniforms (see
+// gpu/shader_source.cpp).
 struct DensityProfile {
   float scale_height;
   int knot_count;

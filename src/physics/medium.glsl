@@ -7,15 +7,15 @@
 // The density of a constituent at `altitude`, relative to its reference
 // density (DensityProfile).
 INLINE float profile_density(IN(DensityProfile) profile, float altitude) {
-  if (profile.scale_height > 0.0f) return exp(-altitude / profile.scale_height);
+  if (profile.knot_count == 0) return exp(-altitude / profile.scale_height);
   // Piecewise linear between the knots, 0 outside them: the first segment
   // that contains the altitude. A loop of constant length (DENSITY_KNOT_BOUND:
   // in shaders the most knots of the atmosphere's constituents, see
-  // shader_source.cpp) without early exits, which the compiler can unroll.
-  // Shader compilers do not fold the atmosphere's constants through the
-  // function calls, and software rasterisers run every iteration and both
-  // sides of every branch anyway, so a loop bounded by the profile's own
-  // count with a return inside saves nothing and cannot be unrolled.
+  // shader_source.cpp) without early exits, which the compiler can unroll;
+  // the profile's knot count is a literal there, which removes the
+  // iterations beyond it. A loop bounded by that count with a return inside
+  // could not be unrolled, and software rasterisers run every iteration and
+  // both sides of every branch anyway.
   float density = 0.0f;
   bool found = false;
   for (int i = 1; i < DENSITY_KNOT_BOUND; ++i) {

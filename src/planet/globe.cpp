@@ -179,6 +179,10 @@ struct Globe::Impl {
   // library (AtmospherePass::glsl_library), which they were linked with.
   std::string prelinked_for;
   TileProgram prelinked_lit, prelinked_shadowed;
+  // The library the lit programs (and the eclipse's) were linked with: it
+  // depends on the atmosphere's structure alone, and a pass with the same
+  // library is drawn with the same programs.
+  std::string linked_for;
   void drop_prelinked() {
     if (prelinked_lit.id != 0) glDeleteProgram(prelinked_lit.id);
     if (prelinked_shadowed.id != 0) glDeleteProgram(prelinked_shadowed.id);
@@ -639,6 +643,7 @@ Globe::Globe(const Atmosphere& atmosphere, const PlanetSurface& surface, const A
 
   const std::string version = "#version 450 core\n";
   p.program = lit_program(pass, settings.first_unit, false, false);
+  p.linked_for = pass.glsl_library(settings.first_unit);
   p.top_radius_m = atmosphere.top_radius_m;
   p.sun_angular_radius_rad = atmosphere.sun_angular_radius_rad;
   if (settings.shadow_cascades > 0) p.create_shadows(version);
@@ -680,7 +685,7 @@ Globe::~Globe() = default;
 void Globe::link_rebind_programs(const AtmospherePass& pass) {
   Impl& p = *impl_;
   std::string library = pass.glsl_library(p.settings.first_unit);
-  if (p.prelinked_lit.id != 0 && p.prelinked_for == library) return;
+  if (library == p.linked_for || (p.prelinked_lit.id != 0 && p.prelinked_for == library)) return;
   p.drop_prelinked();
   TileProgram lit = lit_program(pass, p.settings.first_unit, false, false);
   TileProgram shadowed;
@@ -708,11 +713,20 @@ void Globe::rebind(const Atmosphere& atmosphere, const AtmospherePass& pass) {
                 " m (the relief is built on it): build a new Globe");
   planet::validate_sea_level(p.description, atmosphere, "globe");
   p.check_pass_reaches_ground(pass);
-  // The programs that light tiles carry the pass's library: the new ones
-  // are linked (or taken from link_rebind_programs) before anything
-  // changes, so that a failure leaves the globe bound to its old pass.
+  // The programs that light tiles carry the pass's library: kept when it
+  // is the same text, else the new ones are linked (or taken from
+  // link_rebind_programs) before anything changes, so that a failure
+  // leaves the globe bound to its old pass.
+  std::string library = pass.glsl_library(p.settings.first_unit);
+  if (library == p.linked_for) {
+    p.drop_prelinked();
+    p.pass = &pass;
+    p.top_radius_m = atmosphere.top_radius_m;
+    p.sun_angular_radius_rad = atmosphere.sun_angular_radius_rad;
+    return;
+  }
   TileProgram lit, shadowed;
-  if (p.prelinked_lit.id != 0 && p.prelinked_for == pass.glsl_library(p.settings.first_unit)) {
+  if (p.prelinked_lit.id != 0 && p.prelinked_for == library) {
     lit = p.prelinked_lit;
     shadowed = p.prelinked_shadowed;
     p.prelinked_lit = p.prelinked_shadowed = TileProgram{};
@@ -740,6 +754,7 @@ void Globe::rebind(const Atmosphere& atmosphere, const AtmospherePass& pass) {
     if (e.id != 0) glDeleteProgram(e.id);
     e = TileProgram{};
   }
+  p.linked_for = std::move(library);
   p.pass = &pass;
   p.top_radius_m = atmosphere.top_radius_m;
   p.sun_angular_radius_rad = atmosphere.sun_angular_radius_rad;
