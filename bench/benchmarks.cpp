@@ -65,7 +65,7 @@ void BM_RenderFrame(benchmark::State& state) {
 BENCHMARK(BM_RenderFrame)->Args({1920, 1080})->Unit(benchmark::kMillisecond)->UseManualTime();
 
 // The engine plugin over the synthetic engine frame (`atmos bench`'s
-// plugin.WxH by day, sun 35° up).
+// plugin.WxH by day, sun 35° up); its passes' parts as counters.
 void BM_PluginFrame(benchmark::State& state) {
   Scene& s = scene();
   const int w = int(state.range(0)), h = int(state.range(1));
@@ -73,10 +73,18 @@ void BM_PluginFrame(benchmark::State& state) {
   atmos::AtmospherePass pass(s.atmosphere, s.tables, atmos::PlanetFrame{});
   const atmos::FrameInput input = plugin_scene.input(35.0, false);
   pass.render(input);  // warm-up
+  double sky_view_ms = 0.0, volume_ms = 0.0, composite_ms = 0.0;
   for (auto _ : state) {
     pass.render(input);
-    state.SetIterationTime(pass.last_timings().total_ms() / 1000.0);
+    const atmos::PassTimings& t = pass.last_timings();
+    state.SetIterationTime(t.total_ms() / 1000.0);
+    sky_view_ms += t.sky_view_ms;
+    volume_ms += t.volume_ms;
+    composite_ms += t.composite_ms;
   }
+  state.counters["sky_view_ms"] = benchmark::Counter(sky_view_ms, benchmark::Counter::kAvgIterations);
+  state.counters["volume_ms"] = benchmark::Counter(volume_ms, benchmark::Counter::kAvgIterations);
+  state.counters["composite_ms"] = benchmark::Counter(composite_ms, benchmark::Counter::kAvgIterations);
 }
 BENCHMARK(BM_PluginFrame)->Args({1920, 1080})->Unit(benchmark::kMillisecond)->UseManualTime();
 
