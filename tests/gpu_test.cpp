@@ -184,6 +184,17 @@ TEST(HalfTexel, FaintLightStaysLightAfterRounding) {
   EXPECT_GT(plain_rounding_beyond_locus, 0);
 }
 
+// Earth with other values and the same structure: a longer Rayleigh scale
+// height, another ground albedo, sun and top radius.
+atmos::Atmosphere other_earth_values(const atmos::Atmosphere& earth) {
+  atmos::Atmosphere other = earth;
+  other.constituents[0].density.scale_height_m *= 1.2;
+  other.ground_albedo = atmos::Spectrum::constant(0.31);
+  other.sun_angular_radius_rad *= 1.1;
+  other.top_radius_m += 5e3;
+  return other;
+}
+
 struct Difference {
   double max_relative = 0.0;  // max over pixels of |gpu - cpu| / scale
   double rms_relative = 0.0;
@@ -410,6 +421,30 @@ TEST_F(Gpu, WarpedMuAxisMatchesCpu) {
   ASSERT_GT(params.scattering_r_optical_depth_weight, 0.4f);
   atmos::Renderer renderer(dense, tables, TexturePrecision::full);
   expect_gpu_matches_cpu(renderer, dense, tables, "warped axes vs cpu", 2e-3, 4e-3);
+}
+
+// A renderer of an atmosphere that differs from Earth in values only
+// draws with the programs of Earth's renderer (gpu::shared_program): it
+// links none, and its image matches its own CPU twin within the bounds of
+// FullPrecisionMatchesCpu (the first scene's), not Earth's image.
+TEST_F(Gpu, RendererOfTheSameStructureLinksNoProgram) {
+  const Scene scene = scenes().front();
+  atmos::Renderer earth(*earth_, *tables_, TexturePrecision::full);
+  const Image earth_image = earth.render(scene.camera, scene.sun);
+  const atmos::Atmosphere other = other_earth_values(*earth_);
+  atmos::PrecomputeOptions options;
+  options.sizes = atmos_test::small_gpu_sizes();
+  const atmos::Tables tables = atmos::precompute_tables(other, options);
+  const long linked = atmos::gpu::linked_program_count();
+  atmos::Renderer renderer(other, tables, TexturePrecision::full);
+  const Image gpu = renderer.render(scene.camera, scene.sun);
+  EXPECT_EQ(atmos::gpu::linked_program_count(), linked);
+  ASSERT_TRUE(all_finite(gpu));
+  const Difference twin = compare(gpu, atmos::render_cpu(other, tables, scene.camera, scene.sun));
+  report(scene.name, "other values vs cpu", twin);
+  EXPECT_LE(twin.max_relative, kGroundMaxRelative);
+  EXPECT_LE(twin.rms_relative, kRmsRelative);
+  EXPECT_GT(compare(earth_image, gpu).rms_relative, 10.0 * kRmsRelative);
 }
 
 TEST_F(Gpu, HalfPrecisionMatchesCpu) {
@@ -743,17 +778,6 @@ TEST(ShaderSource, FloatLiteralsAreGlslFloats) {
   EXPECT_EQ(std::stof(atmos::gpu::glsl_float(0.1f)), 0.1f);
   EXPECT_THROW(atmos::gpu::glsl_float(std::numeric_limits<float>::quiet_NaN()), atmos::Error);
   EXPECT_THROW(atmos::gpu::glsl_float(std::numeric_limits<float>::infinity()), atmos::Error);
-}
-
-// Earth with other values and the same structure: a longer Rayleigh scale
-// height, another ground albedo, sun and top radius.
-atmos::Atmosphere other_earth_values(const atmos::Atmosphere& earth) {
-  atmos::Atmosphere other = earth;
-  other.constituents[0].density.scale_height_m *= 1.2;
-  other.ground_albedo = atmos::Spectrum::constant(0.31);
-  other.sun_angular_radius_rad *= 1.1;
-  other.top_radius_m += 5e3;
-  return other;
 }
 
 // The programs' text depends on the atmosphere's structure alone
