@@ -892,7 +892,10 @@ void put_params(AtmosphereParams a) {
   put(a.bottom_radius); put(a.top_radius); put(float(a.constituent_count));
   for (int i = 0; i < MAX_CONSTITUENTS; ++i) {
     put(a.density[i].scale_height); put(float(a.density[i].knot_count));
-    for (int k = 0; k < MAX_DENSITY_KNOTS; ++k) { put(a.density[i].knot_altitude[k]); put(a.density[i].knot_density[k]); }
+    for (int k = 0; k < MAX_DENSITY_KNOTS; ++k) {
+      put(a.density[i].knot_altitude[k]);
+      put(a.density[i].knot_density[k]);
+    }
     put3(a.scattering[i]); put3(a.absorption[i]); put(float(a.is_aerosol[i]));
   }
   put(float(a.aerosol_phase_kind)); put3(a.aerosol_g); put3(a.aerosol_g_back); put3(a.aerosol_forward_weight);

@@ -141,9 +141,9 @@ class Renderer {
   // spectral) and the atmosphere's parameters; its shaders depend on the
   // atmosphere's structure alone and are shared with any Renderer or
   // AtmospherePass of the same structure in the context's share group (see
-  // AtmospherePass::glsl_library), else linked at their first use. Throws atmos::Error without a current OpenGL 4.5 context, on
-  // mismatched tables or on shader compile/link errors (with the first lines
-  // of the info log).
+  // AtmospherePass::glsl_library), else linked at their first use. Throws
+  // atmos::Error without a current OpenGL 4.5 context, on mismatched tables
+  // or on shader compile/link errors (with the first lines of the info log).
   Renderer(const Atmosphere& atmosphere, const Tables& tables, TexturePrecision precision = TexturePrecision::full);
   ~Renderer();
   Renderer(const Renderer&) = delete;

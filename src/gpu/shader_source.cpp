@@ -74,7 +74,9 @@ class BlockWriter {
   // mapping off): zero is a literal, which the compiler folds, and belongs
   // to the atmosphere's structure; any other value is read from the block.
   std::string value_or_zero(float v) { return v == 0.0f ? "0.0" : value(v); }
-  std::string vec3(const physics::vec3& v) { return "vec3(" + value(v.x) + ", " + value(v.y) + ", " + value(v.z) + ")"; }
+  std::string vec3(const physics::vec3& v) {
+    return "vec3(" + value(v.x) + ", " + value(v.y) + ", " + value(v.z) + ")";
+  }
   // A constituent's coefficients: a literal when all three are zero (an
   // absorber that does not scatter, a scatterer that does not absorb), so
   // that the compiler drops their terms from the medium's sums.
@@ -170,7 +172,8 @@ ParameterBlock parameter_block(const physics::AtmosphereParams& params, const ph
                "mat3 atmos_radiance_to_srgb() { return " + matrix + "; }\n" +
                "AtmosphereParams atmos_atmosphere() {\n  return " + atmosphere + ";\n}\n" +
                "SpectralSets atmos_spectral_sets() {\n  return SpectralSets(" + glsl_int(n) + ",\n" + sets + ",\n" +
-               to_channels + ");\n}\n" + "#define ATMOSPHERE atmos_atmosphere()\n#define SPECTRAL atmos_spectral_sets()\n";
+               to_channels + ");\n}\n" +
+               "#define ATMOSPHERE atmos_atmosphere()\n#define SPECTRAL atmos_spectral_sets()\n";
   block.values = std::move(w.values);
   block.values.resize(elements * 4, 0.0f);
   return block;
