@@ -2,7 +2,7 @@
 # Installs what is needed, builds with warnings as errors, and runs a tier of
 # the tests (CTest, one test per GoogleTest suite; tests/CMakeLists.txt):
 #
-#   bash scripts/test.sh          the default tier (under 30 minutes from a
+#   bash scripts/test.sh          the default tier (about 18 minutes from a
 #                                 fresh clone on 2 cores): the unit tests
 #                                 (invariants, fast paths against the shared
 #                                 definitions, cache, post, globe) built with
@@ -100,7 +100,7 @@ sanitize_labels=(-L '^unit$' -L "^$tier$")
 #    globe's and the sea's, which other suites run here (Tables, Spectral,
 #    SpectralSky..., Relief, GlobeMesh, GlobeLod, GlobeStreaming, WaterFresnel,
 #    WaterGlint, WaterColumn...);
-#  - the random sweep's 500 runs (SweepLong);
+#  - the random sweep's 250 runs (SweepLong);
 #  - the streamed descent onto Mars (GlobeStreamingMars; here the same
 #    streaming on Earth, GlobeStreaming, and the Mars relief in the Relief
 #    and GlobeMesh suites);
