@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 namespace atmos_test {
 
@@ -41,6 +42,33 @@ inline GLuint fullscreen_program(const std::string& fragment) {
   glGetProgramiv(program, GL_LINK_STATUS, &linked);
   if (!linked) ADD_FAILURE() << "the test program does not link";
   return program;
+}
+
+// Draws `program` (fullscreen_program's) over a new width x height RGBA32F
+// target, depth test and blending off, and returns its texels (RGBA, rows
+// bottom-up). The caller sets the program's uniforms and binds its textures.
+inline std::vector<float> draw_fullscreen(GLuint program, int width, int height) {
+  GLuint target = 0, framebuffer = 0, vao = 0;
+  glCreateTextures(GL_TEXTURE_2D, 1, &target);
+  glTextureStorage2D(target, 1, GL_RGBA32F, width, height);
+  glCreateFramebuffers(1, &framebuffer);
+  glNamedFramebufferTexture(framebuffer, GL_COLOR_ATTACHMENT0, target, 0);
+  glCreateVertexArrays(1, &vao);
+  glUseProgram(program);
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+  glViewport(0, 0, width, height);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_BLEND);
+  glBindVertexArray(vao);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  std::vector<float> texels(size_t(width) * size_t(height) * 4);
+  glGetTextureImage(target, 0, GL_RGBA, GL_FLOAT, GLsizei(texels.size() * sizeof(float)), texels.data());
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  glBindVertexArray(0);
+  glDeleteVertexArrays(1, &vao);
+  glDeleteFramebuffers(1, &framebuffer);
+  glDeleteTextures(1, &target);
+  return texels;
 }
 
 }  // namespace atmos_test

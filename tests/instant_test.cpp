@@ -327,12 +327,6 @@ void main() {
   GLint linked = 0;
   glGetProgramiv(program, GL_LINK_STATUS, &linked);
   ASSERT_TRUE(linked);
-  GLuint target = 0, framebuffer = 0, vao = 0;
-  glCreateTextures(GL_TEXTURE_2D, 1, &target);
-  glTextureStorage2D(target, 1, GL_RGBA32F, 1, 1);
-  glCreateFramebuffers(1, &framebuffer);
-  glNamedFramebufferTexture(framebuffer, GL_COLOR_ATTACHMENT0, target, 0);
-  glCreateVertexArrays(1, &vao);
 
   const glm::dvec3 up = glm::normalize(glm::dvec3(0.3, 0.2, 0.93));
   const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0.0, 0.0, 1.0), up));
@@ -357,22 +351,13 @@ void main() {
     const bool sky = t < 0.0;
     EXPECT_EQ(sky, down_deg < 19.5) << down_deg;
     const glm::vec3 offset(shot.forward * (sky ? 1.0 : t));
-    glUseProgram(program);
     glProgramUniform3f(program, 0, float(shot.camera.x), float(shot.camera.y), float(shot.camera.z));
     const glm::vec3 sun(shot.sun);
     glProgramUniform3f(program, 1, sun.x, sun.y, sun.z);
     glProgramUniform3f(program, 2, offset.x, offset.y, offset.z);
     glProgramUniform1i(program, 3, sky ? 1 : 0);
     pass_->bind_textures(20);
-    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
-    glViewport(0, 0, 1, 1);
-    glDisable(GL_DEPTH_TEST);
-    glDisable(GL_BLEND);
-    glBindVertexArray(vao);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    float pixel[4] = {0, 0, 0, 0};
-    glReadPixels(0, 0, 1, 1, GL_RGBA, GL_FLOAT, pixel);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    const std::vector<float> pixel = atmos_test::draw_fullscreen(program, 1, 1);
     const glm::vec3 from_library(pixel[0], pixel[1], pixel[2]);
     const double difference =
         glm::length(glm::dvec3(from_library) - glm::dvec3(from_pass[0])) / luminance(from_pass[0]);
@@ -381,9 +366,6 @@ void main() {
     EXPECT_EQ(pixel[3], 1.0f) << down_deg << ": an irradiance, transmittance or radiance was not positive";
     worst = std::max(worst, difference);
   }
-  glDeleteFramebuffers(1, &framebuffer);
-  glDeleteTextures(1, &target);
-  glDeleteVertexArrays(1, &vao);
   glDeleteProgram(program);
   atmos_test::record_figure("instant GLSL library against the pass from 400 km: relative difference", worst, "",
                             "<= 1e-3");

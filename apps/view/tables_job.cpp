@@ -161,12 +161,29 @@ void TableJob::run() {
       step_ = step;
       fraction_ = fraction;
     };
+    // Whether tables of this request would still be shown (the viewer is
+    // not closing, no newer request supersedes them).
+    const auto shown = [this] {
+      std::lock_guard<std::mutex> lock(mutex_);
+      return !stop_ && !waiting_;
+    };
+    // Draws tables once in the warm-up's own context, so that their first
+    // frame on screen finds its programs compiled (TableJob::WarmUp).
+    const auto warm = [&](const PlanetTables& t) {
+      if (!warm_up || !warm_up_ || !shown()) return;
+      progress("compiling the shaders", -1.0);
+      arena.execute([&] {
+        try {
+          warm_up_(t);
+        } catch (const std::exception&) {
+        }
+      });
+    };
     // The instant mode's tables first, shown instead of the old ones while
     // the exact ones are computed (not when those are in the cache: reading
     // them is as quick; nor for the first tables, warm_up false, which
-    // nothing on screen waits for). Their programs are linked by the scene
-    // on the viewer's side; an error here is the exact tables' too, which
-    // report it below.
+    // nothing on screen waits for). An error here is the exact tables' too,
+    // which report it below.
     if (instant_preview_ && warm_up) {
       progress("instant approximation", -1.0);
       std::optional<PlanetTables> preview;
@@ -176,6 +193,7 @@ void TableJob::run() {
         } catch (const std::exception&) {
         }
       });
+      if (preview) warm(*preview);
       std::lock_guard<std::mutex> lock(mutex_);
       if (preview && !stop_ && !waiting_) result_ = std::move(preview);
       step_.clear();
@@ -189,22 +207,7 @@ void TableJob::run() {
         error = e.what();
       }
     });
-    // No warm-up for tables that will not be shown (the viewer is closing,
-    // or a newer request supersedes them).
-    bool shown = true;
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      shown = !stop_ && !waiting_;
-    }
-    if (tables && warm_up && warm_up_ && shown) {
-      progress("compiling the shaders", -1.0);
-      arena.execute([&] {
-        try {
-          warm_up_(*tables);
-        } catch (const std::exception&) {
-        }
-      });
-    }
+    if (tables) warm(*tables);
     std::lock_guard<std::mutex> lock(mutex_);
     busy_ = false;
     // A newer request supersedes these tables: they are dropped unseen.
