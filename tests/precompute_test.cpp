@@ -525,9 +525,14 @@ class Cache : public ::testing::Test {
   atmos::Atmosphere earth;
 };
 
+// The first call computes and stores the tables at tables_cache_path (not
+// there before), the second reads them back.
 TEST_F(Cache, ComputesThenHits) {
+  const std::string path = atmos::tables_cache_path(earth, options, dir.string());
+  EXPECT_FALSE(std::filesystem::exists(path));
   const auto first = atmos::load_or_precompute_tables(earth, options, dir.string());
   EXPECT_EQ(first.status, atmos::CacheStatus::computed);
+  EXPECT_EQ(first.path, path);
   EXPECT_TRUE(std::filesystem::exists(first.path));
   const auto second = atmos::load_or_precompute_tables(earth, options, dir.string());
   EXPECT_EQ(second.status, atmos::CacheStatus::hit);
