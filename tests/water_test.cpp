@@ -894,24 +894,12 @@ void main() {
   glGetProgramiv(program, GL_LINK_STATUS, &linked);
   ASSERT_TRUE(linked);
 
-  GLuint target = 0, framebuffer = 0, vao = 0;
-  glCreateTextures(GL_TEXTURE_2D, 1, &target);
-  glTextureStorage2D(target, 1, GL_RGBA32F, kTwinWidth, kTwinHeight);
-  glCreateFramebuffers(1, &framebuffer);
-  glNamedFramebufferTexture(framebuffer, GL_COLOR_ATTACHMENT0, target, 0);
-  glCreateVertexArrays(1, &vao);
-  glUseProgram(program);
-  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
-  glViewport(0, 0, kTwinWidth, kTwinHeight);
-  glBindVertexArray(vao);
   const char* names[] = {"glint BRDF",      "sky reflectance", "mean sky direction", "water-leaving radiance",
                          "Fresnel",         "water-leaving radiance at 15 wavelengths",
                          "glint at 15 wavelengths"};
   for (int which = 0; which < 7; ++which) {
     glProgramUniform1i(program, 0, which);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    std::vector<float> pixels(size_t(kTwinWidth * kTwinHeight * 4));
-    glReadPixels(0, 0, kTwinWidth, kTwinHeight, GL_RGBA, GL_FLOAT, pixels.data());
+    const std::vector<float> pixels = atmos_test::draw_fullscreen(program, kTwinWidth, kTwinHeight);
     double worst = 0.0, largest = 0.0;
     for (int y = 0; y < kTwinHeight; ++y) {
       for (int x = 0; x < kTwinWidth; ++x) {
@@ -953,10 +941,6 @@ void main() {
     std::printf("GPU vs CPU, %s: worst relative difference %.2e (largest value %.3g)\n", names[which], worst, largest);
     EXPECT_GT(largest, 0.0) << names[which];
   }
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  glDeleteFramebuffers(1, &framebuffer);
-  glDeleteTextures(1, &target);
-  glDeleteVertexArrays(1, &vao);
   glDeleteProgram(program);
 }
 
