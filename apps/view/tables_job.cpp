@@ -24,8 +24,12 @@ double now_s() {
 
 namespace {
 
-// The planet of `params` without its tables: its atmosphere, its surface
-// and the pass's air.
+std::string cache_directory(const CacheConfig& cache) {
+  return cache.directory.empty() ? atmos::default_cache_directory() : cache.directory;
+}
+
+}  // namespace
+
 PlanetTables load_planet(const PlanetParams& params, bool globe) {
   PlanetTables out;
   out.params = params;
@@ -39,38 +43,39 @@ PlanetTables load_planet(const PlanetParams& params, bool globe) {
   return out;
 }
 
-std::string cache_directory(const CacheConfig& cache) {
-  return cache.directory.empty() ? atmos::default_cache_directory() : cache.directory;
+void load_tables(PlanetTables& planet, bool ground_albedo_response, const CacheConfig& cache,
+                 const std::function<void(const std::string&, double)>& progress) {
+  const double start = now_s();
+  atmos::PrecomputeOptions options = make_precompute_options(planet.params, ground_albedo_response);
+  options.progress = progress;
+  if (cache.disabled) {
+    planet.tables = atmos::precompute_tables(planet.air, options);
+    planet.status = "computed (cache disabled)";
+  } else {
+    atmos::CacheResult r = atmos::load_or_precompute_tables(planet.air, options, cache_directory(cache));
+    planet.status = r.status == atmos::CacheStatus::hit ? "loaded from the cache" : "computed and cached";
+    planet.tables = std::move(r.tables);
+  }
+  planet.seconds = now_s() - start;
 }
-
-}  // namespace
 
 PlanetTables load_planet_tables(const PlanetParams& params, bool globe, bool ground_albedo_response,
                                 const CacheConfig& cache,
                                 const std::function<void(const std::string&, double)>& progress) {
   const double start = now_s();
   PlanetTables out = load_planet(params, globe);
-  atmos::PrecomputeOptions options = make_precompute_options(params, globe && ground_albedo_response);
-  options.progress = progress;
-  if (cache.disabled) {
-    out.tables = atmos::precompute_tables(out.air, options);
-    out.status = "computed (cache disabled)";
-  } else {
-    atmos::CacheResult r = atmos::load_or_precompute_tables(out.air, options, cache_directory(cache));
-    out.status = r.status == atmos::CacheStatus::hit ? "loaded from the cache" : "computed and cached";
-    out.tables = std::move(r.tables);
-  }
+  load_tables(out, globe && ground_albedo_response, cache, progress);
   out.seconds = now_s() - start;
   return out;
 }
 
-std::optional<PlanetTables> instant_planet_tables(const PlanetParams& params, bool globe, bool ground_albedo_response,
-                                                  const CacheConfig& cache) {
+std::optional<PlanetTables> instant_preview(const PlanetTables& planet, bool ground_albedo_response,
+                                            const CacheConfig& cache) {
   const double start = now_s();
-  PlanetTables out = load_planet(params, globe);
-  const atmos::PrecomputeOptions options = make_precompute_options(params, globe && ground_albedo_response);
-  if (!cache.disabled && std::filesystem::exists(atmos::tables_cache_path(out.air, options, cache_directory(cache))))
+  const atmos::PrecomputeOptions options = make_precompute_options(planet.params, ground_albedo_response);
+  if (!cache.disabled && std::filesystem::exists(atmos::tables_cache_path(planet.air, options, cache_directory(cache))))
     return std::nullopt;
+  PlanetTables out = planet;
   out.instant = atmos::compute_instant_tables(out.air, options.sizes);
   out.status = "instant approximation (exact tables being computed)";
   out.seconds = now_s() - start;
@@ -179,31 +184,39 @@ void TableJob::run() {
         }
       });
     };
-    // The instant mode's tables first, shown instead of the old ones while
-    // the exact ones are computed (not when those are in the cache: reading
-    // them is as quick; nor for the first tables, warm_up false, which
-    // nothing on screen waits for). An error here is the exact tables' too,
-    // which report it below.
-    if (instant_preview_ && warm_up) {
-      progress("instant approximation", -1.0);
-      std::optional<PlanetTables> preview;
-      arena.execute([&] {
-        try {
-          preview = instant_planet_tables(params, globe_, ground_albedo_response_, cache_);
-        } catch (const std::exception&) {
-        }
-      });
-      if (preview) warm(*preview);
-      std::lock_guard<std::mutex> lock(mutex_);
-      if (preview && !stop_ && !waiting_) result_ = std::move(preview);
-      step_.clear();
-    }
+    // The planet without its tables (its surface's rasters read once for
+    // both kinds of tables), then the instant mode's tables first, shown
+    // instead of the old ones while the exact ones are computed (not when
+    // those are in the cache: reading them is as quick; nor for the first
+    // tables, warm_up false, which nothing on screen waits for). An error of
+    // the preview is the exact tables' too, which report it.
+    const bool response = globe_ && ground_albedo_response_;
     std::optional<PlanetTables> tables;
     std::optional<std::string> error;
     arena.execute([&] {
       try {
-        tables = load_planet_tables(params, globe_, ground_albedo_response_, cache_, progress);
+        const double start = now_s();
+        tables = load_planet(params, globe_);
+        const double planet_s = now_s() - start;
+        if (instant_preview_ && warm_up) {
+          progress("instant approximation", -1.0);
+          std::optional<PlanetTables> preview;
+          try {
+            preview = instant_preview(*tables, response, cache_);
+          } catch (const std::exception&) {
+          }
+          if (preview) {
+            preview->seconds += planet_s;
+            warm(*preview);
+            std::lock_guard<std::mutex> lock(mutex_);
+            if (!stop_ && !waiting_) result_ = std::move(preview);
+            step_.clear();
+          }
+        }
+        load_tables(*tables, response, cache_, progress);
+        tables->seconds += planet_s;
       } catch (const std::exception& e) {
+        tables.reset();
         error = e.what();
       }
     });

@@ -34,11 +34,18 @@ PlanetTables load_planet_tables(const PlanetParams& params, bool globe, bool gro
                                 const CacheConfig& cache,
                                 const std::function<void(const std::string&, double)>& progress = {});
 
-// The planet of `params` with the instant mode's tables (Hillaire 2020,
+// The planet of `params` without its tables (`tables` empty): its
+// atmosphere, its surface (with `globe`) and the pass's air. Throws
+// atmos::Error for bad parameters or an unreadable planet file.
+PlanetTables load_planet(const PlanetParams& params, bool globe);
+// Its exact tables, from the cache or computed (load_planet_tables).
+void load_tables(PlanetTables& planet, bool ground_albedo_response, const CacheConfig& cache,
+                 const std::function<void(const std::string&, double)>& progress = {});
+// A copy of `planet` with the instant mode's tables (Hillaire 2020,
 // atmos::compute_instant_tables: a fraction of a second), or nothing when
-// its exact tables are in the cache. Throws as load_planet_tables.
-std::optional<PlanetTables> instant_planet_tables(const PlanetParams& params, bool globe, bool ground_albedo_response,
-                                                  const CacheConfig& cache);
+// its exact tables are in the cache.
+std::optional<PlanetTables> instant_preview(const PlanetTables& planet, bool ground_albedo_response,
+                                            const CacheConfig& cache);
 
 class TableJob {
  public:
@@ -52,7 +59,7 @@ class TableJob {
 
   // `instant_preview`: each request made with `warm_up` (tables that
   // replace others on screen) first hands over the instant mode's tables
-  // (instant_planet_tables), then the exact ones.
+  // (instant_preview), then the exact ones.
   TableJob(CacheConfig cache, bool globe, bool ground_albedo_response, int threads, WarmUp warm_up = {},
            bool instant_preview = false);
   // Waits for the tables being computed (the precomputation cannot be
