@@ -45,4 +45,15 @@ class EarthGpuTest : public ::testing::Test {
   static inline std::string error_;
 };
 
+// Earth with other values and the same structure (the same programs): a
+// longer Rayleigh scale height, another ground albedo, sun and top radius.
+inline atmos::Atmosphere other_earth_values(const atmos::Atmosphere& earth) {
+  atmos::Atmosphere other = earth;
+  other.constituents[0].density.scale_height_m *= 1.2;
+  other.ground_albedo = atmos::Spectrum::constant(0.31);
+  other.sun_angular_radius_rad *= 1.1;
+  other.top_radius_m += 5e3;
+  return other;
+}
+
 }  // namespace atmos_test

@@ -314,11 +314,7 @@ TEST_F(Plugin, AtmosphereOfTheSameStructureLinksNoProgram) {
   const Shot shot = comparison_shots().front().second;
   EngineFrame first = make_engine_frame(shot), second = make_engine_frame(shot), third = make_engine_frame(shot);
   const std::vector<glm::vec3> earth = run(first);
-  atmos::Atmosphere other = *earth_;
-  other.constituents[0].density.scale_height_m *= 1.2;
-  other.ground_albedo = atmos::Spectrum::constant(0.31);
-  other.sun_angular_radius_rad *= 1.1;
-  other.top_radius_m += 5e3;
+  const atmos::Atmosphere other = atmos_test::other_earth_values(*earth_);
   atmos::PrecomputeOptions options;
   options.sizes = atmos_test::small_gpu_sizes();
   const atmos::Tables tables = atmos::precompute_tables(other, options);
