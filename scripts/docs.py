@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Writes the documents whose numbers are measured: docs/accuracy.md,
-docs/performance.md and the headline figures of README.md.
+docs/performance.md, docs/instant.md and the headline figures of README.md.
 
 Each comes from a template in docs/templates/ (hand-written prose with
 placeholders) and from the output of a run:
@@ -59,6 +59,7 @@ README_END = "<!-- figures:end -->"
 OUTPUTS = [
     ("docs/templates/accuracy.md.in", "docs/accuracy.md"),
     ("docs/templates/performance.md.in", "docs/performance.md"),
+    ("docs/templates/instant.md.in", "docs/instant.md"),
 ]
 README_TEMPLATE = "docs/templates/README-figures.md.in"
 

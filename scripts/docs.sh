@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# Regenerates the measured documents (docs/accuracy.md, docs/performance.md
-# and README.md's headline figures) from a run: builds if needed, runs the
-# tests whose figures the templates in docs/templates/ quote (with
+# Regenerates the measured documents (docs/accuracy.md, docs/performance.md,
+# docs/instant.md and README.md's headline figures) from a run: builds if
+# needed, runs the tests whose figures the templates in docs/templates/ quote (with
 # ATMOS_FIGURES_FILE set: tests/figures.hpp) and `atmos bench`, then
 # scripts/docs.py. The run's raw output stays in <build>/docs-run/.
 #

@@ -125,6 +125,7 @@ SkyError earth_sky_error(const char* name, const atmos::Atmosphere& earth, const
   std::fflush(stdout);
   atmos_test::record_figure(std::string("instant RMS, ") + config, 100.0 * out.rms, "%", "");
   atmos_test::record_figure(std::string("instant max, ") + config, 100.0 * out.worst, "%", "");
+  atmos_test::record_figure(std::string("instant mean, ") + config, 100.0 * out.mean, "%", "");
   if (exact != nullptr)
     atmos_test::record_figure(std::string("exact tables RMS, ") + config, 100.0 * out.exact_rms, "%", "");
   EXPECT_GE(counted, 10);
@@ -214,6 +215,7 @@ TEST(InstantAccuracy, MarsDust) {
                               "");
     atmos_test::record_figure(std::string("instant RMS beyond 20 deg of the sun, ") + config, 100.0 * far_rms, "%",
                               "");
+    atmos_test::record_figure(std::string("instant max, ") + config, 100.0 * worst, "%", "");
     EXPECT_LE(near_rms, b.near) << b.sun;
     EXPECT_LE(far_rms, b.far) << b.sun;
   }
