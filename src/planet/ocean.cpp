@@ -31,7 +31,7 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kGravity = 9.81;  // m s^-2, the waves' dispersion ω² = g k (deep water)
-constexpr int kMaxWaves = 32;      // OCEAN_MAX_WAVES of ocean.frag.glsl
+constexpr int kMaxWaves = 32;      // OCEAN_MAX_WAVES of ocean_waves.glsl
 constexpr int kSkyMapSize = 64;    // OCEAN_SKY_MAP_SIZE of ocean_light_maps.glsl
 constexpr int kLightMapSize = 512; // OCEAN_LIGHT_MAP_SIZE
 constexpr int kReflectanceMapSize = 32;  // OCEAN_REFLECTANCE_MAP_SIZE
@@ -43,13 +43,6 @@ constexpr const char* kConstantSetCount = "#define WATER_SET_COUNT(w) SPECTRAL_S
 
 // set_ocean_terms (ocean_internal.hpp).
 std::atomic<unsigned> terms_drawn{planet::kOceanAllTerms};
-
-// One sine wave of the sea's height: along the direction at `angle` from
-// the upwind axis, wavenumber k (rad/m), amplitude (m), angular frequency
-// (rad/s) and phase (rad).
-struct Wave {
-  double angle = 0.0, k = 0.0, amplitude = 0.0, omega = 0.0, phase = 0.0;
-};
 
 // The waves of a wind of speed U (m/s) whose slope variance along and
 // across the wind stays within `budget` (Cox & Munk's; the waves take at
@@ -70,8 +63,8 @@ struct Wave {
 // at the first one a pixel filters out). Directions: the cos² spreading about the wind (Longuet-Higgins et al.
 // 1963's cos^2s with s = 1), each band's angle from the spreading's
 // inverse distribution at a golden-ratio sequence, on alternate sides.
-std::vector<Wave> make_waves(double wind_speed, glm::dvec2 budget) {
-  std::vector<Wave> waves;
+std::vector<planet::OceanWave> make_waves(double wind_speed, glm::dvec2 budget) {
+  std::vector<planet::OceanWave> waves;
   if (!(wind_speed > 0.5)) return waves;  // calm: the slopes are all the BRDF's
   const double omega_0 = kGravity / wind_speed;
   const double omega_p = std::pow(0.8 * 0.74, 0.25) * omega_0;
@@ -82,7 +75,7 @@ std::vector<Wave> make_waves(double wind_speed, glm::dvec2 budget) {
     const double lo = omega_lo * std::exp(step * i), hi = omega_lo * std::exp(step * (i + 1));
     const double omega = std::sqrt(lo * hi);
     const double s = 8.1e-3 * kGravity * kGravity * std::pow(omega, -5.0) * std::exp(-0.74 * std::pow(omega_0 / omega, 4.0));
-    Wave w;
+    planet::OceanWave w;
     w.omega = omega;
     w.k = omega * omega / kGravity;
     w.amplitude = std::sqrt(2.0 * s * (hi - lo));
@@ -100,7 +93,7 @@ std::vector<Wave> make_waves(double wind_speed, glm::dvec2 budget) {
     waves.push_back(w);
   }
   const double scale = std::min({1.0, 0.8 * budget.x / variance.x, 0.8 * budget.y / variance.y});
-  for (Wave& w : waves) w.amplitude *= std::sqrt(scale);
+  for (planet::OceanWave& w : waves) w.amplitude *= std::sqrt(scale);
   return waves;
 }
 
@@ -125,7 +118,7 @@ struct OceanProgram {
   GLint clip = -1, inverse = -1, viewport = -1, camera = -1, up = -1, radius = -1, height_term = -1,
         pixel_angle = -1, sun = -1, light = -1, refractive = -1, absorption = -1, backscattering = -1,
         diffuse = -1, slope_variance = -1, upwind = -1, wave_count = -1, wave_vector = -1, wave_in_wind = -1,
-        wave_phase = -1,
+        wave_phase = -1, sea_radius = -1,
         bathymetry = -1, sky_map = -1, light_map = -1, reflectance_map = -1, below_map = -1, deep = -1, sea_level = -1, seabed = -1, moon_count = -1,
         moon_spheres = -1, terms = -1, lakes = -1, eclipse_top_radius = -1, star_count = -1, star_directions = -1,
         star_irradiances = -1;
@@ -151,6 +144,7 @@ struct OceanProgram {
     wave_vector = at("wave_vector");
     wave_in_wind = at("wave_in_wind");
     wave_phase = at("wave_phase");
+    sea_radius = at("sea_radius");
     bathymetry = at("bathymetry");
     sky_map = at("sky_map");
     light_map = at("light_map");
@@ -214,6 +208,34 @@ void require_range(double value, double lo, double hi, const char* name) {
 
 namespace planet {
 void set_ocean_terms(unsigned mask) { terms_drawn.store(mask, std::memory_order_relaxed); }
+
+std::vector<OceanWave> make_ocean_waves(double wind_speed_m_s, glm::dvec2 slope_variance) {
+  return make_waves(wind_speed_m_s, slope_variance);
+}
+
+void ocean_wind_axes(const glm::dvec3& nadir, double wind_azimuth_deg, glm::dvec3& upwind, glm::dvec3& crosswind) {
+  glm::dvec3 east = glm::cross(glm::dvec3(0.0, 0.0, 1.0), nadir);
+  if (glm::length(east) < 1e-6) east = glm::cross(glm::dvec3(0.0, 1.0, 0.0), nadir);
+  east = glm::normalize(east);
+  const glm::dvec3 north = glm::cross(nadir, east);
+  const double azimuth = wind_azimuth_deg * kPi / 180.0;
+  upwind = std::cos(azimuth) * north + std::sin(azimuth) * east;
+  crosswind = glm::cross(nadir, upwind);
+}
+
+void set_ocean_wave_uniforms(const std::vector<OceanWave>& waves, const glm::dvec3& upwind,
+                             const glm::dvec3& crosswind, const glm::dvec3& camera_m, double time_s,
+                             OceanWaveField& field) {
+  field.wave_count = int(std::min(waves.size(), size_t(OceanWaveField::kMaxWaves)));
+  for (size_t i = 0; i < size_t(field.wave_count); ++i) {
+    const OceanWave& w = waves[i];
+    const glm::dvec3 k = w.k * (std::cos(w.angle) * upwind + std::sin(w.angle) * crosswind);
+    field.wave_vector[i] = glm::dvec4(k, w.amplitude);
+    field.wave_in_wind[i] = glm::dvec4(w.k * std::cos(w.angle), w.k * std::sin(w.angle), w.k, w.amplitude);
+    const double phase = glm::dot(k, camera_m) + w.phase - w.omega * time_s;
+    field.wave_phase[i] = phase - 2.0 * kPi * std::floor(phase / (2.0 * kPi));
+  }
+}
 }  // namespace planet
 
 // The water levels an ocean draws: the sea, and the lakes of the surface's
@@ -234,7 +256,7 @@ struct Ocean::Impl {
   WaterOptics water;
   // The water at every working wavelength, in the atmosphere's triples.
   WaterTriples spectrum;
-  std::vector<Wave> waves;
+  std::vector<planet::OceanWave> waves;
   // The waves' anchor: the unit direction of the sea below the camera where
   // the wind's frame was last set, and that frame (upwind, crosswind).
   bool anchored = false;
@@ -284,6 +306,7 @@ struct Ocean::Impl {
         "ocean", std::string("#version 450 core\n") + planet::shader_text("ocean", "src/planet/ocean.vert.glsl"),
         head + pass->glsl_library(settings.first_unit) + "\n" + planet::shader_text("ocean", "src/physics/water.glsl") +
             "\n" + planet::shader_text("ocean", "src/planet/ocean_light_maps.glsl") + "\n" +
+            planet::shader_text("ocean", "src/planet/ocean_waves.glsl") + "\n" +
             planet::shader_text("ocean", "src/planet/ocean.frag.glsl"));
     p.locate();
     glProgramUniform1i(p.id, p.bathymetry, settings.first_unit + 5);
@@ -451,13 +474,7 @@ struct Ocean::Impl {
     if (anchored && glm::dot(nadir, anchor) > std::cos(0.5 * kPi / 180.0)) return;
     anchored = true;
     anchor = nadir;
-    glm::dvec3 east = glm::cross(glm::dvec3(0.0, 0.0, 1.0), nadir);
-    if (glm::length(east) < 1e-6) east = glm::cross(glm::dvec3(0.0, 1.0, 0.0), nadir);
-    east = glm::normalize(east);
-    const glm::dvec3 north = glm::cross(nadir, east);
-    const double azimuth = settings.wind_azimuth_deg * kPi / 180.0;
-    upwind = std::cos(azimuth) * north + std::sin(azimuth) * east;
-    crosswind = glm::cross(nadir, upwind);
+    planet::ocean_wind_axes(nadir, settings.wind_azimuth_deg, upwind, crosswind);
   }
 };
 
@@ -620,16 +637,14 @@ void Ocean::draw(const GlobeView& view, double time_s) {
   // The waves: world wave vectors in the anchor's wind frame, and their
   // phases at the camera, k · camera + φ − ω t, reduced in double.
   p.anchor_at(up);
+  planet::OceanWaveField field;
+  planet::set_ocean_wave_uniforms(p.waves, p.upwind, p.crosswind, camera, time_s, field);
   std::array<glm::vec4, kMaxWaves> vectors{}, in_wind{};
   std::array<float, kMaxWaves> phases{};
-  for (size_t i = 0; i < p.waves.size(); ++i) {
-    const Wave& w = p.waves[i];
-    const glm::dvec3 k = w.k * (std::cos(w.angle) * p.upwind + std::sin(w.angle) * p.crosswind);
-    vectors[i] = glm::vec4(glm::vec3(k), float(w.amplitude));
-    in_wind[i] = glm::vec4(float(w.k * std::cos(w.angle)), float(w.k * std::sin(w.angle)), float(w.k),
-                           float(w.amplitude));
-    const double phase = glm::dot(k, camera) + w.phase - w.omega * time_s;
-    phases[i] = float(phase - 2.0 * kPi * std::floor(phase / (2.0 * kPi)));
+  for (size_t i = 0; i < size_t(field.wave_count); ++i) {
+    vectors[i] = glm::vec4(field.wave_vector[i]);
+    in_wind[i] = glm::vec4(field.wave_in_wind[i]);
+    phases[i] = float(field.wave_phase[i]);
   }
 
   const unsigned terms = terms_drawn.load(std::memory_order_relaxed);
@@ -703,6 +718,7 @@ void Ocean::draw(const GlobeView& view, double time_s) {
     if (!above(level)) continue;
     const double radius = p.level_radius_m[size_t(level)];
     glUniform1f(g.height_term, float((r_c - radius) * (r_c + radius)));
+    glUniform1f(g.sea_radius, float(radius));
     glUniform1f(g.sea_level, float(p.level_height_m[size_t(level)]));
     glUniform1i(g.lakes, level == kLakes ? 1 : 0);
     glBindTextureUnit(GLuint(p.settings.first_unit + 6), p.sky_map[size_t(level)]);

@@ -79,11 +79,8 @@ uniform vec2 sea_slope_variance;  // Cox & Munk's, upwind and crosswind
 uniform WaterSpectrum sea_spectrum;
 
 uniform vec3 wind_upwind;  // unit, tangent at the waves' anchor
-#define OCEAN_MAX_WAVES 32
-uniform int wave_count;
-uniform vec4 wave_vector[OCEAN_MAX_WAVES];  // xyz: k (rad/m, planet axes), w: amplitude (m)
-uniform vec4 wave_in_wind[OCEAN_MAX_WAVES]; // xy: k along upwind and crosswind at the anchor, z: |k|, w: amplitude
-uniform float wave_phase[OCEAN_MAX_WAVES];  // k · camera + phase − ω t, modulo 2π
+// The waves (wave_count, wave_vector, wave_in_wind, wave_phase): ocean_waves.glsl.
+uniform float sea_radius;  // m: R, the level's sphere
 
 uniform samplerCube bathymetry;  // r: the ground's height (m above the datum), g: its least over 3 x 3 texels,
                                  // b: the lake mask (1 lake, 0 not)
@@ -220,12 +217,6 @@ void main() {
   float mu_v = max(dot(view, n), 1e-4);
   vec3 along = view - dot(view, n) * n;
   along = length(along) > 1e-6 ? normalize(along) : upwind;
-  vec3 across = cross(n, along);
-
-  // The resolved waves' slopes and variance.
-  float footprint = t * pixel_angle;
-  vec2 slope = vec2(0.0);
-  vec2 resolved = vec2(0.0);
   // The wave vectors' components on the local upwind and crosswind axes
   // are those at the waves' anchor (wave_in_wind, from the CPU): they
   // differ by the square of the arc from it, 1e-4 within its 0.5 degrees,
@@ -233,17 +224,37 @@ void main() {
   // out. The view's azimuth on the same axes gives the footprint's phase
   // changes.
   vec2 along_wind = vec2(dot(along, upwind), dot(along, crosswind));
-  vec2 across_wind = vec2(-along_wind.y, along_wind.x);
+  float footprint = t * pixel_angle;
+
+  // The displaced sea (ocean_waves.glsl): the waves resolved by 8 pixels
+  // or more per wavelength at the ray's sphere point displace the surface;
+  // the pixel is the first crossing of its ray with it. The weights, the
+  // frame and the lead below are the sphere point's.
+  vec3 surface_offset = offset;
+  float surface_depth = depth;
+  ocean_select_displacing_waves(footprint, mu_v, along_wind);
+  if (ocean_wave_count > 0) {
+    float t_surface;
+    if (!ocean_displaced_hit(d, b, camera_height_term, sea_radius, t_surface)) discard;
+    surface_offset = t_surface * d;
+    vec4 surface_clip = clip_from_offset * vec4(surface_offset, 1.0);
+    if (!(surface_clip.w > 0.0)) discard;
+    surface_depth = surface_clip.z / surface_clip.w;
+    point = camera_planet + surface_offset;
+  }
+
+  // The resolved waves' slopes and variance, at the surface's point.
+  vec2 slope = vec2(0.0);
+  vec2 resolved = vec2(0.0);
   for (int i = 0; i < wave_count; ++i) {
     vec4 wave = wave_in_wind[i];
     // The waves come in increasing wavenumber, and the phase change is at
     // least the footprint times |k|: once that filters a wave out, it
     // filters out the shorter ones.
     if (footprint * wave.z >= 0.5 * PI) break;
-    float ka = dot(wave.xy, along_wind) / mu_v, kb = dot(wave.xy, across_wind);
-    float w = 1.0 - smoothstep(0.25 * PI, 0.5 * PI, footprint * sqrt(ka * ka + kb * kb));
+    float w = 1.0 - smoothstep(0.25 * PI, 0.5 * PI, ocean_footprint_phase(footprint, mu_v, along_wind, wave.xy));
     float a = wave.w;
-    slope += (w * a * cos(wave_phase[i] + dot(wave_vector[i].xyz, offset))) * wave.xy;
+    slope += (w * a * cos(wave_phase[i] + dot(wave_vector[i].xyz, surface_offset))) * wave.xy;
     resolved += (w * w * 0.5 * a * a) * wave.xy * wave.xy;
   }
   WaterParams water;
@@ -386,6 +397,9 @@ void main() {
   colour = vec4(max(ATMOS_RADIANCE_TO_SRGB * radiance * light_scale, vec3(0.0)), 1.0);
   // The uniform sky's test: the rough surface's reflectance itself.
   if ((terms & 16) != 0 && (terms & 8) == 0) colour = vec4(max(sky, vec3(0.0)), 1.0);
+  // The depth: the surface's, or where a trough lies beyond the sphere,
+  // the sphere's with its lead (above), so that the terrain's flat sea on
+  // the sphere stays behind the water.
   float lead = clamp(kHeightTolerance / (t * max(dot(view, n), 1e-9)), kRelativeLead, 0.1);
-  gl_FragDepth = min(depth * (1.0 + lead), 1.0);
+  gl_FragDepth = min(max(surface_depth, depth * (1.0 + lead)), 1.0);
 }

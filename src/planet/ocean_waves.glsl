@@ -1,0 +1,272 @@
+// The sea's displaced waves, shared by the sea's fragment shader (GLSL 4.50,
+// float) and its CPU twin (planet/ocean_waves_cpp.hpp, double), written in
+// the common subset of both (functions marked INLINE, parameters IN(T) and
+// OUT(T), no swizzles): the waves' height at a point, each wave's weight
+// from its size on the screen, and the first point where a pixel's view ray
+// meets the displaced surface.
+//
+// The surface. With R the sea level's radius, p a point and
+// h(p) = Σ_i w_i a_i sin(k_i · p + φ_i − ω_i t) the displacing waves
+// (Pierson & Moskowitz 1964's bands, ocean.cpp; the wave vectors fixed in
+// the planet's frame), the sea is the implicit surface |p| − R = h(p). The
+// camera-relative form keeps float's precision near the camera: with o the
+// offset from the camera, k_i · p = k_i · camera + k_i · o, the first term
+// reduced modulo 2π in double on the CPU (wave_phase), so the
+// heights are the world's and nothing swims. Along the ray o = t d, with
+// r_c the camera's distance from the centre, b = r_c (up · d) and
+// c = r_c² − R² (from double on the CPU), the height of the ray above the
+// sphere is e(t) = q / (R + √(R² + q)), q = |p|² − R² = c + t (2b + t),
+// which has no cancellation between R and |p|.
+//
+// The crossing (relief mapping, Policarpo & Oliveira 2005, with steps
+// that cannot pass the surface, as sphere tracing's, Hart 1996).
+// g(t) = e(t) − h(t d) is positive above the sea. With A = Σ w_i a_i, the
+// sea lies between the spheres R − A and R + A: the ray enters the shell at
+// t_in (the sphere R + A; 0 if the camera is inside it) and reaches R − A
+// at t_out (or, if it misses that sphere, leaves R + A beyond its lowest
+// point). On the shell −g' ≤ L = max(−(b + t_in), 0) / (R − A) + S,
+// S = Σ w_i a_i |k_i · d| (e' = (b + t)/|p| grows along the ray and
+// |p| ≥ R − A), and |g''| ≤ M = 1/(R − A) + Σ w_i a_i (k_i · d)²
+// (e'' = (1 − e'²)/|p|). So g has no zero before t + s for the larger of
+// s = g/L and the first positive root of g + g' s − ½ M s² (Taylor's bound
+// from g and g' at t). Stepping by it never passes the first crossing: a
+// ray that grazes a crest stops on that crest rather than on the trough
+// behind it. Near a crossing the second step is a damped Newton step
+// (g/|g'| when M g ≪ g'²); where the ray passes just over a crest's top
+// (g' ≈ 0, g'' ≈ M) it is √(2g/M) and the ray leaves the crest in a few
+// steps. OCEAN_MARCH_STEPS = 10 evaluations of the waves' sum (their sines
+// and cosines) at most per pixel, fewer once g < OCEAN_HIT_TOLERANCE (1 mm;
+// one more step follows it), and only for pixels whose ray has displacing
+// waves; a ray not within 1 mm after them is taken to meet the surface
+// where it stands (the nearer side: a crest's outline widens, nothing
+// behind it shows through).
+//
+// The weights (the screen's footprint; Bruneton, Neyret & Holzschuch 2010,
+// §4, for the normals). A wave's phase changes across the pixel's
+// footprint on the sea by Δφ = t α |(k_along / μ_v, k_across)| (α the
+// pixel's angle, the footprint stretched by 1 / μ_v along the view's
+// azimuth). Sampled once per pixel, the wave's height is resolved while
+// Δφ < π (two pixels per wavelength, Nyquist); the normal, its derivative,
+// fades between Δφ = π/4 and π/2 (8 to 4 pixels per wavelength). The
+// displacement fades one octave earlier, w_i = 1 − smoothstep(π/8, π/4, Δφ)
+// (16 to 8 pixels per wavelength): where a wave stops being geometry its
+// normal is still whole, so the change is the position at which its slopes
+// are seen, not the slopes; and a wave that is geometry spans at least 8
+// pixels per wavelength, so its crests' outlines do not alias. A pixel's
+// weights are those of its ray's point on the sphere (its t and μ_v), one
+// set per ray: h is the same function of p along the whole ray, and the
+// weights change smoothly from pixel to pixel. Far away every weight is 0
+// and the surface is the sphere exactly.
+
+#if !defined(OCEAN_WAVES_CPP)
+#define OCEAN_FLOAT float
+#define OCEAN_VEC2 vec2
+#define OCEAN_VEC3 vec3
+#define OCEAN_VEC4 vec4
+#define OCEAN_MAX_WAVES 32
+// The sea's waves (ocean.cpp), in increasing wavenumber: the first
+// wave_count of wave_vector (xyz: k, rad/m, planet axes; w: the amplitude
+// a, m), wave_in_wind (xy: k along the upwind and crosswind axes at the
+// waves' anchor; z: |k|; w: a) and wave_phase (k · camera + φ − ω t,
+// modulo 2π, rad).
+uniform int wave_count;
+uniform vec4 wave_vector[OCEAN_MAX_WAVES];
+uniform vec4 wave_in_wind[OCEAN_MAX_WAVES];
+uniform float wave_phase[OCEAN_MAX_WAVES];
+// The pixel's displacing waves: the first ocean_wave_count of the sea's,
+// each with its weighted amplitude w_i a_i (m).
+float ocean_wave_amplitude[OCEAN_MAX_WAVES];
+int ocean_wave_count;
+#endif
+
+#ifndef OCEAN_MARCH_STEPS
+#define OCEAN_MARCH_STEPS 12
+#endif
+#ifndef OCEAN_SAFE_STEPS
+#define OCEAN_SAFE_STEPS 3
+#endif
+#define OCEAN_HIT_TOLERANCE 1.0e-3
+#define OCEAN_SHORT_AMPLITUDE 0.01
+
+// The phase change Δφ of a wave across the pixel's footprint: `footprint`
+// the pixel's angle times the distance (m), mu_v the view's cosine to the
+// zenith, along_wind the unit azimuth of the view on the wind's axes
+// (upwind, crosswind) and k the wave vector on the same axes (rad/m).
+INLINE OCEAN_FLOAT ocean_footprint_phase(OCEAN_FLOAT footprint, OCEAN_FLOAT mu_v, OCEAN_VEC2 along_wind, OCEAN_VEC2 k) {
+  OCEAN_FLOAT ka = (k.x * along_wind.x + k.y * along_wind.y) / mu_v;
+  OCEAN_FLOAT kb = k.y * along_wind.x - k.x * along_wind.y;
+  return footprint * sqrt(ka * ka + kb * kb);
+}
+
+// A wave's weight in the displacement for phase change `phase_change`
+// across the footprint: 1 at 16 pixels per wavelength or more, 0 at 8 or
+// fewer.
+INLINE OCEAN_FLOAT ocean_displacement_weight(OCEAN_FLOAT phase_change) {
+  return 1.0 - smoothstep(0.39269908, 0.78539816, phase_change);
+}
+
+// Sets the pixel's displacing waves (ocean_wave_count, ocean_wave_amplitude)
+// for its ray's point on the sphere: `footprint` its distance times the
+// pixel's angle (m), mu_v and along_wind as ocean_footprint_phase's. The
+// waves come in increasing wavenumber and Δφ ≥ footprint |k|: once that
+// reaches π/4 this wave and the shorter ones have weight 0.
+INLINE void ocean_select_displacing_waves(OCEAN_FLOAT footprint, OCEAN_FLOAT mu_v, OCEAN_VEC2 along_wind) {
+  ocean_wave_count = 0;
+  OCEAN_FLOAT amplitude = 0.0;
+  for (int i = 0; i < wave_count; ++i) {
+    if (footprint * wave_in_wind[i].z >= 0.78539816) break;
+    OCEAN_VEC2 k = OCEAN_VEC2(wave_in_wind[i].x, wave_in_wind[i].y);
+    OCEAN_FLOAT w = ocean_displacement_weight(ocean_footprint_phase(footprint, mu_v, along_wind, k));
+    ocean_wave_amplitude[i] = w * wave_vector[i].w;
+    if (w > 0.0) ocean_wave_count = i + 1;
+    amplitude += ocean_wave_amplitude[i];
+  }
+  // Within OCEAN_HIT_TOLERANCE of the sphere the surface is the sphere.
+  if (amplitude < OCEAN_HIT_TOLERANCE) ocean_wave_count = 0;
+}
+
+// The displacing waves' height h (m) at camera-relative offset `offset` (m).
+INLINE OCEAN_FLOAT ocean_wave_height(OCEAN_VEC3 offset) {
+  OCEAN_FLOAT h = 0.0;
+  for (int i = 0; i < ocean_wave_count; ++i)
+    h += ocean_wave_amplitude[i] * sin(wave_phase[i] + dot(OCEAN_VEC3(wave_vector[i]), offset));
+  return h;
+}
+
+// The height e(t) (m) above the sphere of radius `radius` of the ray's point
+// at distance t, for b = r_c (up · d) and c = r_c² − radius².
+INLINE OCEAN_FLOAT ocean_ray_height(OCEAN_FLOAT t, OCEAN_FLOAT b, OCEAN_FLOAT c, OCEAN_FLOAT radius) {
+  OCEAN_FLOAT q = c + t * (2.0 * b + t);
+  return q / (radius + sqrt(max(radius * radius + q, 0.0)));
+}
+
+// g(t) = e(t) − h(t d), positive above the displaced sea, and its
+// derivative along the ray g'(t) = (b + t) / |p| − Σ w_i a_i cos(·) (k_i · d);
+// the same for the first `split` waves alone (long_clearance, long_rate).
+INLINE OCEAN_FLOAT ocean_ray_clearance(OCEAN_FLOAT t, OCEAN_VEC3 d, OCEAN_FLOAT b, OCEAN_FLOAT c, OCEAN_FLOAT radius,
+                                       int split, OUT(OCEAN_FLOAT) rate, OUT(OCEAN_FLOAT) long_clearance,
+                                       OUT(OCEAN_FLOAT) long_rate) {
+  OCEAN_FLOAT e = ocean_ray_height(t, b, c, radius);
+  OCEAN_FLOAT h = 0.0, h_rate = 0.0;
+  long_clearance = e;
+  long_rate = (b + t) / (radius + e);
+  for (int i = 0; i < ocean_wave_count; ++i) {
+    if (i == split) {
+      long_clearance = e - h;
+      long_rate = (b + t) / (radius + e) - h_rate;
+    }
+    OCEAN_FLOAT kd = dot(OCEAN_VEC3(wave_vector[i]), d);
+    OCEAN_FLOAT phase = wave_phase[i] + t * kd;
+    h += ocean_wave_amplitude[i] * sin(phase);
+    h_rate += ocean_wave_amplitude[i] * cos(phase) * kd;
+  }
+  rate = (b + t) / (radius + e) - h_rate;
+  if (split >= ocean_wave_count) {
+    long_clearance = e - h;
+    long_rate = rate;
+  }
+  return e - h;
+}
+
+// The least s > 0 at which the lower bound g + g' s − ½ M s² of a function
+// with value g > 0, derivative g' and |g''| ≤ M reaches 0 (written without
+// cancellation for g' < 0).
+INLINE OCEAN_FLOAT ocean_safe_step(OCEAN_FLOAT g, OCEAN_FLOAT rate, OCEAN_FLOAT curvature) {
+  OCEAN_FLOAT root = sqrt(rate * rate + 2.0 * curvature * g);
+  return rate < 0.0 ? 2.0 * g / (root - rate) : (rate + root) / curvature;
+}
+
+// The first distance t (m) at which the ray from the camera along unit d
+// meets the displaced sea (above), for b = r_c (up · d), c = r_c² − R² and
+// R = `radius`. False when the ray passes over every wave (or the camera is
+// under the water's surface: no underwater view).
+INLINE bool ocean_displaced_hit(OCEAN_VEC3 d, OCEAN_FLOAT b, OCEAN_FLOAT c, OCEAN_FLOAT radius, OUT(OCEAN_FLOAT) t) {
+  // A, S and M over all the waves, and M over the long ones: the first
+  // `split`, after which the rest's amplitudes add up to at most
+  // OCEAN_SHORT_AMPLITUDE.
+  OCEAN_FLOAT amplitude = 0.0, slope = 0.0, curvature = 0.0, long_curvature = 0.0;
+  for (int i = 0; i < ocean_wave_count; ++i) {
+    OCEAN_FLOAT kd = dot(OCEAN_VEC3(wave_vector[i]), d);
+    amplitude += abs(ocean_wave_amplitude[i]);
+    slope += abs(ocean_wave_amplitude[i] * kd);
+    curvature += abs(ocean_wave_amplitude[i] * kd * kd);
+  }
+  int split = ocean_wave_count;
+  OCEAN_FLOAT short_amplitude = 0.0;
+  for (int i = ocean_wave_count - 1; i >= 0; --i) {
+    if (short_amplitude + abs(ocean_wave_amplitude[i]) > OCEAN_SHORT_AMPLITUDE) break;
+    short_amplitude += abs(ocean_wave_amplitude[i]);
+    split = i;
+  }
+  for (int i = 0; i < split; ++i) {
+    OCEAN_FLOAT kd = dot(OCEAN_VEC3(wave_vector[i]), d);
+    long_curvature += abs(ocean_wave_amplitude[i] * kd * kd);
+  }
+  // The shell's bounds: c_hi = r_c² − (R + A)², c_lo = r_c² − (R − A)².
+  OCEAN_FLOAT c_hi = c - amplitude * (2.0 * radius + amplitude);
+  OCEAN_FLOAT c_lo = c + amplitude * (2.0 * radius - amplitude);
+  OCEAN_FLOAT disc_hi = b * b - c_hi, disc_lo = b * b - c_lo;
+  t = 0.0;
+  if (c_hi > 0.0) {
+    if (b >= 0.0 || disc_hi < 0.0) return false;
+    t = c_hi / (-b + sqrt(disc_hi));
+  }
+  bool floor_hit = b < 0.0 && disc_lo >= 0.0;
+  OCEAN_FLOAT t_out = floor_hit ? c_lo / (-b + sqrt(disc_lo)) : -b + sqrt(max(disc_hi, 0.0));
+  // The bounds of −g' and |g''| on the shell: e' = (b + t)/|p| grows
+  // along the ray, e'' = (1 − e'²)/|p| ≤ 1/(R − A).
+  OCEAN_FLOAT lipschitz = max(-(b + t), 0.0) / (radius - amplitude) + slope;
+  curvature += 1.0 / (radius - amplitude);
+  long_curvature += 1.0 / (radius - amplitude);
+  // Above the sea at t_lo (g_lo > 0); below it at t_hi (g_hi ≤ 0) once a
+  // point there is known (t_hi ≥ 0); `side` the end the last regula falsi
+  // step moved (Illinois: the other end's g is halved when one end moves
+  // twice in a row).
+  OCEAN_FLOAT t_lo = t, g_lo = 0.0, t_hi = -1.0, g_hi = 0.0;
+  int side = 0;
+  for (int k = 0; k < OCEAN_MARCH_STEPS; ++k) {
+    OCEAN_FLOAT rate, long_g, long_rate;
+    OCEAN_FLOAT g = ocean_ray_clearance(t, d, b, c, radius, split, rate, long_g, long_rate);
+#ifdef OCEAN_TRACE
+    OCEAN_TRACE(k, t, g, rate);
+#endif
+    // Below the sea where the ray enters the shell: the camera is under
+    // the water (t = 0), or the ray meets a crest's top (within rounding).
+    if (k == 0 && g <= 0.0) return t > 0.0;
+    if (abs(g) < OCEAN_HIT_TOLERANCE) return true;
+    if (g > 0.0) {
+      if (side > 0) g_hi *= 0.5;
+      t_lo = t;
+      g_lo = g;
+      side = t_hi >= 0.0 ? 1 : 0;
+    } else {
+      if (side < 0) g_lo *= 0.5;
+      t_hi = t;
+      g_hi = g;
+      side = -1;
+    }
+    if (t_hi >= 0.0) {
+      t = t_lo + g_lo * (t_hi - t_lo) / (g_lo - g_hi);
+    } else {
+      // The largest of three steps that cannot pass a zero of g: g/L;
+      // Taylor's bound with all the waves; and, while the long waves alone
+      // clear the sea by more than the short ones' amplitude A_s, Taylor's
+      // bound on the long waves' clearance less A_s (g ≥ g_long − A_s).
+      // After OCEAN_SAFE_STEPS, Newton's step where it is longer, up to
+      // t_out: past the crossing it brackets it for the regula falsi.
+      OCEAN_FLOAT step = max(g / lipschitz, ocean_safe_step(g, rate, curvature));
+      if (long_g > short_amplitude)
+        step = max(step, ocean_safe_step(long_g - short_amplitude, long_rate, long_curvature));
+      if (k + 1 >= OCEAN_SAFE_STEPS && rate < 0.0) step = max(step, min(-g / rate, t_out - t));
+      t += step;
+      // Past R − A the ray is below every wave (a step that reaches it
+      // lands there, within rounding); past the shell's far side without
+      // meeting R − A it has passed over them.
+      if (t > t_out) {
+        if (!floor_hit) return false;
+        t = t_out;
+      }
+    }
+  }
+  return true;
+}
