@@ -612,6 +612,12 @@ TEST_F(OceanGpu, LightMapsFollowThePassGroundAlbedo) {
 // levels').
 //  - A 60 degree view to 5 m, the sun 40 degrees up to the side: the mean
 //    changes by at most 1 % from one step to the next.
+//  - A 20 degree view from 2 km to 2 m, the same sun: the waves also become
+//    geometry as they grow past 8-16 pixels per wavelength and their
+//    amplitude past 1-2 pixels (from ~60 m for the longest): the mean
+//    changes by at most 1 % from one step to the next, and each step's
+//    mean is within 0.5 % of the same frames' without the displaced waves
+//    (kOceanUndisplaced).
 //  - A 15 degree view, the sun where the view's centre mirrors it: the
 //    glint's core fills the view and its brightness follows the slopes'
 //    variance; down to 20 m every step's mean stays within 3 % of the
@@ -628,9 +634,9 @@ TEST_F(OceanGpu, DollyKeepsTheMeanRadianceAcrossTheWavesLevels) {
   const double radius = earth_->bottom_radius_m;
   const glm::dvec3 up(0.0, 0.0, 1.0), east(1, 0, 0), north(0, 1, 0);
   const glm::dvec3 forward = glm::normalize(-up + 0.8 * east);
-  const auto dolly = [&](double fov_deg, const glm::dvec3& sun, double lowest_m) {
+  const auto dolly = [&](double fov_deg, const glm::dvec3& sun, double lowest_m, double highest_m = 20e3) {
     std::vector<std::pair<double, double>> means;  // altitude, mean luminance
-    for (double altitude = 20e3; altitude >= lowest_m; altitude /= 1.25) {
+    for (double altitude = highest_m; altitude >= lowest_m; altitude /= 1.25) {
       const atmos::GlobeView view = view_from(up * (radius + altitude), forward, up, width, height, sun, fov_deg);
       double sum = 0.0;
       int count = 0;
@@ -649,7 +655,29 @@ TEST_F(OceanGpu, DollyKeepsTheMeanRadianceAcrossTheWavesLevels) {
     }
     return means;
   };
-  const auto side = dolly(60.0, glm::normalize(up + 1.2 * north + 0.5 * east), 5.0);
+  const glm::dvec3 side_sun = glm::normalize(up + 1.2 * north + 0.5 * east);
+  const auto side = dolly(60.0, side_sun, 5.0);
+  // A 20 degree view from 2 km to 2 m, with the displaced waves and without
+  // them (their normals as in every frame; kOceanUndisplaced): its pixels
+  // of 0.011 rad see the longest waves as geometry below about 60 m. The
+  // geometry moves where the slopes are seen, not the mean.
+  const auto narrow = dolly(20.0, side_sun, 2.0, 2e3);
+  std::vector<std::pair<double, double>> undisplaced;
+  {
+    const TermsGuard guard(planet::kOceanAllTerms | planet::kOceanUndisplaced);
+    undisplaced = dolly(20.0, side_sun, 2.0, 2e3);
+  }
+  double worst_geometry = 0.0, geometry_altitude = 0.0, worst_narrow_step = 0.0;
+  for (size_t i = 0; i < narrow.size(); ++i) {
+    const double change = std::abs(narrow[i].second / undisplaced[i].second - 1.0);
+    if (change > worst_geometry) worst_geometry = change, geometry_altitude = narrow[i].first;
+    if (i > 0)
+      worst_narrow_step =
+          std::max(worst_narrow_step, std::abs(narrow[i].second - narrow[i - 1].second) / narrow[i - 1].second);
+  }
+  EXPECT_LT(worst_geometry, 0.005) << "at " << geometry_altitude << " m";
+  EXPECT_GT(worst_geometry, 1e-5) << "the waves displace nothing";
+  EXPECT_LT(worst_narrow_step, 0.01);
   double worst_step = 0.0, step_altitude = 0.0;
   for (size_t i = 1; i < side.size(); ++i) {
     const double change = std::abs(side[i].second - side[i - 1].second) / side[i - 1].second;
@@ -663,11 +691,14 @@ TEST_F(OceanGpu, DollyKeepsTheMeanRadianceAcrossTheWavesLevels) {
     if (drift > worst_drift) worst_drift = drift, drift_altitude = altitude;
   }
   EXPECT_LT(worst_drift, 0.03) << "at " << drift_altitude << " m";
-  std::printf("dolly: largest step change %.3f %% at %.3g m (%zu steps); glint's core within %.2f %% (at %.3g m)\n",
-              100.0 * worst_step, step_altitude, side.size(), 100.0 * worst_drift, drift_altitude);
+  std::printf("dolly: largest step change %.3f %% at %.3g m (%zu steps); glint's core within %.2f %% (at %.3g m); "
+              "20 degrees to 2 m: largest step change %.3f %%, displaced against undisplaced within %.3f %% (at %.3g m)\n",
+              100.0 * worst_step, step_altitude, side.size(), 100.0 * worst_drift, drift_altitude,
+              100.0 * worst_narrow_step, 100.0 * worst_geometry, geometry_altitude);
 }
 
-// From a deck 2 m above a flat sea at sunset, looking 6 degrees down: the
+// From a deck 2 m above a flat sea at sunset, looking 6 degrees down (a
+// 20 degree view, pixels of 6.5 mrad): the
 // depth the sea writes, turned back into the distance t along each pixel's
 // ray, against the CPU twin's crossing (ocean_waves_cpp.hpp) with the
 // shader's weights, where the troughs beyond the sphere keep the sphere's
@@ -682,67 +713,72 @@ TEST_F(OceanGpu, DeckDepthIsTheDisplacedSurface) {
   atmos::Ocean ocean(*earth_, flat_sea(0.0), *pass_, settings);
   const int width = 96, height = 54;
   GlobeTarget target(width, height);
-  const double radius = earth_->bottom_radius_m, time_s = 2.5;
+  const double radius = earth_->bottom_radius_m;
   const glm::dvec3 up(0, 0, 1), camera = up * (radius + 2.0);
   const glm::dvec3 forward = glm::normalize(glm::dvec3(1, 0.3, -0.1));
-  const atmos::GlobeView view = view_from(camera, forward, up, width, height, glm::normalize(glm::dvec3(1, 0.2, 0.03)));
-  target.clear();
-  ocean.draw(view, time_s);
-  const std::vector<float> depth = target.read_depth();
+  const atmos::GlobeView view =
+      view_from(camera, forward, up, width, height, glm::normalize(glm::dvec3(1, 0.2, 0.03)), 20.0);
   planet::OceanWaveField field;
   const std::vector<planet::OceanWave> waves =
       planet::make_ocean_waves(7.0, atmos::water_optics(settings.water, *earth_).slope_variance);
   glm::dvec3 upwind, crosswind;
   planet::ocean_wind_axes(up, settings.wind_azimuth_deg, upwind, crosswind);
-  planet::set_ocean_wave_uniforms(waves, upwind, crosswind, camera, time_s, field);
   const double pixel_angle = 2.0 / (std::abs(view.projection[1][1]) * height);
   int displaced = 0, flat = 0, crests = 0;
   double worst_clearance = 0.0, worst_height = 0.0, worst_flat = 0.0, highest = 0.0, largest_amplitude = 0.0;
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) {
-      const float z = depth[size_t(y * width + x)];
-      const glm::dvec3 d = pixel_ray(view, x, y);
-      const TwinRay twin = twin_ray(field, camera, d, radius, pixel_angle, upwind);
-      if (!twin.on_sphere) {
-        EXPECT_EQ(z, 0.0f) << "pixel " << x << ", " << y << " above the horizon";
-        continue;
+  // Three instants 3 s apart: the longest waves (72 m, 10 m/s) move a
+  // crest into the view's 7-30 m.
+  for (double time_s : {0.0, 3.0, 6.0}) {
+    target.clear();
+    ocean.draw(view, time_s);
+    const std::vector<float> depth = target.read_depth();
+    planet::set_ocean_wave_uniforms(waves, upwind, crosswind, camera, time_s, field);
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x) {
+        const float z = depth[size_t(y * width + x)];
+        const glm::dvec3 d = pixel_ray(view, x, y);
+        const TwinRay twin = twin_ray(field, camera, d, radius, pixel_angle, upwind);
+        if (!twin.on_sphere) {
+          EXPECT_EQ(z, 0.0f) << "pixel " << x << ", " << y << " above the horizon";
+          continue;
+        }
+        ASSERT_GT(z, 0.0f) << "pixel " << x << ", " << y;
+        const double t_gpu = 0.05 / double(z) / glm::dot(d, forward);
+        const double lead = std::clamp(0.01 / (twin.t_sphere * twin.mu_v), 1e-5, 0.1);
+        const double t_lead = twin.t_sphere / (1.0 + lead);
+        const double sine = twin.mu_v;  // the ray's angle to the sea
+        if (field.ocean_wave_count == 0) {
+          ++flat;
+          worst_flat = std::max(worst_flat, std::abs(t_gpu - t_lead) / twin.t_sphere);
+          continue;
+        }
+        ASSERT_TRUE(twin.hit) << "pixel " << x << ", " << y;
+        ++displaced;
+        largest_amplitude = std::max(largest_amplitude, twin.amplitude);
+        const double surface_height = glm::length(camera + t_gpu * d) - radius;
+        // At most A above the sphere, or 1 cm where the sphere's lead is drawn.
+        EXPECT_LE(surface_height, std::max(twin.amplitude, 0.01) + 1e-3) << "pixel " << x << ", " << y;
+        EXPECT_GE(surface_height, -0.01) << "pixel " << x << ", " << y;
+        highest = std::max(highest, surface_height);
+        if (twin.t < t_lead) {
+          // A crest in front of the sphere: the GPU's point is on the surface.
+          ++crests;
+          double rate = 0.0;
+          const double r_c = glm::length(camera);
+          const double g = field.ocean_ray_clearance(t_gpu, d, glm::dot(camera, d), (r_c - radius) * (r_c + radius),
+                                                     radius, field.ocean_wave_count, rate);
+          worst_clearance = std::max(worst_clearance, std::abs(g));
+        }
+        worst_height = std::max(worst_height, std::abs(t_gpu - std::min(twin.t, t_lead)) * sine);
       }
-      ASSERT_GT(z, 0.0f) << "pixel " << x << ", " << y;
-      const double t_gpu = 0.05 / double(z) / glm::dot(d, forward);
-      const double lead = std::clamp(0.01 / (twin.t_sphere * twin.mu_v), 1e-5, 0.1);
-      const double t_lead = twin.t_sphere / (1.0 + lead);
-      const double sine = twin.mu_v;  // the ray's angle to the sea
-      if (field.ocean_wave_count == 0) {
-        ++flat;
-        worst_flat = std::max(worst_flat, std::abs(t_gpu - t_lead) / twin.t_sphere);
-        continue;
-      }
-      ASSERT_TRUE(twin.hit) << "pixel " << x << ", " << y;
-      ++displaced;
-      largest_amplitude = std::max(largest_amplitude, twin.amplitude);
-      const double surface_height = glm::length(camera + t_gpu * d) - radius;
-      // At most A above the sphere, or 1 cm where the sphere's lead is drawn.
-      EXPECT_LE(surface_height, std::max(twin.amplitude, 0.01) + 1e-3) << "pixel " << x << ", " << y;
-      EXPECT_GE(surface_height, -0.01) << "pixel " << x << ", " << y;
-      highest = std::max(highest, surface_height);
-      if (twin.t < t_lead) {
-        // A crest in front of the sphere: the GPU's point is on the surface.
-        ++crests;
-        double rate = 0.0, long_g = 0.0, long_rate = 0.0;
-        const double r_c = glm::length(camera);
-        const double g = field.ocean_ray_clearance(t_gpu, d, glm::dot(camera, d), (r_c - radius) * (r_c + radius),
-                                                   radius, field.ocean_wave_count, rate, long_g, long_rate);
-        worst_clearance = std::max(worst_clearance, std::abs(g));
-      }
-      worst_height = std::max(worst_height, std::abs(t_gpu - std::min(twin.t, t_lead)) * sine);
-    }
-  EXPECT_GT(displaced, width * height / 3);
-  EXPECT_GT(flat, 100);
+  }
+  EXPECT_GT(displaced, width * height);  // a third of the pixels at each instant
+  EXPECT_GT(flat, 300);
   EXPECT_GT(crests, displaced / 10);
   EXPECT_GT(highest, 0.05);
   EXPECT_LT(worst_clearance, 5e-3);
   EXPECT_LT(worst_height, 5e-3);
-  EXPECT_LT(worst_flat, 1e-5);
+  EXPECT_LT(worst_flat, 1e-4);
   std::printf("deck: %d displaced pixels (%d crests in front of the sphere, up to %.3f m of A = %.3f m), %d flat; "
               "GPU against the twin: clearance %.2e m, height %.2e m; flat pixels' t within %.1e\n",
               displaced, crests, highest, largest_amplitude, flat, worst_clearance, worst_height, worst_flat);
@@ -838,6 +874,49 @@ TEST_F(OceanGpu, TerrainAboveTheSeaHidesIt) {
   EXPECT_GT(sea, 1000);
   EXPECT_EQ(land_kept, land);
   std::printf("terrain and sea: %d land pixels kept of %d, %d sea pixels drawn\n", land_kept, land, sea);
+}
+
+// From the deck 2 m up at sunset, looking 6 degrees down towards the sun,
+// the terrain's flat sea (a flat planet: the datum sphere, at sea level)
+// drawn first: the sea covers it at every pixel whose ray meets the
+// sphere, crests and troughs near the camera as the horizon (no specks of
+// the terrain's sea through the water), and the sky above the horizon
+// keeps the terrain's colour.
+TEST_F(OceanGpu, DeckSeaCoversTheTerrainsFlatSea) {
+  atmos::GlobeSettings globe_settings;
+  globe_settings.complete_every_frame = true;
+  atmos::Globe globe(*earth_, flat_sea(0.0), *pass_, globe_settings);
+  atmos::OceanSettings settings;
+  settings.bathymetry_texels = 16;
+  atmos::Ocean ocean(*earth_, flat_sea(0.0), *pass_, settings);
+  const int width = 96, height = 54;
+  GlobeTarget target(width, height);
+  const glm::dvec3 up(0, 0, 1), camera = up * (earth_->bottom_radius_m + 2.0);
+  const atmos::GlobeView view = view_from(camera, glm::normalize(glm::dvec3(1, 0.3, -0.1)), up, width, height,
+                                          glm::normalize(glm::dvec3(1, 0.2, 0.03)));
+  target.clear();
+  globe.draw(view);
+  const std::vector<float> terrain = target.read_colour();
+  ocean.draw(view, 2.5);
+  const std::vector<float> both = target.read_colour();
+  int sea = 0, covered = 0, sky = 0, sky_kept = 0;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const size_t i = 4 * size_t(y * width + x);
+      const bool changed = both[i] != terrain[i] || both[i + 1] != terrain[i + 1] || both[i + 2] != terrain[i + 2];
+      if (atmos_test::ray_hits_sphere(camera, pixel_ray(view, x, y), earth_->bottom_radius_m)) {
+        ++sea;
+        if (changed) ++covered;
+      } else {
+        ++sky;
+        if (!changed) ++sky_kept;
+      }
+    }
+  EXPECT_GT(sea, width * height / 3);
+  EXPECT_EQ(covered, sea);
+  EXPECT_EQ(sky_kept, sky);
+  std::printf("deck over the terrain's flat sea: %d of %d sea pixels drawn by the water, %d of %d sky pixels kept\n",
+              covered, sea, sky_kept, sky);
 }
 
 // From 2 m above the sea at sunset and from orbit over the night side: finite,

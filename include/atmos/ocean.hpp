@@ -5,11 +5,14 @@
 // The surface is the sea-level sphere, intersected exactly by each pixel's
 // view ray in the fragment shader (in camera-relative float arithmetic from
 // double-precision inputs, so that it does not jitter at 2 m nor at 100
-// planet radii). It is drawn after the terrain (Globe::draw) into the same
+// planet radii); near the camera, where the waves span 8 pixels or more,
+// the ray meets the waves' displaced height field instead (docs/water.md,
+// "Displaced waves"). It is drawn after the terrain (Globe::draw) into the same
 // colour and reversed-Z depth attachments, and the depth test keeps the
 // land in front of it; the terrain draws its sea flat at sea level, just
 // behind the water. The colour written is the lit radiance / nits_per_unit
-// and the depth is the sphere's, so AtmospherePass::render() (lit_colour,
+// and the depth is the surface's (the sphere's where a trough lies beyond
+// it), so AtmospherePass::render() (lit_colour,
 // reversed_z) adds the aerial perspective in front of it as for the
 // terrain.
 //
@@ -31,7 +34,8 @@
 // unresolved rest, whose variance widens the BRDF, in proportions set by
 // each wave's size on the screen (Bruneton, Neyret & Holzschuch 2010): the
 // total slope variance is Cox & Munk's at every distance, so the mean
-// radiance does not change where waves fade into the BRDF.
+// radiance does not change where waves fade into the BRDF. The waves of 16
+// pixels or more per wavelength also displace the surface.
 //
 // Threading and GL state: as Globe (globe.hpp). draw() changes the bound
 // program and vertex array, texture units first_unit..first_unit+9, the

@@ -1,9 +1,10 @@
 // The sea's fragment shader (src/planet/ocean.cpp, include/atmos/ocean.hpp),
 // appended after "#version 450 core", AtmospherePass::glsl_library(),
-// physics/water.glsl and ocean_light_maps.glsl. Each pixel intersects its view ray with the sea-level
-// sphere, shades the point with the water's physics lit by the
-// atmosphere's functions, and writes radiance / nits_per_unit and the
-// point's reversed-Z depth.
+// physics/water.glsl, ocean_light_maps.glsl and ocean_waves.glsl. Each
+// pixel intersects its view ray with the sea-level sphere, and near the
+// camera with the displaced waves (ocean_waves.glsl), shades the point with
+// the water's physics lit by the atmosphere's functions, and writes
+// radiance / nits_per_unit and the point's reversed-Z depth.
 //
 // The ray and the sphere, in camera-relative float arithmetic: with r_c the
 // camera's distance from the centre, R the sphere's radius, up the camera's
@@ -95,8 +96,8 @@ uniform vec3 seabed_albedo;
 
 // Tests' switches (planet/ocean_internal.hpp): 1 the glint, 2 the sky, 4
 // the light from below, 8 the sun's irradiance instead, 16 a uniform sky
-// of radiance 1; 32 (a program of its own, OCEAN_DIRECT_LIGHT) the pass's
-// functions instead of the light maps.
+// of radiance 1, 64 no displaced waves; 32 (a program of its own,
+// OCEAN_DIRECT_LIGHT) the pass's functions instead of the light maps.
 uniform int terms;
 
 #if defined(OCEAN_STARS)
@@ -233,7 +234,7 @@ void main() {
   vec3 surface_offset = offset;
   float surface_depth = depth;
   ocean_select_displacing_waves(footprint, mu_v, along_wind);
-  if (ocean_wave_count > 0) {
+  if (ocean_wave_count > 0 && (terms & 64) == 0) {
     float t_surface;
     if (!ocean_displaced_hit(d, b, camera_height_term, sea_radius, t_surface)) discard;
     surface_offset = t_surface * d;

@@ -54,6 +54,9 @@ enum OceanTerms : unsigned {
   // to check the maps against them. Set when an Ocean is constructed, its
   // maps are filled at its first draw without it instead.
   kOceanDirectLight = 32u,
+  // The sea-level sphere at every pixel: no displaced waves (their normals
+  // as everywhere), to compare the mean radiance with and without them.
+  kOceanUndisplaced = 64u,
 };
 void set_ocean_terms(unsigned mask);
 
