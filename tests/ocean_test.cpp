@@ -149,7 +149,7 @@ glm::dvec3 seven_metre_waves(planet::OceanWaveField& field, const glm::dvec3& ca
 
 // From 2 m and 20 m over the sea, rays 2 to 70 degrees down in every
 // azimuth, the waves weighted for a pixel of 1e-3 rad (1080 lines over
-// 60 degrees): the twin's crossing (at most 12 evaluations of the waves'
+// 60 degrees): the twin's crossing (at most 17 evaluations of the waves'
 // sum) against the brute force's (2 mm steps, then bisection): the same
 // crossing (within 5 cm along the ray, where the displacing waves are
 // 0.8 m long or more), its point within 1 mm of the surface in height

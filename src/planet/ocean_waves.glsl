@@ -29,25 +29,27 @@
 // |p| ≥ R − A), and |g''| ≤ M = 1/(R − A) + Σ w_i a_i (k_i · d)²
 // (e'' = (1 − e'²)/|p|). So g has no zero before t + s for s = g/L, nor
 // before the first positive root of g + g' s − ½ M s² (Taylor's bound from
-// g and g' at t); nor, while the long waves alone (all but a tail of
-// amplitudes adding up to A_s ≤ OCEAN_SHORT_AMPLITUDE = 1 cm) clear the
-// ray by more than A_s, before the root of the same bound on g_long − A_s
-// with the long waves' M (g ≥ g_long − A_s): the short waves' curvature,
-// a_i k_i² with k up to 63 rad/m, would otherwise hold the steps to
-// centimetres far above the sea. Stepping by the largest never passes the
-// first crossing: a ray that grazes a crest stops on that crest rather than
-// on the trough behind it, and one that passes just over a crest's top
-// (g' ≈ 0, g'' ≈ M) steps √(2g/M) and leaves it. After OCEAN_SAFE_STEPS = 3
-// such steps the march takes Newton's step −g/g' where it is longer (up to
-// t_out), and once a point lies below the sea, the regula falsi between it
-// and the last point above (Illinois: the end kept twice in a row has its
-// g halved); Newton's step may pass a crest thinner than itself. It stops
-// once |g| < OCEAN_HIT_TOLERANCE = 1 mm, after OCEAN_MARCH_STEPS = 12
-// evaluations of the waves' sum (their sines and cosines) at most, and only
-// pixels whose ray has displacing waves march. The point is within 1 mm of
-// the surface in height (the clearance) where the march converges: from
-// 2 m and 20 m it does within the 12 for every ray of the tests
-// (tests/ocean_test.cpp, OceanWaves).
+// g and g' at t). The short waves (a tail of amplitudes adding up to
+// A_s ≤ OCEAN_SHORT_AMPLITUDE = 5 cm) move g by at most A_s: while the long
+// waves' clearance g_long exceeds 2 A_s, the march evaluates the long waves
+// alone and steps by the same two bounds on g_long − A_s ≤ g (with their
+// own S and M: the short waves' curvature, a k² with k up to 63 rad/m,
+// would otherwise hold the steps to centimetres far above the sea), then
+// all the waves. Stepping by these bounds never passes the first crossing:
+// a ray that grazes a crest stops on that crest rather than on the trough
+// behind it, and one that passes just over a crest's top (g' ≈ 0,
+// g'' ≈ M) steps √(2g/M) and leaves it. Near a crossing the Taylor step
+// is a damped Newton step (g/|g'| when M g ≪ g'²). A point below the sea
+// (t_out, where a step past R − A is held, or rounding) brackets the
+// crossing with the last point above for the regula falsi (Illinois: the
+// end kept twice in a row has its g halved). The march stops once
+// |g| < OCEAN_HIT_TOLERANCE = 1 mm, after OCEAN_MARCH_STEPS = 16 steps at
+// most (17 evaluations of the waves' sines and cosines, one of them where
+// the long waves hand over to all), and only pixels whose ray has
+// displacing waves march. From 2 m and 20 m it converges within them for
+// every ray of the tests (tests/ocean_test.cpp, OceanWaves); a ray that
+// has not is drawn where it stands, above the surface (a crest's outline
+// widens; nothing behind it shows through).
 //
 // The weights (the screen's footprint; Bruneton, Neyret & Holzschuch 2010,
 // §4, for the normals). A wave's phase changes across the pixel's
@@ -56,15 +58,19 @@
 // azimuth). Sampled once per pixel, the wave's height is resolved while
 // Δφ < π (two pixels per wavelength, Nyquist); the normal, its derivative,
 // fades between Δφ = π/4 and π/2 (8 to 4 pixels per wavelength). The
-// displacement fades one octave earlier, w_i = 1 − smoothstep(π/8, π/4, Δφ)
+// displacement fades one octave earlier, 1 − smoothstep(π/8, π/4, Δφ)
 // (16 to 8 pixels per wavelength): where a wave stops being geometry its
 // normal is still whole, so the change is the position at which its slopes
 // are seen, not the slopes; and a wave that is geometry spans at least 8
-// pixels per wavelength, so its crests' outlines do not alias. A pixel's
-// weights are those of its ray's point on the sphere (its t and μ_v), one
-// set per ray: h is the same function of p along the whole ray, and the
-// weights change smoothly from pixel to pixel. Far away every weight is 0
-// and the surface is the sphere exactly.
+// pixels per wavelength, so its crests' outlines do not alias. Its height
+// must also show: a displacement a along the zenith seen at θ_v from it
+// moves the surface's image by a sin θ_v / t rad, a sin θ_v / (t α)
+// pixels, and a wave is geometry from 2 pixels, none below 1:
+// w_i = (1 − smoothstep(π/8, π/4, Δφ)) smoothstep(1, 2, a_i sin θ_v / (t α)).
+// A pixel's weights are those of its ray's point on the sphere (its t and
+// μ_v), one set per ray: h is the same function of p along the whole ray,
+// and the weights change smoothly from pixel to pixel. Far away every
+// weight is 0 and the surface is the sphere exactly.
 
 #if !defined(OCEAN_WAVES_CPP)
 #define OCEAN_FLOAT float
@@ -87,8 +93,7 @@ float ocean_wave_amplitude[OCEAN_MAX_WAVES];
 int ocean_wave_count;
 #endif
 
-#define OCEAN_MARCH_STEPS 12
-#define OCEAN_SAFE_STEPS 3
+#define OCEAN_MARCH_STEPS 16
 #define OCEAN_HIT_TOLERANCE 1.0e-3
 #define OCEAN_SHORT_AMPLITUDE 0.05
 
@@ -113,10 +118,8 @@ INLINE OCEAN_FLOAT ocean_displacement_weight(OCEAN_FLOAT phase_change) {
 // for its ray's point on the sphere: `footprint` its distance times the
 // pixel's angle (m), mu_v and along_wind as ocean_footprint_phase's. Each
 // wave's weight is the footprint's (ocean_displacement_weight) times its
-// amplitude's size on the screen: a displacement a along the zenith, seen
-// at θ_v from it, moves the surface's image by a sin θ_v / t rad, a sin θ_v
-// / footprint pixels, not seen as geometry below half a pixel:
-// smoothstep(½, 1, a sin θ_v / footprint). The waves come in increasing
+// amplitude's size on the screen, smoothstep(1, 2, a sin θ_v / footprint)
+// (above). The waves come in increasing
 // wavenumber and Δφ ≥ footprint |k|: once that reaches π/4 this wave and
 // the shorter ones have weight 0.
 INLINE void ocean_select_displacing_waves(OCEAN_FLOAT footprint, OCEAN_FLOAT mu_v, OCEAN_VEC2 along_wind) {
@@ -253,12 +256,8 @@ INLINE bool ocean_displaced_hit(OCEAN_VEC3 d, OCEAN_FLOAT b, OCEAN_FLOAT c, OCEA
       t = t_lo + g_lo * (t_hi - t_lo) / (g_lo - g_hi);
     } else {
       // The larger of the two steps that cannot pass a zero of g (g/L,
-      // Taylor's bound); after OCEAN_SAFE_STEPS, Newton's step where it
-      // is longer, up to t_out: past the crossing it brackets it for the
-      // regula falsi.
-      OCEAN_FLOAT step = max(g / (descent + slope), ocean_safe_step(g, rate, curvature));
-      if (k + 1 >= OCEAN_SAFE_STEPS && rate < 0.0) step = max(step, min(-g / rate, t_out - t));
-      t += step;
+      // Taylor's bound).
+      t += max(g / (descent + slope), ocean_safe_step(g, rate, curvature));
       // Past R − A the ray is below every wave (a step that reaches it
       // lands there, within rounding); past the shell's far side without
       // meeting R − A it has passed over them.
