@@ -154,4 +154,40 @@ TEST(OceanWaves, GrazingRayStopsOnTheCrest) {
   }
 }
 
+// The sea's draw skips the displaced waves' selection and march when the
+// camera is so high that no wave's amplitude spans a pixel anywhere
+// (ocean.cpp, waves_can_displace: max a_i <= h α, h the camera's height
+// above the level). Just above that height, every ray of the view, from
+// straight down to grazing, selects no displacing wave; well below it some
+// ray does (the gate is not always shut).
+TEST(OceanWaves, NoWaveDisplacesAboveTheHeightWhereNoAmplitudeSpansAPixel) {
+  const double radius = 6.36e6, pixel_angle = 1e-3;
+  const std::vector<planet::OceanWave> waves =
+      planet::make_ocean_waves(12.0, glm::dvec2(3.16e-3 * 12.0, 0.003 + 1.92e-3 * 12.0));
+  double largest = 0.0;
+  for (const planet::OceanWave& w : waves) largest = std::max(largest, w.amplitude);
+  ASSERT_GT(largest, 0.0);
+  const double gate_height = largest / pixel_angle;
+  for (double factor : {1.001, 0.25}) {
+    const glm::dvec3 camera(0.0, 0.0, radius + factor * gate_height);
+    planet::OceanWaveField field;
+    glm::dvec3 upwind, crosswind;
+    planet::ocean_wind_axes(glm::normalize(camera), 90.0, upwind, crosswind);
+    planet::set_ocean_wave_uniforms(waves, upwind, crosswind, camera, 0.0, field);
+    int displacing = 0;
+    for (int i = 0; i < 400; ++i) {
+      const double down = glm::radians(0.05 + 89.9 * double(i % 20) / 19.0), azimuth = glm::radians(18.0 * (i / 20));
+      const glm::dvec3 d(std::cos(down) * std::cos(azimuth), std::cos(down) * std::sin(azimuth), -std::sin(down));
+      const TwinRay twin = twin_ray(field, camera, d, radius, pixel_angle, upwind);
+      displacing += twin.on_sphere && field.ocean_wave_count > 0;
+    }
+    std::printf("camera at %.3f of the gate's height (%.0f m): %d of 400 rays with displacing waves\n", factor,
+                gate_height, displacing);
+    if (factor > 1.0)
+      EXPECT_EQ(displacing, 0);
+    else
+      EXPECT_GT(displacing, 0);
+  }
+}
+
 }  // namespace

@@ -118,7 +118,7 @@ struct OceanProgram {
   GLint clip = -1, inverse = -1, viewport = -1, camera = -1, up = -1, radius = -1, height_term = -1,
         pixel_angle = -1, sun = -1, light = -1, refractive = -1, absorption = -1, backscattering = -1,
         diffuse = -1, slope_variance = -1, upwind = -1, wave_count = -1, wave_vector = -1, wave_in_wind = -1,
-        wave_phase = -1, sea_radius = -1,
+        wave_phase = -1, sea_radius = -1, waves_can_displace = -1,
         bathymetry = -1, sky_map = -1, light_map = -1, reflectance_map = -1, below_map = -1, deep = -1, sea_level = -1, seabed = -1, moon_count = -1,
         moon_spheres = -1, terms = -1, lakes = -1, eclipse_top_radius = -1, star_count = -1, star_directions = -1,
         star_irradiances = -1;
@@ -145,6 +145,7 @@ struct OceanProgram {
     wave_in_wind = at("wave_in_wind");
     wave_phase = at("wave_phase");
     sea_radius = at("sea_radius");
+    waves_can_displace = at("waves_can_displace");
     bathymetry = at("bathymetry");
     sky_map = at("sky_map");
     light_map = at("light_map");
@@ -678,7 +679,8 @@ void Ocean::draw(const GlobeView& view, double time_s) {
   glUniform3f(g.camera, float(camera.x), float(camera.y), float(camera.z));
   glUniform3f(g.up, float(up.x), float(up.y), float(up.z));
   glUniform1f(g.radius, float(r_c));
-  glUniform1f(g.pixel_angle, float(2.0 / (std::abs(view.projection[1][1]) * view.height)));
+  const double pixel_angle = 2.0 / (std::abs(view.projection[1][1]) * view.height);  // rad
+  glUniform1f(g.pixel_angle, float(pixel_angle));
   glUniform3f(g.sun, float(sun.x), float(sun.y), float(sun.z));
   const double lux_scale =
       view.sun_illuminance_lux > 0.0 ? view.sun_illuminance_lux / p.pass->sun_illuminance_lux() : 1.0;
@@ -719,6 +721,12 @@ void Ocean::draw(const GlobeView& view, double time_s) {
     const double radius = p.level_radius_m[size_t(level)];
     glUniform1f(g.height_term, float((r_c - radius) * (r_c + radius)));
     glUniform1f(g.sea_radius, float(radius));
+    // ocean.frag.glsl: a wave of amplitude a displaces the surface only
+    // where a spans more than a pixel, a sin θ_v / (t α) > 1, and t is at
+    // least the camera's height above this level.
+    double largest_amplitude = 0.0;
+    for (const planet::OceanWave& wave : p.waves) largest_amplitude = std::max(largest_amplitude, wave.amplitude);
+    glUniform1i(g.waves_can_displace, largest_amplitude > (r_c - radius) * pixel_angle ? 1 : 0);
     glUniform1f(g.sea_level, float(p.level_height_m[size_t(level)]));
     glUniform1i(g.lakes, level == kLakes ? 1 : 0);
     glBindTextureUnit(GLuint(p.settings.first_unit + 6), p.sky_map[size_t(level)]);

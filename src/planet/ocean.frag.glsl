@@ -82,6 +82,13 @@ uniform WaterSpectrum sea_spectrum;
 uniform vec3 wind_upwind;  // unit, tangent at the waves' anchor
 // The waves (wave_count, wave_vector, wave_in_wind, wave_phase): ocean_waves.glsl.
 uniform float sea_radius;  // m: R, the level's sphere
+// 0 when no wave can displace the surface anywhere in the image: a wave
+// displaces only where its amplitude a spans a pixel, a sin θ_v / (t α) > 1
+// (ocean_waves.glsl), and every sea point is at least the camera's height
+// h above the level away, so none can once max a_i < h α. A uniform
+// branch: the software rasteriser skips the selection and the march
+// instead of running them under an empty mask.
+uniform int waves_can_displace;
 
 uniform samplerCube bathymetry;  // r: the ground's height (m above the datum), g: its least over 3 x 3 texels,
                                  // b: the lake mask (1 lake, 0 not)
@@ -233,7 +240,8 @@ void main() {
   // frame and the lead below are the sphere point's.
   vec3 surface_offset = offset;
   float surface_depth = depth;
-  ocean_select_displacing_waves(footprint, mu_v, along_wind);
+  ocean_wave_count = 0;
+  if (waves_can_displace != 0) ocean_select_displacing_waves(footprint, mu_v, along_wind);
   if (ocean_wave_count > 0 && (terms & 64) == 0) {
     float t_surface;
     if (!ocean_displaced_hit(d, b, camera_height_term, sea_radius, t_surface)) discard;
