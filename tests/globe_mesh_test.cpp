@@ -14,11 +14,13 @@
 #include <vector>
 
 #include "atmos/globe.hpp"
+#include "planet_surfaces.hpp"
 #include "planet/globe_mesh.hpp"
 #include "planet/globe_shadows.hpp"
 
 namespace {
 
+using atmos_test::surface_of;
 using atmos::planet::kGridVertices;
 using atmos::planet::kSkirtVertices;
 using atmos::planet::kTileQuads;
@@ -29,15 +31,6 @@ using atmos::planet::TileKey;
 using atmos::planet::TileMesh;
 
 constexpr double kEarthRadius = 6360e3;
-
-atmos::PlanetSurface surface_of(atmos::SurfaceStyle style, std::uint64_t seed,
-                                std::optional<double> sea_level_m = std::nullopt) {
-  atmos::PlanetSurface s;
-  s.style = style;
-  s.seed = seed;
-  s.sea_level_m = sea_level_m;
-  return s;
-}
 
 glm::dvec3 position_of(const TileMesh& mesh, int i, int j) {
   const auto& v = mesh.vertices[size_t(j * kTileSide + i)];

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "atmos/globe.hpp"
+#include "planet_surfaces.hpp"
 #include "atmos/plugin.hpp"
 #include "globe_rays.hpp"
 #include "globe_target.hpp"
@@ -35,6 +36,7 @@
 
 namespace {
 
+using atmos_test::surface_of;
 using atmos::planet::MeshBuilder;
 using atmos::planet::ReadyTile;
 using atmos::planet::Surface;
@@ -45,13 +47,6 @@ using atmos_test::pixel_ray;
 using atmos_test::ray_hits_sphere;
 
 constexpr double kEarthRadius = 6360e3;
-
-atmos::PlanetSurface surface_of(atmos::SurfaceStyle style, std::uint64_t seed) {
-  atmos::PlanetSurface s;
-  s.style = style;
-  s.seed = seed;
-  return s;
-}
 
 // Waits (polling every millisecond, at most a minute) until `done`.
 template <typename Done>

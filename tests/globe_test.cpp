@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "atmos/globe.hpp"
+#include "planet_surfaces.hpp"
 #include "atmos/plugin.hpp"
 #include "globe_rays.hpp"
 #include "fullscreen_program.hpp"
@@ -40,19 +41,9 @@
 
 namespace {
 
+using atmos_test::surface_of;
 using atmos::planet::kGridVertices;
 using atmos::planet::kSkirtVertices;
-
-constexpr double kEarthRadius = 6360e3;
-
-atmos::PlanetSurface surface_of(atmos::SurfaceStyle style, std::uint64_t seed,
-                                std::optional<double> sea_level_m = std::nullopt) {
-  atmos::PlanetSurface s;
-  s.style = style;
-  s.seed = seed;
-  s.sea_level_m = sea_level_m;
-  return s;
-}
 
 // ---------------------------------------------------------------------------
 // The GPU: the globe drawn into a small reversed-Z framebuffer.
