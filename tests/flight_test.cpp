@@ -25,6 +25,7 @@
 namespace {
 
 namespace fs = std::filesystem;
+
 #ifdef ATMOS_VIEWER
 
 using atmos_view::Flight;
