@@ -18,14 +18,12 @@
 #include <cstddef>
 #include <vector>
 
+#include "physics/glsl_subset_cpp.hpp"
+
 namespace atmos::physics {
 
 using namespace glm;
 
-#define IN(T) const T&
-#define OUT(T) T&
-#define INOUT(T) T&
-#define INLINE inline
 // Loop bounds: in C++ the structures' own counts (and the largest knot
 // count); in shaders compile-time constants of the atmosphere (see
 // gpu/shader_source.cpp), which let the compiler unroll the loops.

@@ -716,6 +716,8 @@ void Ocean::draw(const GlobeView& view, double time_s) {
   // The sea, then the lakes: each its own sphere, light maps and water
   // level; the lakes only where the mask says so. The depth test keeps
   // the nearer water, and the terrain in front of both.
+  double largest_amplitude = 0.0;  // m, of the waves (waves_can_displace below)
+  for (const planet::OceanWave& wave : p.waves) largest_amplitude = std::max(largest_amplitude, wave.amplitude);
   for (int level = 0; level < kLevels; ++level) {
     if (!above(level)) continue;
     const double radius = p.level_radius_m[size_t(level)];
@@ -724,8 +726,6 @@ void Ocean::draw(const GlobeView& view, double time_s) {
     // ocean.frag.glsl: a wave of amplitude a displaces the surface only
     // where a spans more than a pixel, a sin θ_v / (t α) > 1, and t is at
     // least the camera's height above this level.
-    double largest_amplitude = 0.0;
-    for (const planet::OceanWave& wave : p.waves) largest_amplitude = std::max(largest_amplitude, wave.amplitude);
     glUniform1i(g.waves_can_displace, largest_amplitude > (r_c - radius) * pixel_angle ? 1 : 0);
     glUniform1f(g.sea_level, float(p.level_height_m[size_t(level)]));
     glUniform1i(g.lakes, level == kLakes ? 1 : 0);

@@ -7,9 +7,7 @@
 
 #include <glm/glm.hpp>
 
-// The subset's C++ meaning (the same definitions as physics/shader_cpp.hpp;
-// identical redefinitions are allowed when both headers are included).
-#define INLINE inline
+#include "physics/glsl_subset_cpp.hpp"
 
 namespace atmos::post {
 
