@@ -154,6 +154,43 @@ TEST_F(GlobeGpu, DescentFromOrbitToTheGroundHasNoHoles) {
   EXPECT_EQ(holes, 0) << "first at " << first_hole;
 }
 
+// complete_every_frame: the first frame of a new globe is already the
+// settled one, selected with the height ranges of resident tiles, not with
+// the planet's range that a tile inherits until an ancestor is resident
+// (which keeps the rings of fine tiles around a camera near the ground).
+// Drawn again, 2 m above the ground towards the horizon and towards the
+// sky, the view needs no new tile, draws as many and gives the same image.
+TEST_F(GlobeGpu, ACompleteFrameBuildsTheTilesOfItsSettledSelection) {
+  atmos::GlobeSettings settings;
+  settings.complete_every_frame = true;
+  const int width = 96, height = 64;
+  Target target(width, height);
+  const glm::dvec3 up = glm::normalize(glm::dvec3(0.2, -0.6, 0.77));
+  const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), up));
+  const glm::dvec3 north = glm::cross(up, east);
+  const double radius = earth_->bottom_radius_m;
+  for (const double pitch_deg : {-10.0, 40.0}) {
+    atmos::Globe globe(*earth_, surface_of(atmos::SurfaceStyle::earth, 1), *pass_, settings);
+    const glm::dvec3 camera = up * (radius + globe.height_m(up * radius) + 2.0);
+    const double pitch = glm::radians(pitch_deg);
+    const atmos::GlobeView view =
+        view_from(camera, glm::normalize(north * std::cos(pitch) + up * std::sin(pitch)), up, width, height);
+    target.clear();
+    globe.draw(view);
+    const atmos::GlobeStats first = globe.last_stats();
+    const std::vector<float> first_image = target.read_colour();
+    target.clear();
+    globe.draw(view);
+    const atmos::GlobeStats second = globe.last_stats();
+    std::printf("pitch %+.0f deg: first frame %d tiles built, %d drawn; second %d built, %d drawn\n", pitch_deg,
+                first.tiles_generated, first.tiles_drawn, second.tiles_generated, second.tiles_drawn);
+    EXPECT_EQ(first.tiles_pending, 0);
+    EXPECT_EQ(second.tiles_generated, 0) << pitch_deg;
+    EXPECT_EQ(second.tiles_drawn, first.tiles_drawn) << pitch_deg;
+    EXPECT_TRUE(target.read_colour() == first_image) << pitch_deg;
+  }
+}
+
 // Streaming: at most max_tiles_per_frame new tiles a frame, the others
 // drawn by their nearest resident ancestor meanwhile, so that no hole opens
 // while tiles load; the resident tiles stay under the memory cap (least

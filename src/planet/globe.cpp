@@ -408,14 +408,48 @@ struct Globe::Impl {
   int complete(const std::vector<const planet::Selection*>& selections, GlobeStats& out) {
     std::vector<TileKey> batch = needed_by(selections);
     std::stable_sort(batch.begin(), batch.end(), [](const TileKey& a, const TileKey& b) { return a.level < b.level; });
-    const std::set<std::uint64_t> kept = kept_by(selections);
+    build(batch, kept_by(selections), out);
+    return pending_in(selections);
+  }
+
+  // complete_every_frame, the view's tiles: built a generation at a time,
+  // each missing selected tile's coarsest missing ancestor (or the tile),
+  // and selected again after each generation. A missing tile inherits its
+  // nearest resident ancestor's height range, at first the planet's
+  // (tile_selection.hpp): a selection over that range keeps every tile
+  // whose column from the deepest trench to the highest summit might be in
+  // view, and refines near the camera as if the ground were at the trench.
+  // Each generation's own heights bound its descendants tightly, so the
+  // selection the frame ends with is the one it would make with every tile
+  // resident, and only its tiles and their ancestors are built. Returns the
+  // selected tiles still pending (beyond the memory cap).
+  int complete_by_generations(const std::function<planet::Selection()>& select, planet::Selection& selection,
+                              GlobeStats& out) {
+    for (;;) {
+      std::vector<TileKey> generation;
+      std::set<std::uint64_t> listed;
+      for (const planet::SelectedTile& t : selection.tiles) {
+        if (resident.count(t.key.packed()) != 0) continue;
+        TileKey key = t.key;
+        while (key.level > 0 && resident.count(planet::parent(key).packed()) == 0) key = planet::parent(key);
+        if (listed.insert(key.packed()).second) generation.push_back(key);
+      }
+      if (!build(generation, kept_by({&selection}), out)) break;
+      selection = select();
+    }
+    return pending_in({&selection});
+  }
+
+  // Builds (in parallel) and uploads the tiles of `batch` that fit under
+  // the memory cap beside `kept`; returns how many.
+  std::size_t build(std::vector<TileKey> batch, const std::set<std::uint64_t>& kept, GlobeStats& out) {
     batch.resize(std::min(batch.size(), room_for(kept)));
     std::vector<planet::TileMesh> meshes(batch.size());
     tbb::parallel_for(size_t(0), batch.size(), [&](size_t i) { meshes[i] = builder.build(batch[i]); });
     make_room(batch.size(), kept);
     for (size_t i = 0; i < batch.size(); ++i) upload(batch[i], meshes[i]);
     out.tiles_generated += int(batch.size());
-    return pending_in(selections);
+    return batch.size();
   }
 
   // Streaming: asks the worker for the tiles the selections need that fit
@@ -805,7 +839,6 @@ void Globe::draw_views(const GlobeView& view, const std::vector<GlobeView>& eye_
   const glm::dvec3 sun = view.sun_direction / sun_length;
 
   // --- Selection. ---
-  const auto t0 = Clock::now();
   planet::LodCamera lod_camera;
   lod_camera.position = camera;
   lod_camera.view_projection = view.projection * view.view * glm::translate(glm::dmat4(1.0), frame.centre) *
@@ -823,12 +856,16 @@ void Globe::draw_views(const GlobeView& view, const std::vector<GlobeView>& eye_
     return true;
   };
   const planet::LodSettings lod_settings = p.builder.lod_settings(p.settings.max_screen_error_px);
-  const planet::Selection selection =
-      planet::select_tiles(lod_camera, lod_settings, p.builder.bounds(), known_range);
   GlobeStats stats;
   stats.view_selections = 1;
-  stats.selection_ms = ms_since(t0);
-  stats.nodes_visited = selection.nodes_visited;
+  const auto select = [&] {
+    const auto t = Clock::now();
+    planet::Selection s = planet::select_tiles(lod_camera, lod_settings, p.builder.bounds(), known_range);
+    stats.selection_ms += ms_since(t);
+    stats.nodes_visited += s.nodes_visited;
+    return s;
+  };
+  planet::Selection selection = select();
 
   // --- New tiles. complete_every_frame: every missing tile built here (in
   // parallel) and uploaded, first the view's, then the shadow casters'.
@@ -836,7 +873,7 @@ void Globe::draw_views(const GlobeView& view, const std::vector<GlobeView>& eye_
   // are known (below). ---
   const bool complete = p.settings.complete_every_frame;
   const auto t1 = Clock::now();
-  if (complete) stats.tiles_pending = p.complete({&selection}, stats);
+  if (complete) stats.tiles_pending = p.complete_by_generations(select, selection, stats);
   stats.generation_ms = ms_since(t1);
 
   // --- The sun's cascades and their casters: for each cascade the tiles
