@@ -259,6 +259,36 @@ TEST_F(ShorelineBinsFileTest, SyntheticLevelsAreExact) {
   EXPECT_EQ(ice.level_at(-95, 45), ice.level_at(-90, 45));
 }
 
+// levels_along_parallel gives point_level_at's level at every point: on the
+// synthetic file's parallels through its vertices (the peninsula's pinch,
+// the rings' bounds) and between them, at points on the bins' west sides,
+// in every column, in one call per parallel.
+TEST_F(ShorelineBinsFileTest, LevelsAlongAParallelArePointLevels) {
+  const std::string file = path("synthetic.nc");
+  write_synthetic(file, good_file());
+  for (const AntarcticCoast coast : {AntarcticCoast::ice_front, AntarcticCoast::grounding_line}) {
+    const ShorelineBins bins(file, coast);
+    std::vector<double> ys = {0, 3800, 4000, 5000, 5800, 6200, 6500, 6500.5, 6700, 7600, 8000, 8200,
+                              16383.5, 16384, 16384.5, 20000, 24576, 30000, 32000, 32767, 32767.5, 55000, 65535};
+    for (int k = 0; k < 64; ++k) ys.push_back(k * 1023.9);
+    std::vector<double> longitudes;
+    for (int column = 0; column < 4; ++column)
+      for (int k = 0; k <= 256; ++k) longitudes.push_back(column * 90.0 + k * 90.0 / 256.0 + (k % 3 == 1 ? 1e-3 : 0.0));
+    int coastal = 0;
+    for (int row = 0; row < 2; ++row)
+      for (const double y : ys) {
+        const double latitude = synthetic_point(row * 4, 0.0, y)[0];
+        std::vector<ShoreLevel> levels(longitudes.size());
+        bins.levels_along_parallel(latitude, longitudes.data(), longitudes.size(), levels.data());
+        for (std::size_t i = 0; i < longitudes.size(); ++i) {
+          ASSERT_EQ(levels[i], bins.point_level_at(latitude, longitudes[i])) << latitude << ", " << longitudes[i];
+          coastal += bins.level_at(latitude, longitudes[i]) == ShoreLevel::coastal;
+        }
+      }
+    EXPECT_GT(coastal, 10000);
+  }
+}
+
 TEST_F(ShorelineBinsFileTest, InconsistentFilesAreRejected) {
   struct Mutation {
     const char* what;
@@ -451,6 +481,29 @@ TEST_F(ShorelineBinsGshhgTest, LevelIsContinuousAcrossBins) {
   expect_continuous(*low_, "low, ice front");
   expect_continuous(*low_grounding_, "low, grounding line");
   expect_continuous(*intermediate_, "intermediate, ice front");
+}
+
+// levels_along_parallel gives point_level_at's level at every point of the
+// surface's coast grid (2048 points per parallel), on 97 parallels, in the
+// low and the intermediate files.
+TEST_F(ShorelineBinsGshhgTest, LevelsAlongAParallelArePointLevels) {
+  std::vector<double> longitudes(2048);
+  for (std::size_t i = 0; i < longitudes.size(); ++i) longitudes[i] = -180.0 + (double(i) + 0.5) * 360.0 / 2048.0;
+  for (const ShorelineBins* bins : {low_.get(), low_grounding_.get(), intermediate_.get()}) {
+    int land = 0, coastal = 0;
+    for (int j = 0; j < 97; ++j) {
+      const double latitude = 89.0 - j * 178.0 / 96.0 + 0.013;
+      std::vector<ShoreLevel> levels(longitudes.size());
+      bins->levels_along_parallel(latitude, longitudes.data(), longitudes.size(), levels.data());
+      for (std::size_t i = 0; i < longitudes.size(); ++i) {
+        ASSERT_EQ(levels[i], bins->point_level_at(latitude, longitudes[i])) << latitude << ", " << longitudes[i];
+        land += levels[i] != ShoreLevel::ocean;
+        coastal += bins->level_at(latitude, longitudes[i]) == ShoreLevel::coastal;
+      }
+    }
+    EXPECT_GT(land, 20000);
+    EXPECT_GT(coastal, 40000);
+  }
 }
 
 bool is_land(ShoreLevel level) { return level == ShoreLevel::land || level == ShoreLevel::island_in_lake; }

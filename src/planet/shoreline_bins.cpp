@@ -335,4 +335,57 @@ ShoreLevel ShorelineBins::point_level_at(double latitude_deg, double longitude_d
   return static_cast<ShoreLevel>(inside == 0 ? 0 : std::bit_width(inside) - 1);
 }
 
+// The same count as point_level_at's, split by what depends on the point's
+// x: a segment's crossings of the bin's west side below the point depend on
+// y alone, and an edge can cross the parallel west of the point only if it
+// crosses the parallel at all. Each crossing flips the segment's bit, so
+// the parity of the flips is the XOR of one toggle per flip.
+void ShorelineBins::levels_along_parallel(double latitude_deg, const double* longitudes_deg, std::size_t count,
+                                          ShoreLevel* out) const {
+  struct Crossing {
+    Vertex low, high;
+    unsigned bit = 0;
+  };
+  std::vector<Crossing> crossings;
+  unsigned west_toggles = 0;  // bits of the segments with an odd count of west-side flips below y
+  int run_bin = -1;
+  double run_y = 0.0;
+  for (std::size_t k = 0; k < count; ++k) {
+    const BinCell cell = locate(latitude_deg, longitudes_deg[k]);
+    const auto uniform = static_cast<ShoreLevel>(bin_levels_[cell.bin]);
+    if (uniform != ShoreLevel::coastal) {
+      out[k] = uniform;
+      continue;
+    }
+    const double px = cell.x, py = cell.y;
+    if (cell.bin != run_bin || py != run_y) {
+      run_bin = cell.bin;
+      run_y = py;
+      crossings.clear();
+      west_toggles = 0;
+      for (std::uint32_t s = first_segment_[cell.bin]; s < first_segment_[cell.bin + 1]; ++s) {
+        const Segment& segment = segments_[s];
+        const unsigned bit = 1u << segment.level;
+        const Vertex* vertex = vertices_.data() + segment.first_vertex;
+        for (std::uint32_t i = 0; i + 1 < segment.vertex_count; ++i) {
+          const Vertex& a = vertex[i];
+          const Vertex& b = vertex[i + 1];
+          const bool a_west = a.x == 0, b_west = b.x == 0;
+          if (a_west != b_west && (a_west ? a.y : b.y) <= py) west_toggles ^= bit;
+          const bool a_north = a.y > py, b_north = b.y > py;
+          if (a_north != b_north && !(a_west && b_west)) crossings.push_back({a_north ? b : a, a_north ? a : b, bit});
+        }
+      }
+    }
+    unsigned inside = ((2u << south_west_levels_[cell.bin]) - 2u) ^ west_toggles;
+    for (const Crossing& c : crossings) {
+      const double cross = (static_cast<double>(c.high.x) - c.low.x) * (py - c.low.y) -
+                           (static_cast<double>(c.high.y) - c.low.y) * (px - c.low.x);
+      if (cross < 0) inside ^= c.bit;
+    }
+    inside &= ~1u;
+    out[k] = static_cast<ShoreLevel>(inside == 0 ? 0 : std::bit_width(inside) - 1);
+  }
+}
+
 }  // namespace atmos::planet

@@ -18,6 +18,7 @@
 // shoreline_bins.cpp, with the checks made when a file is read.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -73,6 +74,14 @@ class ShorelineBins {
   // errors as level_at. Cost: linear in the coastal bin's vertex count (at
   // most 2040 in the low file, 8351 in the intermediate one).
   ShoreLevel point_level_at(double latitude_deg, double longitude_deg) const;
+
+  // point_level_at of `count` points on one parallel, the same levels: for
+  // each run of points in one coastal bin the bin's vertices are read once,
+  // to find the edges that cross the points' parallel, and each point then
+  // tests those edges alone. Cost: linear in the vertex count of each
+  // coastal bin met, plus the crossing edges per point.
+  void levels_along_parallel(double latitude_deg, const double* longitudes_deg, std::size_t count,
+                             ShoreLevel* out) const;
 
  private:
   // A segment's vertex, in 1/65535 of the bin's side from its south-west

@@ -36,16 +36,18 @@ const glm::vec3 kSeaAlbedo(0.045f, 0.06f, 0.08f);
 // step lengths; Borgefors 1986), far below what the coastal profile needs.
 class CoastDistanceGrid {
  public:
-  template <class IsLand>
-  CoastDistanceGrid(int width, int height, double radius_m, const IsLand& is_land)
+  // land_row(latitude, longitudes, count, out): 1 where the points of one
+  // parallel are land, 0 where they are sea.
+  template <class LandRow>
+  CoastDistanceGrid(int width, int height, double radius_m, const LandRow& land_row)
       : width_(width), height_(height), radius_m_(radius_m) {
     const std::size_t n = std::size_t(width) * std::size_t(height);
     std::vector<std::uint8_t> land(n);
+    std::vector<double> longitudes(static_cast<std::size_t>(width));
+    for (int i = 0; i < width; ++i) longitudes[std::size_t(i)] = -180.0 + (i + 0.5) * 360.0 / width;
     tbb::parallel_for(0, height, [&](int j) {
-      for (int i = 0; i < width; ++i) {
-        const double lat = 90.0 - (j + 0.5) * 180.0 / height, lon = -180.0 + (i + 0.5) * 360.0 / width;
-        land[std::size_t(j) * std::size_t(width) + std::size_t(i)] = is_land(lat, lon) ? 1 : 0;
-      }
+      const double lat = 90.0 - (j + 0.5) * 180.0 / height;
+      land_row(lat, longitudes.data(), longitudes.size(), land.data() + std::size_t(j) * std::size_t(width));
     });
     const std::vector<float> to_sea = distance_to(land, 0), to_land = distance_to(land, 1);
     const double half_cell = 0.5 * radius_m * kPi / height;
@@ -182,20 +184,27 @@ std::unique_ptr<Surface::Data> open_data(const PlanetSurface& s, double radius_m
     const int width = kCoastGridWidth, height = kCoastGridWidth / 2;
     if (!s.coastline.empty()) {
       const ShorelineBins bins(s.coastline);
-      data->coast = std::make_unique<CoastDistanceGrid>(width, height, radius_m, [&](double lat, double lon) {
-        return bins.point_level_at(lat, lon) != ShoreLevel::ocean;
-      });
+      data->coast = std::make_unique<CoastDistanceGrid>(
+          width, height, radius_m, [&](double lat, const double* lons, std::size_t count, std::uint8_t* out) {
+            std::vector<ShoreLevel> levels(count);
+            bins.levels_along_parallel(lat, lons, count, levels.data());
+            for (std::size_t i = 0; i < count; ++i) out[i] = levels[i] != ShoreLevel::ocean ? 1 : 0;
+          });
     } else {
       const RasterSource& imagery = *data->imagery;
       const double spacing = radius_m * kPi / height;
-      data->coast = std::make_unique<CoastDistanceGrid>(width, height, radius_m, [&](double lat, double lon) {
-        const glm::dvec3 d(std::cos(lat * kDegree) * std::cos(lon * kDegree),
-                           std::cos(lat * kDegree) * std::sin(lon * kDegree), std::sin(lat * kDegree));
-        float rgb[3];
-        std::uint8_t ok = 0;
-        imagery.sample(&d, 1, spacing, radius_m, rgb, &ok);
-        return ok != 0 && !imagery_is_sea(glm::vec3(rgb[0], rgb[1], rgb[2]));
-      });
+      data->coast = std::make_unique<CoastDistanceGrid>(
+          width, height, radius_m, [&](double lat, const double* lons, std::size_t count, std::uint8_t* out) {
+            for (std::size_t i = 0; i < count; ++i) {
+              const double lon = lons[i];
+              const glm::dvec3 d(std::cos(lat * kDegree) * std::cos(lon * kDegree),
+                                 std::cos(lat * kDegree) * std::sin(lon * kDegree), std::sin(lat * kDegree));
+              float rgb[3];
+              std::uint8_t ok = 0;
+              imagery.sample(&d, 1, spacing, radius_m, rgb, &ok);
+              out[i] = ok != 0 && !imagery_is_sea(glm::vec3(rgb[0], rgb[1], rgb[2])) ? 1 : 0;
+            }
+          });
     }
   }
   return data;
