@@ -2,6 +2,7 @@
 // the mesh error bound against bilinear interpolation on sampled grids, the
 // styles' large-scale statistics, craters, continuity, invalid settings.
 #include "planet/relief.hpp"
+#include "planet/noise_cpp.hpp"
 
 #include "atmos/atmosphere.hpp"
 
@@ -11,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <set>
@@ -56,6 +58,42 @@ void tangent_frame(const glm::dvec3& d, glm::dvec3& e1, glm::dvec3& e2) {
 
 const ReliefStyle kStyles[] = {ReliefStyle::earth, ReliefStyle::mars, ReliefStyle::venus, ReliefStyle::titan,
                                ReliefStyle::flat};
+
+// The relief's noise (octave_noise: its eight corners' hashes side by side,
+// in the copy the CPU runs) is the shared definition's, gradient_noise of
+// noise.glsl compiled here as C++, bit for bit: at points on the lattice's
+// planes, just below them, at the cells' centres, at random, near the
+// planet and far from its centre (cells beyond 2^32, wrapped), with random
+// keys and offsets.
+TEST(Relief, OctaveNoiseIsTheSharedGradientNoise) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::uniform_int_distribution<std::uint32_t> word;
+  int compared = 0, nonzero = 0;
+  for (int k = 0; k < 200000; ++k) {
+    Relief::Octave o;
+    o.inv_wavelength_per_m = std::pow(2.0, -30.0 * unit(rng) + 10.0);  // wavelengths 1 mm to 1000 km
+    o.offset = glm::dvec3(double(word(rng) >> 24), double(word(rng) >> 24), double(word(rng) >> 24)) / 256.0;
+    o.key = glm::uvec3(word(rng), word(rng), word(rng));
+    const double scale = k % 4 == 0 ? 1e10 : kEarthRadius;
+    glm::dvec3 p = (glm::dvec3(unit(rng), unit(rng), unit(rng)) * 2.0 - 1.0) * scale;
+    const glm::dvec3 q = p * o.inv_wavelength_per_m + o.offset;
+    if (k % 5 == 1) p = (glm::floor(q) - o.offset) / o.inv_wavelength_per_m;  // on the planes (up to rounding)
+    if (k % 5 == 2) p = (glm::floor(q) + 0.5 - o.offset) / o.inv_wavelength_per_m;
+    if (k % 5 == 3) p = (glm::floor(q) + 1.0 - 1e-9 - o.offset) / o.inv_wavelength_per_m;
+    const glm::dvec3 r = p * o.inv_wavelength_per_m + o.offset;
+    const glm::dvec3 floor_r(std::floor(r.x), std::floor(r.y), std::floor(r.z));
+    const glm::uvec3 cell(std::uint32_t(std::int64_t(floor_r.x)), std::uint32_t(std::int64_t(floor_r.y)),
+                          std::uint32_t(std::int64_t(floor_r.z)));
+    const double shared = atmos::planet::gradient_noise(cell, r - floor_r, o.key);
+    const double fast = atmos::planet::octave_noise(p, o);
+    ASSERT_EQ(std::memcmp(&shared, &fast, sizeof(double)), 0) << k << ": " << shared << " vs " << fast;
+    ++compared;
+    nonzero += shared != 0.0;
+  }
+  EXPECT_EQ(compared, 200000);
+  EXPECT_GT(nonzero, 120000);
+}
 
 TEST(Relief, SameSeedSameHeightsOtherSeedOtherHeights) {
   const auto directions = random_directions(2000, 7);

@@ -49,6 +49,12 @@
 #include <string>
 #include <utility>
 
+#if defined(ATMOS_KERNEL_CLONES) && defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define ATMOS_NOISE_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define ATMOS_NOISE_CLONES
+#endif
+
 namespace atmos::planet {
 
 namespace {
@@ -80,15 +86,22 @@ uvec3 layer_key(std::uint64_t seed, std::uint32_t layer, std::uint32_t index) {
   return pcg3d(uvec3(std::uint32_t(seed), std::uint32_t(seed >> 32), layer * 65536u + index));
 }
 
+}  // namespace
+
 // Split lattice coordinates of p / wavelength + offset: the cell (int64
 // floor, wrapped to 32 bits for the hash) and the fraction in [0, 1).
-double octave_noise(const glm::dvec3& p_m, const Relief::Octave& octave) {
+// Compiled also for AVX2 (one register for the eight corners' hashes) and
+// chosen at run time, as the precomputation's kernels are (ATMOS_KERNEL_CLONES);
+// AVX2 without FMA, so that both copies round alike.
+ATMOS_NOISE_CLONES double octave_noise(const glm::dvec3& p_m, const Relief::Octave& octave) {
   const glm::dvec3 q = p_m * octave.inv_wavelength_per_m + octave.offset;
   const glm::dvec3 floor_q(std::floor(q.x), std::floor(q.y), std::floor(q.z));
   const uvec3 cell(std::uint32_t(std::int64_t(floor_q.x)), std::uint32_t(std::int64_t(floor_q.y)),
                    std::uint32_t(std::int64_t(floor_q.z)));
-  return gradient_noise(cell, q - floor_q, octave.key);
+  return gradient_noise_lanes(cell, q - floor_q, octave.key);
 }
+
+namespace {
 
 // Octaves of wavelength lambda_0 2^-k (k < count), amplitude a_0 gain^k, each
 // on its own lattice (key) shifted by a dyadic fraction so that the lattices

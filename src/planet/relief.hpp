@@ -176,4 +176,9 @@ class Relief {
   double crater_presence_low_ = 0, crater_presence_high_ = 0;
 };
 
+// One octave's noise at p (planet-centred m): gradient_noise (noise.glsl) on
+// the octave's lattice, p / wavelength + offset. The relief's layers are
+// sums of it.
+double octave_noise(const glm::dvec3& p_m, const Relief::Octave& octave);
+
 }  // namespace atmos::planet
