@@ -8,7 +8,8 @@
 #   -DSKIP_APP_SUITES=1 (those suites are not registered: their programs are not built)
 #   -DSLOW_SUITES="regex of the unit suites slow under the sanitizers" (label slow)
 #   -DTIMES=<file of "suite seconds" lines> -DTIMEOUT=seconds -DENVIRONMENT="VAR=value;..."
-#   -DGPU_ENVIRONMENT="VAR=value;..." (added for the gpu and apps suites)
+#   -DGPU_ENVIRONMENT="VAR=value;..." (added for the gpu and apps suites but
+#    those of -DDRAW_BOUND_SUITES="regex")
 execute_process(COMMAND ${EXECUTABLE} --gtest_list_tests OUTPUT_VARIABLE listing RESULT_VARIABLE result
                 ERROR_VARIABLE errors)
 if(NOT result EQUAL 0)
@@ -71,7 +72,8 @@ foreach(line IN LISTS lines)
       set(cost " COST ${seconds}")
     endif()
     set(environment ${ENVIRONMENT})
-    if((GPU_SUITES AND suite MATCHES "${GPU_SUITES}") OR (APP_SUITES AND suite MATCHES "${APP_SUITES}"))
+    if(((GPU_SUITES AND suite MATCHES "${GPU_SUITES}") OR (APP_SUITES AND suite MATCHES "${APP_SUITES}"))
+       AND NOT (DRAW_BOUND_SUITES AND suite MATCHES "${DRAW_BOUND_SUITES}"))
       list(APPEND environment ${GPU_ENVIRONMENT})
     endif()
     string(REPLACE ";" "\\;" environment_arg "${environment}")
