@@ -422,10 +422,13 @@ struct Globe::Impl {
   // Each generation's own heights bound its descendants tightly, so the
   // selection the frame ends with is the one it would make with every tile
   // resident, and only its tiles and their ancestors are built. Returns the
-  // selected tiles still pending (beyond the memory cap).
+  // selected tiles still pending (beyond the memory cap). At most one
+  // generation per level of the quadtree, and a few more: under a memory
+  // cap that evicts what an earlier generation built, the selections could
+  // otherwise ask for the same tiles again and again.
   int complete_by_generations(const std::function<planet::Selection()>& select, planet::Selection& selection,
                               GlobeStats& out) {
-    for (;;) {
+    for (int generations = 0; generations < 2 * planet::kMaxTileLevel; ++generations) {
       std::vector<TileKey> generation;
       std::set<std::uint64_t> listed;
       for (const planet::SelectedTile& t : selection.tiles) {
@@ -873,8 +876,9 @@ void Globe::draw_views(const GlobeView& view, const std::vector<GlobeView>& eye_
   // are known (below). ---
   const bool complete = p.settings.complete_every_frame;
   const auto t1 = Clock::now();
+  const double selection_before_ms = stats.selection_ms;
   if (complete) stats.tiles_pending = p.complete_by_generations(select, selection, stats);
-  stats.generation_ms = ms_since(t1);
+  stats.generation_ms = ms_since(t1) - (stats.selection_ms - selection_before_ms);
 
   // --- The sun's cascades and their casters: for each cascade the tiles
   // of the view's level of detail inside its box's prism along the sun (the
