@@ -1,5 +1,8 @@
 // The `atmos` command line, end to end: exit codes, one-line errors, CSV
-// output, and physically plausible images.
+// output, and physically plausible images. CliRenders (the full tier): the
+// projections and the CPU path, the all-sky fisheye, the eclipsed ground and
+// the stereo pair, whose functions the default tier tests in the library's
+// suites (Plugin, GlobeGpu, EclipseGpu, StereoGpu).
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -619,7 +622,7 @@ TEST(Cli, DateAndPlaceSetTheSunAndTheMoon) {
   EXPECT_EQ(r.code, 0) << r.err;
 }
 
-TEST(Cli, RenderProjectionsAndCpuPath) {
+TEST(CliRenders, RenderProjectionsAndCpuPath) {
   for (const char* projection : {"perspective", "fisheye", "equirect"}) {
     const atmos::Image image = render(std::string("--projection ") + projection + " --size 32x16", projection);
     EXPECT_EQ(image.width, 32);
@@ -726,7 +729,7 @@ TEST(Cli, GlobeOfMarsReachesBelowItsDatum) {
 // in the right eye than in the left: 35.1 px in a 10° field 96 px tall
 // (bound 0.5 px: the disc is 5 px wide, its centroid sampled at pixel
 // centres).
-TEST(Cli, StereoRendersEachEyeThroughItsOwnFrustum) {
+TEST(CliRenders, StereoRendersEachEyeThroughItsOwnFrustum) {
   const std::string view = "--altitude 2 --sun-elevation 20 --sun-azimuth 180 --look 180,20 --fov 10 --size 96x96";
   const atmos::Image pair = render(view + " --stereo side-by-side --ipd 0.064 --convergence 1", "stereo-pair");
   ASSERT_EQ(pair.width, 192);
@@ -791,7 +794,7 @@ TEST(Cli, GlobeFromOrbitShowsThePlanet) {
 // (which fixes the image's orientation: the sky is brighter towards the
 // sun), and outside the image circle is black. Over the globe's own ground
 // (the north pole's sea ice, albedo about 0.8) the whole sky is brighter.
-TEST(Cli, GlobeFisheyeAllSkyMatchesTheSphereSky) {
+TEST(CliRenders, GlobeFisheyeAllSkyMatchesTheSphereSky) {
   const std::string view = "--projection fisheye --look 0,90 --sun-azimuth 135 --sun-elevation 20 --size 96x96";
   const atmos::Image globe = render(view + " --planet-albedo", "globe-allsky");
   const atmos::Image ice = render(view, "globe-allsky-ice");
@@ -816,7 +819,7 @@ TEST(Cli, GlobeFisheyeAllSkyMatchesTheSphereSky) {
 // factors for the sun's and the sky's light, atmos_eclipse). The ground 4 m
 // away (the north pole's flat sea ice and the flat sphere) has
 // the same mix of sun and sky light in both.
-TEST(Cli, GlobeGroundDimsInAnEclipse) {
+TEST(CliRenders, GlobeGroundDimsInAnEclipse) {
   const std::string view = " --sun-elevation 40 --sun-azimuth 180 --look 180,-30 --fov 20 --size 32x32";
   const std::string moon = " --moon 180,40.3,0.3";
   double ratio[2] = {0.0, 0.0};

@@ -1,7 +1,9 @@
 // atmos view end to end under Xvfb: a screenshot of sky over ground,
 // scripted flying and slider drags, deterministic replays, and one-line
 // errors for bad input. The flight model, the recorded flights and the
-// scripts are unit-tested in flight_test.cpp.
+// scripts are unit-tested in flight_test.cpp. ViewCliLong (the full tier):
+// new tables shown first by the instant mode, the date's sun and moon, a
+// rebind over the same ground and the anaglyph.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -155,7 +157,7 @@ TEST(ViewCli, ScriptFliesTheCameraAndDragsASlider) {
 // --date: the sun and the Moon of that instant over the starting point. In
 // the totality of 8 April 2024 at Mazatlan the sky is dark; an hour later,
 // with the Moon off the sun, it is a day sky again.
-TEST(ViewCli, DatePlacesTheSunAndTheMoonOfThatInstant) {
+TEST(ViewCliLong, DatePlacesTheSunAndTheMoonOfThatInstant) {
   SKIP_WITHOUT_VIEWER();
   const auto sky = [&](const std::string& time) {
     const fs::path png = scratch() / ("date-" + time.substr(0, 2) + ".png");
@@ -182,7 +184,7 @@ TEST(ViewCli, DatePlacesTheSunAndTheMoonOfThatInstant) {
 // the viewer's thread. The swap's frames against the median are printed,
 // not asserted: the first draws with the new programs still compile their
 // machine code on llvmpipe (docs/viewer.md).
-TEST(ViewCli, TablesOverTheSameGroundRebindTheGlobe) {
+TEST(ViewCliLong, TablesOverTheSameGroundRebindTheGlobe) {
   SKIP_WITHOUT_VIEWER();
   const fs::path script = scratch() / "reswap.json";
   std::ofstream(script) << R"({"events": [{"frame": 2, "planet": "earth"}]})";
@@ -203,7 +205,7 @@ TEST(ViewCli, TablesOverTheSameGroundRebindTheGlobe) {
 // pass and lit through its GLSL library, while the exact tables are
 // computed; then the exact ones replace them. With --no-instant-preview
 // the old tables stay until the exact ones are there.
-TEST(ViewCli, NewTablesShowTheInstantApproximationFirst) {
+TEST(ViewCliLong, NewTablesShowTheInstantApproximationFirst) {
   SKIP_WITHOUT_VIEWER();
   const fs::path script = scratch() / "instant.json";
   std::ofstream(script) << R"({"events": [{"frame": 2, "frames": 2, "slider": "density_scale", "from": 1.2, "to": 1.37}]})";
@@ -241,7 +243,7 @@ glm::dvec2 channel_disc_centre(const atmos::Image& image, int channel) {
 // per unit of tangent (180 px over 5°, where the disc is 19 px across):
 // 10.31 px, at the same height. The PNG is the window as shown, with the
 // panel's Stereo section.
-TEST(ViewCli, AnaglyphPutsEachEyesSunWhereItsFrustumDoes) {
+TEST(ViewCliLong, AnaglyphPutsEachEyesSunWhereItsFrustumDoes) {
   SKIP_WITHOUT_VIEWER();
   const fs::path png = scratch() / "anaglyph.png", exr = scratch() / "anaglyph.exr";
   const CliRun r = view("--frames 2 --stereo anaglyph --ipd 0.01 --convergence 2 --fov 5 --pitch 5 "
