@@ -301,45 +301,16 @@ ShoreLevel ShorelineBins::level_at(double latitude_deg, double longitude_deg) co
 }
 
 ShoreLevel ShorelineBins::point_level_at(double latitude_deg, double longitude_deg) const {
-  const BinCell cell = locate(latitude_deg, longitude_deg);
-  const auto uniform = static_cast<ShoreLevel>(bin_levels_[cell.bin]);
-  if (uniform != ShoreLevel::coastal) return uniform;
-
-  // Bit L set: the point is inside A_L (see the derivation above). The corner
-  // is inside A_1 .. A_level.
-  unsigned inside = (2u << south_west_levels_[cell.bin]) - 2u;
-  const double px = cell.x, py = cell.y;
-  for (std::uint32_t s = first_segment_[cell.bin]; s < first_segment_[cell.bin + 1]; ++s) {
-    const Segment& segment = segments_[s];
-    const unsigned bit = 1u << segment.level;
-    const Vertex* vertex = vertices_.data() + segment.first_vertex;
-    unsigned flips = 0;
-    for (std::uint32_t i = 0; i + 1 < segment.vertex_count; ++i) {
-      const Vertex& a = vertex[i];
-      const Vertex& b = vertex[i + 1];
-      const bool a_west = a.x == 0, b_west = b.x == 0;
-      if (a_west != b_west && (a_west ? a.y : b.y) <= py) ++flips;
-      const bool a_north = a.y > py, b_north = b.y > py;
-      if (a_north != b_north && !(a_west && b_west)) {
-        const Vertex& low = a_north ? b : a;
-        const Vertex& high = a_north ? a : b;
-        // p lies east of the upward edge low -> high: the edge crosses the
-        // parallel west of p.
-        const double cross = (static_cast<double>(high.x) - low.x) * (py - low.y) - (static_cast<double>(high.y) - low.y) * (px - low.x);
-        if (cross < 0) ++flips;
-      }
-    }
-    if (flips & 1u) inside ^= bit;
-  }
-  inside &= ~1u;
-  return static_cast<ShoreLevel>(inside == 0 ? 0 : std::bit_width(inside) - 1);
+  ShoreLevel level = ShoreLevel::ocean;
+  levels_along_parallel(latitude_deg, &longitude_deg, 1, &level);
+  return level;
 }
 
-// The same count as point_level_at's, split by what depends on the point's
-// x: a segment's crossings of the bin's west side below the point depend on
-// y alone, and an edge can cross the parallel west of the point only if it
-// crosses the parallel at all. Each crossing flips the segment's bit, so
-// the parity of the flips is the XOR of one toggle per flip.
+// The path's crossings (the level of a point, above), split by what depends
+// on the point's x: those of the west leg depend on the parallel alone, and
+// an edge can pass west of the point only if it crosses the parallel. Bit L
+// of `inside` says whether the point is in A_L: set for L <= the corner's
+// level, then flipped at each crossing of a level-L segment.
 void ShorelineBins::levels_along_parallel(double latitude_deg, const double* longitudes_deg, std::size_t count,
                                           ShoreLevel* out) const {
   struct Crossing {
