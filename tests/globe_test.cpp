@@ -74,6 +74,16 @@ class GlobeGpu : public atmos_test::EarthGpuTest {
     return v;
   }
 
+  // The descents' site (about 50° N) and its local up and north.
+  struct Site {
+    glm::dvec3 up, north;
+  };
+  static Site descent_site() {
+    const glm::dvec3 up = glm::normalize(glm::dvec3(0.2, -0.6, 0.77));
+    const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), up));
+    return {up, glm::cross(up, east)};
+  }
+
   // The same view drawn by a globe without and one with shadows.
   struct Images {
     std::vector<float> off, on, depth_off, depth_on;
@@ -117,9 +127,8 @@ TEST_F(GlobeGpu, DescentFromOrbitToTheGroundHasNoHoles) {
   atmos::Globe globe(*earth_, surface_of(atmos::SurfaceStyle::earth, 1), *pass_, settings);
   const int width = 160, height = 90;
   Target target(width, height);
-  const glm::dvec3 up = glm::normalize(glm::dvec3(0.2, -0.6, 0.77));
-  const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), up));
-  const glm::dvec3 north = glm::cross(up, east);
+  const Site site = descent_site();
+  const glm::dvec3 up = site.up, north = site.north;
   const double radius = earth_->bottom_radius_m;
   const double ground = radius + globe.height_m(up * radius);
   // Below the relief, and below the chord of a level-1 tile edge.
@@ -165,9 +174,8 @@ TEST_F(GlobeGpu, ACompleteFrameBuildsTheTilesOfItsSettledSelection) {
   settings.complete_every_frame = true;
   const int width = 96, height = 64;
   Target target(width, height);
-  const glm::dvec3 up = glm::normalize(glm::dvec3(0.2, -0.6, 0.77));
-  const glm::dvec3 east = glm::normalize(glm::cross(glm::dvec3(0, 0, 1), up));
-  const glm::dvec3 north = glm::cross(up, east);
+  const Site site = descent_site();
+  const glm::dvec3 up = site.up, north = site.north;
   const double radius = earth_->bottom_radius_m;
   for (const double pitch_deg : {-10.0, 40.0}) {
     atmos::Globe globe(*earth_, surface_of(atmos::SurfaceStyle::earth, 1), *pass_, settings);
