@@ -100,6 +100,17 @@ void BM_InstantMode(benchmark::State& state) {
 }
 BENCHMARK(BM_InstantMode)->Args({1920, 1080})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
+// `atmos bench`'s figures of the sea over the globe (harness.hpp:
+// time_water), arguments width and height, each as a counter (ms, and the
+// sea's share of the frame).
+void BM_Water(benchmark::State& state) {
+  Scene& s = scene();
+  for (auto _ : state)
+    atmos_bench::time_water(s.atmosphere, s.tables, int(state.range(0)), int(state.range(1)),
+                            [&](const atmos_bench::Figure& f) { state.counters[f.name] = f.value; });
+}
+BENCHMARK(BM_Water)->Args({1920, 1080})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+
 // The globe's tile selection on the CPU (src/planet/tile_selection.hpp):
 // Earth (6360 km, heights -430..8848 m, no per-tile height ranges), error
 // 0.1 x vertex spacing plus the sagitta, 1 px at 1080 p, 60 degree field of

@@ -278,34 +278,44 @@ atmos::GlobeView globe_view(const atmos::Globe& globe, const atmos::Atmosphere& 
   return view;
 }
 
-}  // namespace
+// An engine's frame for the globe: its colour and depth targets and the
+// pass's output at width x height. frame() draws the terrain into them, the
+// sea over it if `ocean` (its own time in `sea_ms`), then the pass; it
+// returns the whole frame's wall-clock time up to glFinish, ms, and the
+// terrain's in `terrain_ms`.
+class EngineFrame {
+ public:
+  EngineFrame(atmos::AtmospherePass& pass, int width, int height) : pass_(pass), width_(width), height_(height) {
+    glCreateTextures(GL_TEXTURE_2D, 1, &colour_);
+    glTextureStorage2D(colour_, 1, GL_RGBA16F, width, height);
+    glCreateTextures(GL_TEXTURE_2D, 1, &depth_);
+    glTextureStorage2D(depth_, 1, GL_DEPTH_COMPONENT32F, width, height);
+    glCreateTextures(GL_TEXTURE_2D, 1, &output_);
+    glTextureStorage2D(output_, 1, GL_RGBA16F, width, height);
+    glCreateFramebuffers(1, &framebuffer_);
+    glNamedFramebufferTexture(framebuffer_, GL_COLOR_ATTACHMENT0, colour_, 0);
+    glNamedFramebufferTexture(framebuffer_, GL_DEPTH_ATTACHMENT, depth_, 0);
+  }
+  EngineFrame(const EngineFrame&) = delete;
+  EngineFrame& operator=(const EngineFrame&) = delete;
+  ~EngineFrame() {
+    glDeleteFramebuffers(1, &framebuffer_);
+    glDeleteTextures(1, &colour_);
+    glDeleteTextures(1, &depth_);
+    glDeleteTextures(1, &output_);
+  }
 
-void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, int width, int height,
-                const FigureSink& sink) {
-  atmos::AtmospherePass pass(atmosphere, tables, atmos::PlanetFrame{});
-  GLuint colour = 0, depth = 0, output = 0, framebuffer = 0;
-  glCreateTextures(GL_TEXTURE_2D, 1, &colour);
-  glTextureStorage2D(colour, 1, GL_RGBA16F, width, height);
-  glCreateTextures(GL_TEXTURE_2D, 1, &depth);
-  glTextureStorage2D(depth, 1, GL_DEPTH_COMPONENT32F, width, height);
-  glCreateTextures(GL_TEXTURE_2D, 1, &output);
-  glTextureStorage2D(output, 1, GL_RGBA16F, width, height);
-  glCreateFramebuffers(1, &framebuffer);
-  glNamedFramebufferTexture(framebuffer, GL_COLOR_ATTACHMENT0, colour, 0);
-  glNamedFramebufferTexture(framebuffer, GL_DEPTH_ATTACHMENT, depth, 0);
-  using Clock = std::chrono::steady_clock;
-  const auto ms_since = [](Clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-  };
-  // One frame: the terrain into the engine's targets, the sea over it if
-  // `ocean` (its own time in `sea_ms`), then the pass.
-  const auto frame = [&](atmos::Globe& globe, const atmos::GlobeView& view, double& terrain_ms,
-                         atmos::Ocean* ocean = nullptr, double* sea_ms = nullptr) {
+  double operator()(atmos::Globe& globe, const atmos::GlobeView& view, double& terrain_ms,
+                    atmos::Ocean* ocean = nullptr, double* sea_ms = nullptr) {
+    using Clock = std::chrono::steady_clock;
+    const auto ms_since = [](Clock::time_point t0) {
+      return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    };
     const auto t0 = Clock::now();
     const float clear_colour[4] = {0, 0, 0, 0}, clear_depth = 0.0f;
-    glClearNamedFramebufferfv(framebuffer, GL_COLOR, 0, clear_colour);
-    glClearNamedFramebufferfv(framebuffer, GL_DEPTH, 0, &clear_depth);
-    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+    glClearNamedFramebufferfv(framebuffer_, GL_COLOR, 0, clear_colour);
+    glClearNamedFramebufferfv(framebuffer_, GL_DEPTH, 0, &clear_depth);
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
     globe.draw(view);
     glFinish();
     terrain_ms = ms_since(t0);
@@ -316,25 +326,38 @@ void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables
       if (sea_ms != nullptr) *sea_ms = ms_since(sea_start);
     }
     atmos::FrameInput input;
-    input.colour = colour;
-    input.depth = depth;
-    input.width = width;
-    input.height = height;
+    input.colour = colour_;
+    input.depth = depth_;
+    input.width = width_;
+    input.height = height_;
     input.depth_encoding = atmos::DepthEncoding::reversed_z;
     input.view = view.view;
     input.projection = view.projection;
     input.sun_direction = view.sun_direction;
     input.nits_per_unit = view.nits_per_unit;
-    input.output = output;
+    input.output = output_;
     // With the globe's shadows, its farthest cascade for the light shafts.
     const atmos::GlobeShadowMap shadow = globe.shadow_map_for_pass();
     input.shadow_map = shadow.texture;
     input.shadow_matrix = shadow.matrix;
-    pass.render(input);
+    pass_.render(input);
     glFinish();
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     return ms_since(t0);
-  };
+  }
+
+ private:
+  atmos::AtmospherePass& pass_;
+  int width_, height_;
+  GLuint colour_ = 0, depth_ = 0, output_ = 0, framebuffer_ = 0;
+};
+
+}  // namespace
+
+void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, int width, int height,
+                const FigureSink& sink) {
+  atmos::AtmospherePass pass(atmosphere, tables, atmos::PlanetFrame{});
+  EngineFrame frame(pass, width, height);
   {
     atmos::GlobeSettings settings;
     settings.complete_every_frame = true;
@@ -387,34 +410,6 @@ void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables
     }
   }
   {
-    // The sea (atmos::Ocean) over the Pacific at 0°, 150° W, drawn after the
-    // terrain: the frame with it, the sea's own draw, and the frame without
-    // it, from 2 m, 1 km and 400 km above the sea level.
-    atmos::GlobeSettings settings;
-    settings.complete_every_frame = true;
-    const atmos::PlanetSurface surface = atmos::load_surface("earth");
-    atmos::Globe globe(atmosphere, surface, pass, settings);
-    atmos::Ocean ocean(atmosphere, surface, pass);
-    const std::pair<const char*, double> altitudes[] = {{"2m", 2.0}, {"1km", 1e3}, {"400km", 400e3}};
-    for (const auto& [name, altitude] : altitudes) {
-      const atmos::GlobeView view =
-          globe_view(globe, atmosphere, altitude, width, height, 0.0, -150.0, ocean.sea_level_m());
-      double terrain_ms = 0.0, sea_ms = 0.0;
-      frame(globe, view, terrain_ms, &ocean, &sea_ms);  // generates the tiles, compiles the programs
-      std::vector<double> with_sea, without_sea, sea;
-      for (int i = 0; i < 3; ++i) {
-        without_sea.push_back(frame(globe, view, terrain_ms));
-        with_sea.push_back(frame(globe, view, terrain_ms, &ocean, &sea_ms));
-        sea.push_back(sea_ms);
-      }
-      const std::string prefix = std::string("water.") + name;
-      sink({prefix + ".frame", median(with_sea), "ms"});
-      sink({prefix + ".sea", median(sea), "ms"});
-      sink({prefix + ".frame_without_sea", median(without_sea), "ms"});
-      sink({prefix + ".overhead", median(with_sea) / median(without_sea) - 1.0, "ratio"});
-    }
-  }
-  {
     // The descent: tiles streamed as a viewer would.
     atmos::Globe globe(atmosphere, atmos::load_surface("earth"), pass, atmos::GlobeSettings{});
     const double first = 2.5 * atmosphere.bottom_radius_m, last = 2.0;
@@ -435,10 +430,38 @@ void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables
     sink({"globe.descent.max", longest, "ms"});
     sink({"globe.descent.max_over_median", longest / median(times), "ratio"});
   }
-  glDeleteFramebuffers(1, &framebuffer);
-  glDeleteTextures(1, &colour);
-  glDeleteTextures(1, &depth);
-  glDeleteTextures(1, &output);
+}
+
+void time_water(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, int width, int height,
+                const FigureSink& sink) {
+  atmos::AtmospherePass pass(atmosphere, tables, atmos::PlanetFrame{});
+  EngineFrame frame(pass, width, height);
+  // The sea (atmos::Ocean) over the Pacific at 0°, 150° W, drawn after the
+  // terrain: the frame with it, the sea's own draw, and the frame without
+  // it, from 2 m, 1 km and 400 km above the sea level.
+  atmos::GlobeSettings settings;
+  settings.complete_every_frame = true;
+  const atmos::PlanetSurface surface = atmos::load_surface("earth");
+  atmos::Globe globe(atmosphere, surface, pass, settings);
+  atmos::Ocean ocean(atmosphere, surface, pass);
+  const std::pair<const char*, double> altitudes[] = {{"2m", 2.0}, {"1km", 1e3}, {"400km", 400e3}};
+  for (const auto& [name, altitude] : altitudes) {
+    const atmos::GlobeView view =
+        globe_view(globe, atmosphere, altitude, width, height, 0.0, -150.0, ocean.sea_level_m());
+    double terrain_ms = 0.0, sea_ms = 0.0;
+    frame(globe, view, terrain_ms, &ocean, &sea_ms);  // generates the tiles, compiles the programs
+    std::vector<double> with_sea, without_sea, sea;
+    for (int i = 0; i < 3; ++i) {
+      without_sea.push_back(frame(globe, view, terrain_ms));
+      with_sea.push_back(frame(globe, view, terrain_ms, &ocean, &sea_ms));
+      sea.push_back(sea_ms);
+    }
+    const std::string prefix = std::string("water.") + name;
+    sink({prefix + ".frame", median(with_sea), "ms"});
+    sink({prefix + ".sea", median(sea), "ms"});
+    sink({prefix + ".frame_without_sea", median(without_sea), "ms"});
+    sink({prefix + ".overhead", median(with_sea) / median(without_sea) - 1.0, "ratio"});
+  }
 }
 
 void time_post(atmos::Renderer& renderer, const atmos::Camera& camera, const FigureSink& sink) {
@@ -506,6 +529,7 @@ void run_all(const atmos::Atmosphere& atmosphere, const atmos::PrecomputeOptions
   time_ground_albedo(atmosphere, options, sink);
   time_post(renderer, camera, sink);
   time_globe(atmosphere, tables, width, height, sink);
+  time_water(atmosphere, tables, width, height, sink);
 }
 
 }  // namespace atmos_bench

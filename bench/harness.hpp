@@ -144,11 +144,20 @@ void time_post(atmos::Renderer& renderer, const atmos::Camera& camera, const Fig
 void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, int width, int height,
                 const FigureSink& sink);
 
+// The sea (atmos::Ocean, Earth) over the globe at width x height, over the
+// Pacific at 0°, 150° W from 2 m, 1 km and 400 km above the sea level
+// (`water.2m.*`, `water.1km.*`, `water.400km.*`): the frame with the sea,
+// the sea's own draw, the frame without it and the sea's share,
+// frame / frame_without_sea - 1 (`.overhead`); medians of 3 frames after one
+// that generates the tiles and compiles the programs.
+void time_water(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, int width, int height,
+                const FigureSink& sink);
+
 // Everything `atmos bench` reports, in its order: the precomputation of
 // `atmosphere` with `options`, the spectral one, the renderer (sun 20° up;
 // a total eclipse, sun 40° up, seen from the centre of the shadow; twilight
 // with the spectral tables, sun 3° below the horizon), the plugin, the
-// post-processing and the globe, frames of width x height. Creates a headless OpenGL
+// post-processing, the globe and the sea, frames of width x height. Creates a headless OpenGL
 // context (atmos::Error without one).
 void run_all(const atmos::Atmosphere& atmosphere, const atmos::PrecomputeOptions& options, int width, int height,
              const FigureSink& sink);

@@ -241,15 +241,17 @@ void main() {
   vec3 surface_offset = offset;
   float surface_depth = depth;
   ocean_wave_count = 0;
-  if (waves_can_displace != 0) ocean_select_displacing_waves(footprint, mu_v, along_wind);
-  if (ocean_wave_count > 0 && (terms & 64) == 0) {
-    float t_surface;
-    if (!ocean_displaced_hit(d, b, camera_height_term, sea_radius, t_surface)) discard;
-    surface_offset = t_surface * d;
-    vec4 surface_clip = clip_from_offset * vec4(surface_offset, 1.0);
-    if (!(surface_clip.w > 0.0)) discard;
-    surface_depth = surface_clip.z / surface_clip.w;
-    point = camera_planet + surface_offset;
+  if (waves_can_displace != 0) {
+    ocean_select_displacing_waves(footprint, mu_v, along_wind);
+    if (ocean_wave_count > 0 && (terms & 64) == 0) {
+      float t_surface;
+      if (!ocean_displaced_hit(d, b, camera_height_term, sea_radius, t_surface)) discard;
+      surface_offset = t_surface * d;
+      vec4 surface_clip = clip_from_offset * vec4(surface_offset, 1.0);
+      if (!(surface_clip.w > 0.0)) discard;
+      surface_depth = surface_clip.z / surface_clip.w;
+      point = camera_planet + surface_offset;
+    }
   }
 
   // The resolved waves' slopes and variance, at the surface's point.
