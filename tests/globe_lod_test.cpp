@@ -544,6 +544,76 @@ TEST(GlobeLod, CullingIsConservative) {
   EXPECT_GT(culled, 10000);
 }
 
+TEST(GlobeLod, TilePlaneMaximumIsTheSampledMaximum) {
+  // Random tiles and planes through points near them: the exact largest
+  // signed distance bounds a dense sample of the tile between its radii
+  // from above, and exceeds it by no more than the sample's spacing.
+  std::mt19937_64 rng(2001);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const TileKey key = random_key(rng, int(rng() % 16));
+    const double lo = kRadius - 500.0 - 9000.0 * unit(rng), hi = kRadius + 9000.0 * unit(rng);
+    const glm::dvec3 n = glm::normalize(glm::dvec3(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5));
+    const glm::dvec3 through = planet::tile_direction(key, 1.4 * unit(rng) - 0.2, 1.4 * unit(rng) - 0.2) *
+                               (lo + (hi - lo) * unit(rng));
+    const glm::dvec4 plane(n, -glm::dot(n, through));
+    const double exact = planet::tile_plane_max_m(plane, key, lo, hi);
+    double sampled = -INFINITY;
+    for (int j = 0; j <= 32; ++j)
+      for (int i = 0; i <= 32; ++i)
+        for (const double s : {lo, hi})
+          sampled = std::max(sampled, glm::dot(n, planet::tile_direction(key, i / 32.0, j / 32.0) * s) + plane.w);
+    const double rounding = 1e-9 * (hi + std::abs(plane.w));
+    ASSERT_GE(exact, sampled - rounding) << trial;
+    ASSERT_LE(exact, sampled + hi * planet::max_tile_diagonal_angle(key.level) / 32.0 + rounding) << trial;
+  }
+}
+
+TEST(GlobeLod, EveryDrawnAreaReachesIntoEverySidePlane) {
+  // Every tile known to lie between 0 and 1 m, the camera 2 m above it,
+  // a 10 degree field: towards the horizon and 40 degrees up (no ground in
+  // view but the tiles around the camera's foot). Each drawn area (a
+  // selected tile's quadrant, with the tile's height range) has a point on
+  // the inner side of each of the four side planes, to within the sample's
+  // spacing: no area is kept that one plane alone excludes, as bounding
+  // spheres of the tiles near the camera, whose planes pass through it,
+  // would keep.
+  const LodSettings settings;
+  const ReliefBounds bounds = earth_bounds();
+  const planet::TileHeightRange flat = [](const TileKey&, double& lo, double& hi) {
+    lo = 0.0;
+    hi = 1.0;
+    return true;
+  };
+  const glm::dvec3 up = glm::normalize(glm::dvec3(0.3, 0.8, 0.5));
+  for (const double pitch : {-5.0, 40.0}) {
+    const LodCamera camera = make_camera(up, 2.0, pitch, 30.0, 10.0);
+    const std::array<glm::dvec4, 4> planes = planet::frustum_side_planes(camera.view_projection);
+    const Selection selection = planet::select_tiles(camera, settings, bounds, flat);
+    if (pitch < 0.0) {
+      EXPECT_GT(selection.tiles.size(), 50u);
+    } else {
+      EXPECT_LE(selection.tiles.size(), 4u);
+    }
+    for (const SelectedTile& t : selection.tiles)
+      for (int q = 0; q < 4; ++q) {
+        if ((t.quadrants & (1u << q)) == 0) continue;
+        const TileKey area = planet::child(t.key, q);
+        const double lo = kRadius + t.min_height_m, hi = kRadius + t.max_height_m;
+        const double spacing = hi * planet::max_tile_diagonal_angle(area.level) / 16.0;
+        for (const glm::dvec4& plane : planes) {
+          double sampled = -INFINITY;
+          for (int j = 0; j <= 16; ++j)
+            for (int i = 0; i <= 16; ++i)
+              for (const double s : {lo, hi})
+                sampled = std::max(sampled, glm::dot(glm::dvec3(plane), planet::tile_direction(area, i / 16.0, j / 16.0) * s) + plane.w);
+          ASSERT_GE(sampled, -spacing - 1e-9 * (hi + std::abs(plane.w)))
+              << "pitch " << pitch << ": level " << t.key.level << " quadrant " << q << " lies outside a side plane";
+        }
+      }
+  }
+}
+
 TEST(GlobeLod, HorizonTestAgreesWithTheSphere) {
   const double r = kRadius;
   const glm::dvec3 camera(0, 0, r + 1000.0);

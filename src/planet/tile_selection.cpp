@@ -70,38 +70,56 @@ double checked_error(const ReliefBounds& bounds, double spacing_m) {
 double highest_radius(const ReliefBounds& b) { return b.radius_m + std::max(b.max_height_m, 0.0); }
 
 // The tile's footprint: corner directions (s, t) = (0,0), (1,0), (1,1),
-// (0,1), and tan of its equal-angle bounds on the face.
+// (0,1), tan of its equal-angle bounds on the face, the face's axes N, U, V
+// and the unit normals of its edges' great-circle planes: the edge u = u0
+// lies in the plane of normal U - tan(a0) N (it holds V and
+// N + tan(a0) U), likewise for u1, v0 (V - tan(b0) N) and v1.
 struct Footprint {
   glm::dvec3 corner[4];
+  // The normalised sum of the corners: the axis of its bounding sphere
+  // and occludee point (any direction inside the footprint serves; the
+  // farthest point of the footprint from it in angle is a corner).
+  glm::dvec3 centre;
   double tan_u0, tan_u1, tan_v0, tan_v1;
+  glm::dvec3 n, u, v;
+  glm::dvec3 edge_u0, edge_u1, edge_v0, edge_v1;
 };
+
+glm::dvec3 unit(const glm::dvec3& a) { return a / std::sqrt(dot(a, a)); }
 
 Footprint footprint(const TileKey& key) {
   Footprint f;
-  f.corner[0] = tile_direction(key, 0.0, 0.0);
-  f.corner[1] = tile_direction(key, 1.0, 0.0);
-  f.corner[2] = tile_direction(key, 1.0, 1.0);
-  f.corner[3] = tile_direction(key, 0.0, 1.0);
   const double scale = std::ldexp(1.0, -key.level);
   f.tan_u0 = equal_angle_tan(2.0 * (double(key.x) * scale) - 1.0);
   f.tan_u1 = equal_angle_tan(2.0 * (double(key.x + 1) * scale) - 1.0);
   f.tan_v0 = equal_angle_tan(2.0 * (double(key.y) * scale) - 1.0);
   f.tan_v1 = equal_angle_tan(2.0 * (double(key.y + 1) * scale) - 1.0);
+  const FaceFrame& frame = face_frame(key.face);
+  f.n = to_vec(frame.normal);
+  f.u = to_vec(frame.u_axis);
+  f.v = to_vec(frame.v_axis);
+  // The equal-angle cube's direction at gnomonic coordinates (x, y) on the
+  // face: N + x U + y V, normalised (tile_direction, to rounding).
+  f.corner[0] = unit(f.n + f.tan_u0 * f.u + f.tan_v0 * f.v);
+  f.corner[1] = unit(f.n + f.tan_u1 * f.u + f.tan_v0 * f.v);
+  f.corner[2] = unit(f.n + f.tan_u1 * f.u + f.tan_v1 * f.v);
+  f.corner[3] = unit(f.n + f.tan_u0 * f.u + f.tan_v1 * f.v);
+  f.centre = unit(f.corner[0] + f.corner[1] + f.corner[2] + f.corner[3]);
+  f.edge_u0 = unit(f.u - f.tan_u0 * f.n);
+  f.edge_u1 = unit(f.u - f.tan_u1 * f.n);
+  f.edge_v0 = unit(f.v - f.tan_v0 * f.n);
+  f.edge_v1 = unit(f.v - f.tan_v1 * f.n);
   return f;
 }
 
 // Squared chord, on the unit sphere, from the unit vector `c` to the
-// nearest point of the footprint. Its edges are great-circle arcs: the edge
-// u = u0 lies in the plane of normal U - tan(a0) N (it holds V and
-// N + tan(a0) U). Inside the footprint (c.N > 0, its gnomonic coordinates
-// x = c.U / c.N, y = c.V / c.N within the tile's tan bounds) the chord is
-// 0; outside, the nearest point is a corner or the projection of c on an
-// edge's plane when that falls within the edge, where
-// |c - p/|p||^2 = 2 - 2|p| = 2 (c.m)^2 / (1 + sqrt(1 - (c.m)^2)).
-double nearest_chord_squared(const glm::dvec3& c, const TileKey& key, const Footprint& f) {
-  const FaceFrame& frame = face_frame(key.face);
-  const glm::dvec3 n = to_vec(frame.normal), u = to_vec(frame.u_axis), v = to_vec(frame.v_axis);
-  const double cn = dot(c, n), cu = dot(c, u), cv = dot(c, v);
+// nearest point of the footprint. Inside the footprint (c.N > 0, its
+// gnomonic coordinates x = c.U / c.N, y = c.V / c.N within the tile's tan
+// bounds) the chord is 0; outside, the nearest point is a corner or the
+// projection of c on an edge's plane (unit normal m) when that falls within
+// the edge, where |c - p/|p||^2 = 2 - 2|p| = 2 (c.m)^2 / (1 + sqrt(1 - (c.m)^2)).
+double nearest_chord_squared(const glm::dvec3& c, const Footprint& f) {
+  const double cn = dot(c, f.n), cu = dot(c, f.u), cv = dot(c, f.v);
   if (cn > 0.0) {
     const double x = cu / cn, y = cv / cn;
     if (x >= f.tan_u0 && x <= f.tan_u1 && y >= f.tan_v0 && y <= f.tan_v1) return 0.0;
@@ -112,22 +130,20 @@ double nearest_chord_squared(const glm::dvec3& c, const TileKey& key, const Foot
     best = std::min(best, dot(d, d));
   }
   // Edges at constant u (along v) and at constant v (along u).
-  const auto edge = [&](const glm::dvec3& axis, double tan_bound, const glm::dvec3& along, double lo, double hi) {
-    const glm::dvec3 m_raw = axis - tan_bound * n;
-    const glm::dvec3 m = m_raw / std::sqrt(dot(m_raw, m_raw));
+  const auto edge = [&](const glm::dvec3& m, const glm::dvec3& along, double lo, double hi) {
     const double cm = dot(c, m);
     const glm::dvec3 p = c - cm * m;
-    const double pn = dot(p, n);
+    const double pn = dot(p, f.n);
     if (pn <= 0.0) return;
     const double t = dot(p, along) / pn;
     if (t < lo || t > hi) return;
     const double sin2 = std::min(cm * cm, 1.0);
     best = std::min(best, 2.0 * sin2 / (1.0 + std::sqrt(1.0 - sin2)));
   };
-  edge(u, f.tan_u0, v, f.tan_v0, f.tan_v1);
-  edge(u, f.tan_u1, v, f.tan_v0, f.tan_v1);
-  edge(v, f.tan_v0, u, f.tan_u0, f.tan_u1);
-  edge(v, f.tan_v1, u, f.tan_u0, f.tan_u1);
+  edge(f.edge_u0, f.v, f.tan_v0, f.tan_v1);
+  edge(f.edge_u1, f.v, f.tan_v0, f.tan_v1);
+  edge(f.edge_v0, f.u, f.tan_u0, f.tan_u1);
+  edge(f.edge_v1, f.u, f.tan_u0, f.tan_u1);
   return best;
 }
 
@@ -169,12 +185,29 @@ bool occludee(const glm::dvec3& centre, const Footprint& f, double max_radius_m,
   return true;
 }
 
-bool culled(const glm::dvec3& camera, const std::array<glm::dvec4, 4>& planes, const TileKey& key,
-            const Footprint& f, double s_lo, double s_hi, double occluder_radius) {
-  const glm::dvec3 centre = tile_direction(key, 0.5, 0.5);
+// The largest n.p + w over the tile's points p = s u between the radii
+// (u in the footprint, s in [s_lo, s_hi]), for a plane with |n| = 1: with
+// m = max_u n.u = 1 - chi^2 / 2 (chi the chord from n to the footprint,
+// nearest_chord_squared), s m is largest at s_hi when m >= 0 and at s_lo
+// otherwise. The mesh's triangles are convex combinations of such points,
+// so no point of them lies farther on the plane's positive side.
+double plane_max(const glm::dvec4& plane, const Footprint& f, double s_lo, double s_hi) {
+  const glm::dvec3 n(plane);
+  const double m = 1.0 - 0.5 * nearest_chord_squared(n, f);
+  return (m >= 0.0 ? s_hi : s_lo) * m + plane.w;
+}
+
+// `within`, when given, is set to whether the tile's bounding sphere lies
+// wholly on the inner side of every plane (then so does every part of it).
+bool culled(const glm::dvec3& camera, const std::array<glm::dvec4, 4>& planes, const Footprint& f, double s_lo,
+            double s_hi, double occluder_radius, bool* within = nullptr) {
+  const glm::dvec3& centre = f.centre;
   // Bounding sphere on the centre ray: the farthest points from it are
   // the corners (largest angle from the centre) at the lowest or highest
-  // radius.
+  // radius. A plane the sphere lies wholly outside culls the tile; one it
+  // straddles is decided by the tile's own extent (plane_max), which the
+  // sphere overstates most for tiles near the camera, whose planes pass
+  // through it.
   const glm::dvec3 middle = centre * (0.5 * (s_lo + s_hi));
   double radius2 = 0.0;
   for (const glm::dvec3& corner : f.corner)
@@ -183,8 +216,17 @@ bool culled(const glm::dvec3& camera, const std::array<glm::dvec4, 4>& planes, c
       radius2 = std::max(radius2, dot(d, d));
     }
   const double radius = std::sqrt(radius2) * (1.0 + 1e-12);
-  for (const glm::dvec4& plane : planes)
-    if (dot(glm::dvec3(plane), middle) + plane.w < -radius) return true;
+  if (within != nullptr) *within = true;
+  for (const glm::dvec4& plane : planes) {
+    const double centre_distance = dot(glm::dvec3(plane), middle) + plane.w;
+    if (centre_distance < radius && within != nullptr) *within = false;
+    if (centre_distance < -radius) return true;
+    // Rounding of n.p and w, each up to about s_hi and |w|.
+    const double tolerance = 1e-9 * (s_hi + std::abs(plane.w));
+    if (centre_distance < radius && dot(glm::dvec3(plane), glm::dvec3(plane)) > 0.5 &&
+        plane_max(plane, f, s_lo, s_hi) < -tolerance)
+      return true;
+  }
   glm::dvec3 point;
   if (occludee(centre, f, s_hi, occluder_radius, point) && horizon_hides(camera, occluder_radius, point)) return true;
   return false;
@@ -223,8 +265,8 @@ struct Traversal {
     }
   }
 
-  double nearest(const TileKey& key, const Footprint& f, double s_lo, double s_hi) const {
-    return distance_at_chord(camera_radius, nearest_chord_squared(camera_direction, key, f), s_lo, s_hi);
+  double nearest(const Footprint& f, double s_lo, double s_hi) const {
+    return distance_at_chord(camera_radius, nearest_chord_squared(camera_direction, f), s_lo, s_hi);
   }
 
   // CDLOD (Strugar 2009): a node nearer than the finer level's range is
@@ -236,9 +278,10 @@ struct Traversal {
     ++out->nodes_visited;
     const double s_lo = bounds->radius_m + h_lo, s_hi = bounds->radius_m + h_hi;
     const Footprint f = footprint(key);
-    if (culled(camera, planes, key, f, s_lo, s_hi, occluder_radius)) return;
+    bool within = false;
+    if (culled(camera, planes, f, s_lo, s_hi, occluder_radius, &within)) return;
     unsigned quadrants = 0xFu;
-    if (key.level < finest && nearest(key, f, s_lo, s_hi) < ranges[std::size_t(key.level + 1)]) {
+    if (key.level < finest && nearest(f, s_lo, s_hi) < ranges[std::size_t(key.level + 1)]) {
       quadrants = 0u;
       for (int q = 0; q < 4; ++q) {
         const TileKey c = child(key, q);
@@ -246,13 +289,23 @@ struct Traversal {
         child_range(c, h_lo, h_hi, lo, hi);
         const Footprint cf = footprint(c);
         const double c_lo = bounds->radius_m + lo, c_hi = bounds->radius_m + hi;
-        if (nearest(c, cf, c_lo, c_hi) < ranges[std::size_t(key.level + 1)]) {
+        if (nearest(cf, c_lo, c_hi) < ranges[std::size_t(key.level + 1)]) {
           visit(c, lo, hi);
         } else {
           // The quadrant shows this node's mesh: culled with its height range.
           ++out->nodes_visited;
-          if (!culled(camera, planes, c, cf, s_lo, s_hi, occluder_radius)) quadrants |= 1u << q;
+          if (!culled(camera, planes, cf, s_lo, s_hi, occluder_radius)) quadrants |= 1u << q;
         }
+      }
+      if (quadrants == 0u) return;
+    } else if (!within && key.level < kMaxTileLevel) {
+      // Not refined, and a side plane crosses its bounding sphere: its
+      // quadrants culled as a refined node's are, so that a tile the
+      // frustum's edge crosses draws only the areas inside.
+      quadrants = 0u;
+      for (int q = 0; q < 4; ++q) {
+        const TileKey c = child(key, q);
+        if (!culled(camera, planes, footprint(c), s_lo, s_hi, occluder_radius)) quadrants |= 1u << q;
       }
       if (quadrants == 0u) return;
     }
@@ -318,7 +371,7 @@ double nearest_distance_m(const glm::dvec3& camera_m, const TileKey& key, double
   validate(key);
   double rho = 0.0;
   const glm::dvec3 dir = unit_or_pole(camera_m, rho);
-  return distance_at_chord(rho, nearest_chord_squared(dir, key, footprint(key)), min_radius_m, max_radius_m);
+  return distance_at_chord(rho, nearest_chord_squared(dir, footprint(key)), min_radius_m, max_radius_m);
 }
 
 std::array<glm::dvec4, 4> frustum_side_planes(const glm::dmat4& m) {
@@ -348,13 +401,19 @@ bool horizon_hides(const glm::dvec3& camera_m, double occluder_radius_m, const g
 
 bool horizon_occludee_point(const TileKey& key, double max_radius_m, double occluder_radius_m, glm::dvec3& point) {
   validate(key);
-  return occludee(tile_direction(key, 0.5, 0.5), footprint(key), max_radius_m, occluder_radius_m, point);
+  const Footprint f = footprint(key);
+  return occludee(f.centre, f, max_radius_m, occluder_radius_m, point);
+}
+
+double tile_plane_max_m(const glm::dvec4& plane, const TileKey& key, double min_radius_m, double max_radius_m) {
+  validate(key);
+  return plane_max(plane, footprint(key), min_radius_m, max_radius_m);
 }
 
 bool tile_culled(const glm::dvec3& camera_m, const std::array<glm::dvec4, 4>& planes, const TileKey& key,
                  double min_radius_m, double max_radius_m, double occluder_radius_m) {
   validate(key);
-  return culled(camera_m, planes, key, footprint(key), min_radius_m, max_radius_m, occluder_radius_m);
+  return culled(camera_m, planes, footprint(key), min_radius_m, max_radius_m, occluder_radius_m);
 }
 
 Selection select_tiles(const LodCamera& camera, const LodSettings& settings, const ReliefBounds& bounds,

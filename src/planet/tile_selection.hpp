@@ -152,8 +152,15 @@ bool horizon_hides(const glm::dvec3& camera_m, double occluder_radius_m, const g
 // spans too much of the sphere).
 bool horizon_occludee_point(const TileKey& key, double max_radius_m, double occluder_radius_m, glm::dvec3& point);
 
-// Frustum culling (a bounding sphere of the tile between the two radii)
-// and horizon culling (the occludee point at max_radius_m against the sphere
+// The largest signed distance n.p + w (m) from a plane (n, w), |n| = 1, of
+// the tile's surface between the radii [min_radius_m, max_radius_m]
+// (exact: the footprint's farthest direction along n at the radius that
+// maximises it).
+double tile_plane_max_m(const glm::dvec4& plane, const TileKey& key, double min_radius_m, double max_radius_m);
+
+// Frustum culling (the tile between the two radii is wholly outside a side
+// plane: a bounding sphere's test, then tile_plane_max_m where the sphere
+// straddles the plane) and horizon culling (the occludee point at max_radius_m against the sphere
 // of occluder_radius_m): true when no point of the tile can be seen.
 bool tile_culled(const glm::dvec3& camera_m, const std::array<glm::dvec4, 4>& planes, const TileKey& key,
                  double min_radius_m, double max_radius_m, double occluder_radius_m);
