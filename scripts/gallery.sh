@@ -81,7 +81,9 @@ done
 globe="${ATMOS_BUILD_DIR:-$root/build}/examples/atmos_example_globe"
 mkdir -p "$out/globe/earth" "$out/globe/earth-noon" "$out/globe/earth-terminator" "$out/globe/mars" \
   "$out/globe/mars-canyon"
-"$globe" --planet earth --descent 1 --latitude 10 --longitude 20 --heading 0 --sun-elevation 90 \
+# Noon from orbit at EV 15, a sunlit scene's exposure (the "sunny 16" rule:
+# f/16 at 1/ISO s); at the default EV 13 the sunlit desert saturates.
+"$globe" --planet earth --descent 1 --latitude 10 --longitude 20 --heading 0 --sun-elevation 90 --exposure 15 \
   --out-dir "$out/globe/earth-noon"
 "$globe" --planet earth --descent 1 --latitude 10 --longitude 20 --heading 0 --sun-elevation 0 --sun-azimuth 90 \
   --out-dir "$out/globe/earth-terminator"
