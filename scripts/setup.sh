@@ -10,7 +10,7 @@ packages=(
   libglm-dev nlohmann-json3-dev libcli11-dev libtinyexr-dev libstb-dev
   libtbb-dev libgtest-dev libgmock-dev libbenchmark-dev
   libepoxy-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev
-  libeigen3-dev python3-matplotlib
+  libeigen3-dev liblapacke-dev python3-matplotlib
   libgdal-dev libnetcdf-dev
   xplanet-images xplanet gmt-gshhg-low kstars-data
   libglfw3-dev libimgui-dev xvfb xauth

@@ -46,7 +46,10 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
-#include <Eigen/Dense>
+// LAPACK (Anderson et al. 1999) for the small dense problems of the
+// restarts: least squares, LU, eigenvectors, QR; column-major storage.
+#define LAPACK_COMPLEX_CPP
+#include <lapacke.h>
 
 #include <algorithm>
 #include <array>
@@ -60,8 +63,69 @@ namespace atmos::precompute {
 namespace {
 
 using glm::dvec3;
-using Eigen::MatrixXd;
-using Eigen::VectorXd;
+
+// A small dense matrix, column-major (LAPACK's layout), zero at first.
+struct Matrix {
+  int rows = 0, cols = 0;
+  std::vector<double> v;
+  Matrix() = default;
+  Matrix(int r, int c) : rows(r), cols(c), v(size_t(r) * size_t(c), 0.0) {}
+  double& operator()(int i, int j) { return v[size_t(j) * size_t(rows) + size_t(i)]; }
+  double operator()(int i, int j) const { return v[size_t(j) * size_t(rows) + size_t(i)]; }
+  // The top left r x c block.
+  Matrix block(int r, int c) const {
+    Matrix b(r, c);
+    for (int j = 0; j < c; ++j)
+      for (int i = 0; i < r; ++i) b(i, j) = (*this)(i, j);
+    return b;
+  }
+};
+
+using Vector = std::vector<double>;
+
+// a x (the first a.cols entries of x).
+Vector product(const Matrix& a, const Vector& x) {
+  Vector y(size_t(a.rows), 0.0);
+  for (int j = 0; j < a.cols; ++j)
+    for (int i = 0; i < a.rows; ++i) y[size_t(i)] += a(i, j) * x[size_t(j)];
+  return y;
+}
+
+// aᵀ b.
+Matrix transpose_product(const Matrix& a, const Matrix& b) {
+  Matrix c(a.cols, b.cols);
+  for (int j = 0; j < b.cols; ++j)
+    for (int i = 0; i < a.cols; ++i) {
+      double sum = 0.0;
+      for (int l = 0; l < a.rows; ++l) sum += a(l, i) * b(l, j);
+      c(i, j) = sum;
+    }
+  return c;
+}
+
+// a b.
+Matrix product(const Matrix& a, const Matrix& b) {
+  Matrix c(a.rows, b.cols);
+  for (int j = 0; j < b.cols; ++j)
+    for (int l = 0; l < a.cols; ++l)
+      for (int i = 0; i < a.rows; ++i) c(i, j) += a(i, l) * b(l, j);
+  return c;
+}
+
+// The x that minimises |b - a x|, a of full column rank or not: QR with
+// column pivoting (LAPACK dgelsy), of effective rank the largest leading
+// triangle of R whose condition number stays below 1e15.
+Vector least_squares(Matrix a, const Vector& b) {
+  Vector x = b;
+  x.resize(size_t(std::max(a.rows, a.cols)), 0.0);
+  std::vector<lapack_int> pivots(size_t(a.cols), 0);
+  lapack_int rank = 0;
+  if (LAPACKE_dgelsy(LAPACK_COL_MAJOR, a.rows, a.cols, 1, a.v.data(), a.rows, x.data(), lapack_int(x.size()),
+                     pivots.data(), 1e-15, &rank) != 0)
+    std::fill(x.begin(), x.end(), 0.0);
+  x.resize(size_t(a.cols));
+  return x;
+}
 
 // A field of the iteration: the radiance of an order (a 4D table, as the
 // multiple scattering tables: not divided by a phase function) and the sky
@@ -141,7 +205,7 @@ void set_zero(Field& f) {
 // basis[l] ← Σ_j P_c(j, l) basis[j] for l < new_count, j < old_count, per
 // channel c, in place: texel by texel (each texel's new values depend on
 // that texel's old values only), so no field is allocated.
-void recombine(std::vector<Field>& basis, const std::array<MatrixXd, 3>& p, int old_count, int new_count) {
+void recombine(std::vector<Field>& basis, const std::array<Matrix, 3>& p, int old_count, int new_count) {
   std::vector<vec3> pf(size_t(old_count) * size_t(new_count));
   for (int l = 0; l < new_count; ++l)
     for (int j = 0; j < old_count; ++j)
@@ -172,40 +236,60 @@ void recombine(std::vector<Field>& basis, const std::array<MatrixXd, 3>& p, int 
 // k <= k_wanted that splits no complex pair in any channel. Returns k, 0
 // when no such k > 1 exists or a channel's H_m is singular (then a plain
 // restart).
-int harmonic_ritz_bases(const std::array<MatrixXd, 3>& h, const std::array<VectorXd, 3>& r, const bool active[3],
-                        int m, int k_wanted, std::array<MatrixXd, 3>& p) {
-  std::array<Eigen::VectorXcd, 3> values;
-  std::array<Eigen::MatrixXcd, 3> vectors;
+int harmonic_ritz_bases(const std::array<Matrix, 3>& h, const std::array<Vector, 3>& r, const bool active[3], int m,
+                        int k_wanted, std::array<Matrix, 3>& p) {
+  using complex = std::complex<double>;
+  std::array<std::vector<complex>, 3> values;
+  std::array<Matrix, 3> vectors;  // LAPACK dgeev's: a complex pair as its real then imaginary parts
   std::array<std::vector<int>, 3> order;
   for (int c = 0; c < 3; ++c) {
     if (!active[c]) continue;
-    const MatrixXd hm = h[size_t(c)].topLeftCorner(m, m);
+    const Matrix hm = h[size_t(c)].block(m, m);
     const double last = h[size_t(c)](m, m - 1);
-    Eigen::PartialPivLU<MatrixXd> lu(hm.transpose());
+    // H_mᵀ and its 1-norm (largest column sum), for the LU's conditioning.
+    Matrix lu(m, m);
+    double norm1 = 0.0;
+    for (int j = 0; j < m; ++j) {
+      double column = 0.0;
+      for (int i = 0; i < m; ++i) {
+        lu(i, j) = hm(j, i);
+        column += std::abs(lu(i, j));
+      }
+      norm1 = std::max(norm1, column);
+    }
+    std::vector<lapack_int> pivots(static_cast<size_t>(m));
+    if (LAPACKE_dgetrf(LAPACK_COL_MAJOR, m, m, lu.v.data(), m, pivots.data()) != 0) return 0;
     // The determinant of a 30 x 30 matrix under- or overflows long before
     // the matrix is singular: ask for its conditioning instead.
-    if (!(lu.rcond() > 1e-14)) return 0;
-    const VectorXd f = lu.solve(VectorXd::Unit(m, m - 1));
-    MatrixXd harmonic = hm;
-    harmonic.col(m - 1) += last * last * f;
-    if (!harmonic.allFinite()) return 0;
-    Eigen::EigenSolver<MatrixXd> solver(harmonic);
-    if (solver.info() != Eigen::Success) return 0;
-    values[size_t(c)] = solver.eigenvalues();
-    vectors[size_t(c)] = solver.eigenvectors();
+    double rcond = 0.0;
+    if (LAPACKE_dgecon(LAPACK_COL_MAJOR, '1', m, lu.v.data(), m, norm1, &rcond) != 0 || !(rcond > 1e-14)) return 0;
+    Vector f(size_t(m), 0.0);
+    f[size_t(m) - 1] = 1.0;
+    if (LAPACKE_dgetrs(LAPACK_COL_MAJOR, 'N', m, 1, lu.v.data(), m, pivots.data(), f.data(), m) != 0) return 0;
+    Matrix harmonic = hm;
+    for (int i = 0; i < m; ++i) harmonic(i, m - 1) += last * last * f[size_t(i)];
+    for (double x : harmonic.v)
+      if (!std::isfinite(x)) return 0;
+    Vector re(static_cast<size_t>(m)), im(static_cast<size_t>(m));
+    Matrix& v = vectors[size_t(c)];
+    v = Matrix(m, m);
+    if (LAPACKE_dgeev(LAPACK_COL_MAJOR, 'N', 'V', m, harmonic.v.data(), m, re.data(), im.data(), nullptr, 1,
+                      v.v.data(), m) != 0)
+      return 0;
+    for (int i = 0; i < m; ++i) values[size_t(c)].emplace_back(re[size_t(i)], im[size_t(i)]);
     std::vector<int>& o = order[size_t(c)];
     for (int i = 0; i < m; ++i) o.push_back(i);
     // By distance from 0; a conjugate pair (same modulus) with its positive
     // imaginary part first, so that the two stay next to each other.
     std::stable_sort(o.begin(), o.end(), [&](int x, int z) {
-      const std::complex<double> vx = values[size_t(c)](x), vz = values[size_t(c)](z);
+      const complex vx = values[size_t(c)][size_t(x)], vz = values[size_t(c)][size_t(z)];
       if (std::abs(vx) != std::abs(vz)) return std::abs(vx) < std::abs(vz);
       return vx.imag() > vz.imag();
     });
   }
   auto splits_a_pair = [&](int c, int k) {
     // The k-th value is complex and its conjugate comes after it.
-    const std::complex<double> v = values[size_t(c)](order[size_t(c)][size_t(k) - 1]);
+    const complex v = values[size_t(c)][size_t(order[size_t(c)][size_t(k) - 1])];
     return v.imag() > 0.0;
   };
   int k = k_wanted;
@@ -216,25 +300,27 @@ int harmonic_ritz_bases(const std::array<MatrixXd, 3>& h, const std::array<Vecto
   }
   if (k <= 1) return 0;
   for (int c = 0; c < 3; ++c) {
-    MatrixXd& pc = p[size_t(c)];
-    pc = MatrixXd::Zero(m + 1, k + 1);
+    Matrix& pc = p[size_t(c)];
+    pc = Matrix(m + 1, k + 1);
     if (!active[c]) {
-      pc.topLeftCorner(k + 1, k + 1).setIdentity();
+      for (int i = 0; i <= k; ++i) pc(i, i) = 1.0;
       continue;
     }
+    // dgeev stores the eigenvector of λ_j = re_j + i im_j, im_j > 0, as
+    // columns j (its real part) and j + 1 (its imaginary part), and
+    // λ_{j+1} is the conjugate: column `index` is the real part of the
+    // first of a pair and (up to sign) the imaginary part of the second.
     for (int i = 0; i < k; ++i) {
-      const Eigen::VectorXcd v = vectors[size_t(c)].col(order[size_t(c)][size_t(i)]);
-      const bool second_of_pair = values[size_t(c)](order[size_t(c)][size_t(i)]).imag() < 0.0;
-      if (second_of_pair)
-        pc.col(i).head(m) = v.imag();
-      else
-        pc.col(i).head(m) = v.real();
+      const int index = order[size_t(c)][size_t(i)];
+      for (int row = 0; row < m; ++row) pc(row, i) = vectors[size_t(c)](row, index);
     }
-    pc.col(k) = r[size_t(c)];
+    for (int row = 0; row <= m; ++row) pc(row, k) = r[size_t(c)][size_t(row)];
     // Orthonormal columns (the residual's last, so that it spans what the
-    // Ritz vectors do not): Householder QR, thin Q.
-    const Eigen::HouseholderQR<MatrixXd> qr(pc);
-    pc = qr.householderQ() * MatrixXd::Identity(m + 1, k + 1);
+    // Ritz vectors do not): Householder QR, thin Q (LAPACK dgeqrf, dorgqr).
+    Vector tau(size_t(k) + 1);
+    if (LAPACKE_dgeqrf(LAPACK_COL_MAJOR, m + 1, k + 1, pc.v.data(), m + 1, tau.data()) != 0 ||
+        LAPACKE_dorgqr(LAPACK_COL_MAJOR, m + 1, k + 1, k + 1, pc.v.data(), m + 1, tau.data()) != 0)
+      return 0;
   }
   return k;
 }
@@ -279,8 +365,8 @@ ScatteringTail solve_scattering_tail(const AtmosphereParams& a, const OrderGeome
   // Per channel: H, the matrix of I - A in the basis (column j: (I - A) v_j
   // = Σ_i H(i, j) v_i, (m + 1) x m), and g, the coordinates of the residual
   // at the start of the cycle.
-  std::array<MatrixXd, 3> h;
-  std::array<VectorXd, 3> g;
+  std::array<Matrix, 3> h;
+  std::array<Vector, 3> g;
   std::vector<Field> basis(1);
   int k = 0;  // basis vectors carried over from the last cycle (then basis[k] is the residual's direction)
   while (tail.iterations < max_iterations && !converged()) {
@@ -292,16 +378,16 @@ ScatteringTail solve_scattering_tail(const AtmosphereParams& a, const OrderGeome
       for (int c = 0; c < 3; ++c) inverse_beta[c] = beta[c] > 0.0 ? 1.0 / beta[c] : 0.0;
       scale(basis[0], inverse_beta);
       for (int c = 0; c < 3; ++c) {
-        h[size_t(c)] = MatrixXd::Zero(m + 1, m);
-        g[size_t(c)] = VectorXd::Zero(m + 1);
-        g[size_t(c)](0) = beta[c];
+        h[size_t(c)] = Matrix(m + 1, m);
+        g[size_t(c)].assign(size_t(m) + 1, 0.0);
+        g[size_t(c)][0] = beta[c];
       }
     }
     // Arnoldi from column k, with classical Gram-Schmidt done again where it
     // cancels (the DGKS criterion, Daniel et al. 1976): the fields are
     // floats, and the Krylov basis of a slowly converging iteration is
     // nearly dependent.
-    std::array<VectorXd, 3> y;
+    std::array<Vector, 3> y;
     int columns = k;
     for (int j = k; j < m && tail.iterations < max_iterations; ++j) {
       if (basis.size() < size_t(j) + 2) basis.emplace_back();
@@ -340,34 +426,39 @@ ScatteringTail solve_scattering_tail(const AtmosphereParams& a, const OrderGeome
       // microseconds, against about a second for the step).
       for (int c = 0; c < 3; ++c) {
         if (!active[c]) {
-          y[size_t(c)] = VectorXd::Zero(columns);
+          y[size_t(c)].assign(size_t(columns), 0.0);
           continue;
         }
-        const MatrixXd hc = h[size_t(c)].topLeftCorner(columns + 1, columns);
-        const VectorXd gc = g[size_t(c)].head(columns + 1);
-        y[size_t(c)] = hc.colPivHouseholderQr().solve(gc);
-        relative[c] = (gc - hc * y[size_t(c)]).norm() / initial_norm[c];
+        const Matrix hc = h[size_t(c)].block(columns + 1, columns);
+        const Vector gc(g[size_t(c)].begin(), g[size_t(c)].begin() + columns + 1);
+        y[size_t(c)] = least_squares(hc, gc);
+        const Vector hy = product(hc, y[size_t(c)]);
+        double squares = 0.0;
+        for (int i = 0; i <= columns; ++i) squares += (gc[size_t(i)] - hy[size_t(i)]) * (gc[size_t(i)] - hy[size_t(i)]);
+        relative[c] = std::sqrt(squares) / initial_norm[c];
       }
       if (converged()) break;
     }
     // T += V y.
     std::vector<dvec3> coefficients(size_t(columns), dvec3(0.0));
     for (int c = 0; c < 3; ++c)
-      for (int i = 0; i < columns; ++i) coefficients[size_t(i)][c] = y[size_t(c)](i);
+      for (int i = 0; i < columns; ++i) coefficients[size_t(i)][c] = y[size_t(c)][size_t(i)];
     add_combination(solution, coefficients, basis.data(), columns);
     if (converged() || tail.iterations >= max_iterations) break;
 
     // The residual's coordinates in the basis, g - H y.
-    std::array<VectorXd, 3> r;
-    for (int c = 0; c < 3; ++c)
-      r[size_t(c)] = active[c] ? VectorXd(g[size_t(c)].head(columns + 1) -
-                                          h[size_t(c)].topLeftCorner(columns + 1, columns) * y[size_t(c)])
-                               : VectorXd::Zero(columns + 1);
+    std::array<Vector, 3> r;
+    for (int c = 0; c < 3; ++c) {
+      r[size_t(c)].assign(size_t(columns) + 1, 0.0);
+      if (!active[c]) continue;
+      const Vector hy = product(h[size_t(c)].block(columns + 1, columns), y[size_t(c)]);
+      for (int i = 0; i <= columns; ++i) r[size_t(c)][size_t(i)] = g[size_t(c)][size_t(i)] - hy[size_t(i)];
+    }
     // Deflated restart (see the top of the file): keep the harmonic Ritz
     // vectors of the k eigenvalues of I - A nearest 0, i.e. the slowest
     // modes of the orders (the light diffusing through a thick, nearly
     // conservative layer: eigenvalues of A near 1).
-    std::array<MatrixXd, 3> p;
+    std::array<Matrix, 3> p;
     const int kept = columns == m ? harmonic_ritz_bases(h, r, active, m, k_wanted, p) : 0;
     if (kept == 0) {
       // A plain restart from the residual V r.
@@ -375,7 +466,7 @@ ScatteringTail solve_scattering_tail(const AtmosphereParams& a, const OrderGeome
       set_zero(residual);
       std::vector<dvec3> rc(size_t(columns) + 1, dvec3(0.0));
       for (int c = 0; c < 3; ++c)
-        for (int i = 0; i <= columns; ++i) rc[size_t(i)][c] = r[size_t(c)](i);
+        for (int i = 0; i <= columns; ++i) rc[size_t(i)][c] = r[size_t(c)][size_t(i)];
       add_combination(residual, rc, basis.data(), columns + 1);
       k = 0;
       continue;
@@ -384,13 +475,16 @@ ScatteringTail solve_scattering_tail(const AtmosphereParams& a, const OrderGeome
     // direction), H ← Pᵀ H P, g ← Pᵀ r.
     recombine(basis, p, m + 1, kept + 1);
     for (int c = 0; c < 3; ++c) {
-      const MatrixXd& pc = p[size_t(c)];
-      const MatrixXd small = pc.transpose() * h[size_t(c)] * pc.topLeftCorner(m, kept);
-      const VectorXd gc = pc.transpose() * r[size_t(c)];
-      h[size_t(c)].setZero();
-      h[size_t(c)].topLeftCorner(kept + 1, kept) = small;
-      g[size_t(c)].setZero();
-      g[size_t(c)].head(kept + 1) = gc;
+      const Matrix& pc = p[size_t(c)];
+      const Matrix small = transpose_product(pc, product(h[size_t(c)], pc.block(m, kept)));
+      Matrix rc(m + 1, 1);
+      rc.v = r[size_t(c)];
+      const Matrix gc = transpose_product(pc, rc);
+      h[size_t(c)] = Matrix(m + 1, m);
+      for (int j = 0; j < kept; ++j)
+        for (int i = 0; i <= kept; ++i) h[size_t(c)](i, j) = small(i, j);
+      g[size_t(c)].assign(size_t(m) + 1, 0.0);
+      for (int i = 0; i <= kept; ++i) g[size_t(c)][size_t(i)] = gc(i, 0);
     }
     k = kept;
   }
