@@ -1,4 +1,4 @@
-// The keys of the stored reference results (support/reference_store.hpp):
+// The keys of the stored reference results (support/reference_key.hpp):
 // every input that changes the reference's result changes the key, and
 // nothing else does, so a stored result is never used for other inputs.
 #include <gtest/gtest.h>
@@ -8,7 +8,7 @@
 #include <string>
 
 #include "atmos/planet_file.hpp"
-#include "support/reference_store.hpp"
+#include "support/reference_key.hpp"
 
 namespace {
 

@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <cinttypes>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -17,7 +16,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "reference_source_hash.hpp"
+#include "support/reference_key.hpp"
 
 namespace atmos_test::oracle {
 namespace {
@@ -39,66 +38,6 @@ Mode mode() {
   }();
   return m;
 }
-
-// The canonical text of a call's inputs: every number as a hexadecimal float
-// (exact), every list with its length. Names and file paths of the atmosphere
-// are left out: they do not change the physics.
-class Key {
- public:
-  explicit Key(const char* function) { text_ << function << ';' << ATMOS_REFERENCE_SOURCE_HASH << ';'; }
-  Key& number(double v) {
-    char buffer[40];
-    std::snprintf(buffer, sizeof buffer, "%a,", v);
-    text_ << buffer;
-    return *this;
-  }
-  Key& integer(std::int64_t v) {
-    text_ << v << ',';
-    return *this;
-  }
-  Key& vec(const glm::dvec3& v) { return number(v.x).number(v.y).number(v.z); }
-  Key& list(const std::vector<double>& values) {
-    integer(std::int64_t(values.size()));
-    for (double v : values) number(v);
-    return *this;
-  }
-  Key& spectrum(const atmos::Spectrum& s) { return list(s.wavelengths_nm()).list(s.values()); }
-  Key& atmosphere(const atmos::Atmosphere& a) {
-    list(a.wavelengths_nm).number(a.bottom_radius_m).number(a.top_radius_m).number(a.sun_angular_radius_rad);
-    spectrum(a.ground_albedo).spectrum(a.solar_irradiance);
-    integer(std::int64_t(a.constituents.size()));
-    for (const atmos::Constituent& c : a.constituents) {
-      integer(int(c.density.kind)).number(c.density.scale_height_m).integer(std::int64_t(c.density.knots.size()));
-      for (const auto& [altitude, density] : c.density.knots) number(altitude).number(density);
-      spectrum(c.scattering).spectrum(c.absorption);
-      integer(int(c.phase.kind)).spectrum(c.phase.g).spectrum(c.phase.g_back).spectrum(c.phase.forward_weight);
-    }
-    return *this;
-  }
-  Key& options(const atmos::ReferenceOptions& o) {
-    integer(o.scattering_orders).integer(o.paths).integer(std::int64_t(o.seed)).number(o.sun_limb_darkening_u);
-    integer(std::int64_t(o.moons.size()));
-    for (const auto& m : o.moons) vec(m.centre).number(m.radius);
-    return *this;
-  }
-
-  // 128 bits of two FNV-1a hashes (Fowler, Noll & Vo) with different offset
-  // bases: a name for the entry, not a security measure.
-  std::string hex() const {
-    const std::string s = text_.str();
-    std::uint64_t a = 0xcbf29ce484222325ull, b = 0x84222325cbf29ce4ull;
-    for (unsigned char c : s) {
-      a = (a ^ c) * 0x100000001b3ull;
-      b = (b ^ c) * 0x100000001b3ull;
-    }
-    char out[33];
-    std::snprintf(out, sizeof out, "%016" PRIx64 "%016" PRIx64, a, b);
-    return out;
-  }
-
- private:
-  std::ostringstream text_;
-};
 
 std::filesystem::path store_directory() {
   if (const char* dir = std::getenv("ATMOS_REFERENCE_STORE")) return dir;
@@ -236,23 +175,6 @@ std::string describe(const char* function, const atmos::Atmosphere& a, const glm
 }
 
 }  // namespace
-
-// The references are deterministic, so a change of the compiler, the
-// platform or the store's contents shows in every entry it touches: a
-// quarter of them finds it at a quarter of the Monte Carlo's time, and a
-// quarter fixed by the keys (hashes, uniform in their digits) keeps the full
-// tier's run time and outcome the same from run to run.
-bool verified_entry(const std::string& key, bool first_of_suite) {
-  if (first_of_suite) return true;
-  const char last = key.empty() ? '0' : key.back();
-  const int digit = last >= 'a' ? last - 'a' + 10 : last - '0';
-  return digit % 4 == 0;
-}
-
-std::string radiance_key(const atmos::Atmosphere& atmosphere, const glm::dvec3& observer, const glm::dvec3& view,
-                         const glm::dvec3& sun, const atmos::ReferenceOptions& options) {
-  return Key("reference_radiance").atmosphere(atmosphere).vec(observer).vec(view).vec(sun).options(options).hex();
-}
 
 atmos::ReferenceResult reference_radiance(const atmos::Atmosphere& atmosphere, const glm::dvec3& observer,
                                           const glm::dvec3& view, const glm::dvec3& sun,

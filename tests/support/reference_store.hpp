@@ -18,6 +18,7 @@
 //   write             compute and store (scripts/update-references.sh);
 //   fill              return the stored result, compute and store a missing one
 //                     (to complete a store after an interrupted write).
+// The keys: support/reference_key.hpp.
 #pragma once
 
 #include <glm/vec3.hpp>
@@ -50,17 +51,5 @@ std::vector<double> reference_transmittance(const atmos::Atmosphere& atmosphere,
 
 atmos::PlaneParallelFluxes reference_plane_parallel_fluxes(const atmos::Atmosphere& atmosphere, double mu_s,
                                                            const atmos::PlaneParallelOptions& options = {});
-
-// The key of a reference_radiance call: a hash of the reference's code and of
-// every input (not the atmosphere's name or origin). Exposed for the tests of
-// the store itself.
-std::string radiance_key(const atmos::Atmosphere& atmosphere, const glm::dvec3& observer, const glm::dvec3& view,
-                         const glm::dvec3& sun, const atmos::ReferenceOptions& options);
-
-// Whether verify mode recomputes the entry of `key`: the first one a test
-// suite asks for in the process (`first_of_suite`), and those whose key ends
-// in a hexadecimal digit that is a multiple of 4. Exposed for the tests of
-// the store itself.
-bool verified_entry(const std::string& key, bool first_of_suite);
 
 }  // namespace atmos_test::oracle
