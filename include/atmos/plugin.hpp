@@ -183,7 +183,8 @@ struct PassTimings {
 
 // Which programs an AtmospherePass compiles before its constructor returns.
 // Drivers compile much of a program's code at its first draw (llvmpipe's
-// JIT in particular), so that the default draws a 1x1 frame with each:
+// JIT in particular, for each draw state), so that the default draws a 3x3
+// frame with each, with the engine textures' formats of docs/plugin.md:
 // the engine's first frames then measure frames, not compilation.
 enum class PassPrograms {
   // Those of a camera in the atmosphere and of one above it, by day, the

@@ -243,21 +243,33 @@ void create_pass_objects(AtmospherePass& pass, AtmospherePass::Impl& p, const At
   if (programs == PassPrograms::none) return;
   // Drivers (llvmpipe's JIT in particular) compile shaders at their first
   // draw: draw the common variants once (lit colour, sun high, camera in
-  // and above the atmosphere) over a 1x1 sky, so that the engine's first
+  // and above the atmosphere) over a small sky, so that the engine's first
   // frames and the timings measure frames, not compilation. The other
-  // variants compile at their first use.
+  // variants compile at their first use. llvmpipe compiles a fragment
+  // shader again for each draw state it meets: its variants are keyed by
+  // the formats of the render target and of the sampled textures, and by
+  // whether those textures' sizes are powers of two (Mesa,
+  // lp_state_fs.h: lp_fragment_shader_variant_key). So the sky is drawn
+  // with the engine's textures of docs/plugin.md (depth
+  // GL_DEPTH_COMPONENT32F, colour RGBA16F, the pass's own RGBA32F output)
+  // at 3 x 3 pixels, a size that is not a power of two, as an engine's
+  // frame usually is not.
+  constexpr int kWarmUpSize = 3;
   GLuint warm_up_textures[2] = {0, 0};
   glCreateTextures(GL_TEXTURE_2D, 2, warm_up_textures);
-  glTextureStorage2D(warm_up_textures[0], 1, GL_R32F, 1, 1);
-  glTextureStorage2D(warm_up_textures[1], 1, GL_RGBA32F, 1, 1);
-  const float sky_depth[4] = {1.0f, 0.0f, 0.0f, 0.0f};
-  glTextureSubImage2D(warm_up_textures[0], 0, 0, 0, 1, 1, GL_RED, GL_FLOAT, sky_depth);
-  glTextureSubImage2D(warm_up_textures[1], 0, 0, 0, 1, 1, GL_RGBA, GL_FLOAT, sky_depth);
+  glTextureStorage2D(warm_up_textures[0], 1, GL_DEPTH_COMPONENT32F, kWarmUpSize, kWarmUpSize);
+  glTextureStorage2D(warm_up_textures[1], 1, GL_RGBA16F, kWarmUpSize, kWarmUpSize);
+  // Depth 1: the far plane of the standard encoding, the sky.
+  const std::vector<float> sky_depth(kWarmUpSize * kWarmUpSize, 1.0f);
+  const std::vector<float> black(4 * kWarmUpSize * kWarmUpSize, 0.0f);
+  glTextureSubImage2D(warm_up_textures[0], 0, 0, 0, kWarmUpSize, kWarmUpSize, GL_DEPTH_COMPONENT, GL_FLOAT,
+                      sky_depth.data());
+  glTextureSubImage2D(warm_up_textures[1], 0, 0, 0, kWarmUpSize, kWarmUpSize, GL_RGBA, GL_FLOAT, black.data());
   try {
     FrameInput warm_up;
     warm_up.depth = warm_up_textures[0];
     warm_up.colour = warm_up_textures[1];
-    warm_up.width = warm_up.height = 1;
+    warm_up.width = warm_up.height = kWarmUpSize;
     warm_up.projection = glm::perspective(1.0, 1.0, 1.0, 100.0);
     for (double altitude : {10.0, 1e7}) {
       warm_up.view = glm::translate(glm::dmat4(1.0), -(frame.centre + glm::dvec3(0.0, 0.0, 1.0) *
