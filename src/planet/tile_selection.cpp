@@ -274,10 +274,10 @@ struct Traversal {
   // visited) or drawn as a quadrant of the node at the node's level. So a
   // selected tile of level L lies within r_L + D_L of the camera, the
   // bound the ranges' seam inequality is built on (level_ranges_m).
-  void visit(const TileKey& key, double h_lo, double h_hi) {
+  // `f`: the tile's footprint, which the caller has already made.
+  void visit(const TileKey& key, const Footprint& f, double h_lo, double h_hi) {
     ++out->nodes_visited;
     const double s_lo = bounds->radius_m + h_lo, s_hi = bounds->radius_m + h_hi;
-    const Footprint f = footprint(key);
     bool within = false;
     if (culled(camera, planes, f, s_lo, s_hi, occluder_radius, &within)) return;
     unsigned quadrants = 0xFu;
@@ -290,7 +290,7 @@ struct Traversal {
         const Footprint cf = footprint(c);
         const double c_lo = bounds->radius_m + lo, c_hi = bounds->radius_m + hi;
         if (nearest(cf, c_lo, c_hi) < ranges[std::size_t(key.level + 1)]) {
-          visit(c, lo, hi);
+          visit(c, cf, lo, hi);
         } else {
           // The quadrant shows this node's mesh: culled with its height range.
           ++out->nodes_visited;
@@ -440,7 +440,7 @@ Selection select_tiles(const LodCamera& camera, const LodSettings& settings, con
       lo = bounds.min_height_m;
       hi = bounds.max_height_m;
     }
-    t.visit(root, lo, hi);
+    t.visit(root, footprint(root), lo, hi);
   }
   return selection;
 }
