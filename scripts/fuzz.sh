@@ -38,7 +38,7 @@ if ! [[ "$runs" =~ ^[1-9][0-9]*$ ]]; then
 fi
 [ ${#targets[@]} -gt 0 ] || targets=(planet cache)
 
-bash "$root/scripts/setup.sh" --fuzz
+bash "$root/scripts/setup.sh"
 
 # Assertions stay on (no -DNDEBUG); line tables make the sanitizers' stacks readable.
 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=Fuzz \

@@ -2,7 +2,8 @@
 # Installs every Debian package atmos needs to build, test and render.
 # Idempotent and non-interactive: packages already present are skipped, so it is
 # safe (and fast) to run twice.
-#   --fuzz  also clang and libFuzzer, for scripts/fuzz.sh
+# clang builds the tests' sanitizer build (scripts/test.sh) and the fuzz
+# targets (scripts/fuzz.sh); GCC builds everything else.
 set -euo pipefail
 
 packages=(
@@ -15,14 +16,13 @@ packages=(
   xplanet-images xplanet gmt-gshhg-low kstars-data
   libglfw3-dev libimgui-dev xvfb xauth
   libopenxr-dev libopenxr-loader1
+  clang libclang-rt-14-dev
 )
 
-for arg in "$@"; do
-  case "$arg" in
-    --fuzz) packages+=(clang libclang-rt-14-dev) ;;
-    *) echo "setup: unknown option $arg (only --fuzz)" >&2; exit 2 ;;
-  esac
-done
+if [ $# -gt 0 ]; then
+  echo "setup: no options (got $*)" >&2
+  exit 2
+fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -449,7 +449,9 @@ TEST(StarCatalogueColours, TheBrightStarsGetTheirBMinusVFromKStars) {
               kstars.size());
   EXPECT_GT(double(matched), 0.97 * double(bsc.size()));
   const std::vector<std::pair<int, double>> published = {{2491, 0.00}, {1713, -0.03}, {5340, 1.23}, {7001, 0.00}};
-  for (const auto& [hr, b_minus_v] : published) {
+  for (const auto& star : published) {
+    const int hr = star.first;
+    const double b_minus_v = star.second;
     const auto s = std::find_if(bsc.begin(), bsc.end(), [&](const atmos::CatalogueStar& c) {
       return c.bright_star_number == hr;
     });

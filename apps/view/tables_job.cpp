@@ -14,13 +14,9 @@
 
 namespace atmos_view {
 
-namespace {
-
 double now_s() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
-
-}  // namespace
 
 namespace {
 

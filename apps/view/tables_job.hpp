@@ -21,6 +21,9 @@
 
 namespace atmos_view {
 
+// Seconds on the steady clock, for durations (its epoch is unspecified).
+double now_s();
+
 struct CacheConfig {
   std::string directory;  // "": atmos::default_cache_directory()
   bool disabled = false;  // always precompute, neither read nor write

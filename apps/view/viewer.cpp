@@ -42,10 +42,6 @@ constexpr double kDegree = M_PI / 180.0;
 // The Moon's apparent angular radius from the Earth, rad (1737.4 km at 384 400 km).
 constexpr double kMoonAngularRadius = 0.2590 * kDegree;
 
-double now_s() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
 bool has_extension(const std::string& path, const std::string& ext) {
   if (path.size() < ext.size()) return false;
   std::string tail = path.substr(path.size() - ext.size());

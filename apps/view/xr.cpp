@@ -110,7 +110,6 @@ MockViewProvider MockViewProvider::read(const std::string& path) {
   if (!j.contains("eyes") || !j["eyes"].is_array() || j["eyes"].size() != 2)
     throw fail("eyes must be an array of two eyes (left, right)");
   std::array<EyeView, 2> eyes;
-  constexpr double kDegree = M_PI / 180.0;
   for (size_t i = 0; i < 2; ++i) {
     const nlohmann::json& e = j["eyes"][i];
     const std::string where = "eyes[" + std::to_string(i) + "].";
@@ -121,8 +120,8 @@ MockViewProvider MockViewProvider::read(const std::string& path) {
     eyes[i].orientation = glm::dquat(q[0], q[1], q[2], q[3]);
     if (!e.contains("fov_deg")) throw fail(where + "fov_deg must be an object with left, right, up, down");
     const std::string fov_where = where + "fov_deg.";
-    eyes[i].fov = {number(e["fov_deg"], "left", fov_where) * kDegree, number(e["fov_deg"], "right", fov_where) * kDegree,
-                   number(e["fov_deg"], "up", fov_where) * kDegree, number(e["fov_deg"], "down", fov_where) * kDegree};
+    const auto fov_rad = [&](const char* side) { return number(e["fov_deg"], side, fov_where) * (M_PI / 180.0); };
+    eyes[i].fov = {fov_rad("left"), fov_rad("right"), fov_rad("up"), fov_rad("down")};
   }
   const auto integer = [&](const char* key, double fallback) {
     const double v = j.contains(key) ? number(j, key, "") : fallback;

@@ -9,30 +9,22 @@
 #include <cstdlib>
 
 #include "atmos/atmosphere.hpp"
+#include "astronomy/angles.hpp"
+#include "physics/checks.hpp"
 
 namespace atmos {
 
 namespace {
 
-constexpr double kDegree = M_PI / 180.0;
-constexpr double kArcsecond = 1.0 / 3600.0;  // degrees
+using astronomy::kArcsecond;
+using astronomy::kDegree;
+using astronomy::wrap_360;
+
 constexpr double kJ2000 = 2451545.0;         // JD of 2000 January 1.5 TT
 constexpr double kJulianCentury = 36525.0;   // days
 
 double sin_deg(double x) { return std::sin(x * kDegree); }
 double cos_deg(double x) { return std::cos(x * kDegree); }
-
-// x reduced to [0, 360).
-double wrap_360(double x) {
-  const double r = std::fmod(x, 360.0);
-  return r < 0.0 ? r + 360.0 : r;
-}
-
-std::string number(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", v);
-  return buffer;
-}
 
 double centuries_from_j2000(double jd) { return (jd - kJ2000) / kJulianCentury; }
 
@@ -285,7 +277,7 @@ double delta_t_s(double y) {
   // Espenak & Meeus 2006 (Five Millennium Canon of Solar Eclipses, NASA
   // TP-2006-214141, section 2.6), seconds.
   if (!(y >= kEphemerisFirstYear && y < kEphemerisLastYear + 1.0))
-    throw Error("delta T: the year " + number(y) + " is outside [" + std::to_string(kEphemerisFirstYear) +
+    throw Error("delta T: the year " + number_text(y) + " is outside [" + std::to_string(kEphemerisFirstYear) +
                 ", " + std::to_string(kEphemerisLastYear + 1) + ")");
   if (y < 1860) {
     const double t = y - 1800;
@@ -330,7 +322,7 @@ double delta_t_s(double y) {
 Instant instant_of(const UtcTime& time, double delta_t_seconds) {
   validate(time);
   if (!std::isfinite(delta_t_seconds) || std::abs(delta_t_seconds) > 3600.0)
-    throw Error("delta T must be finite and within an hour, got " + number(delta_t_seconds) + " s");
+    throw Error("delta T must be finite and within an hour, got " + number_text(delta_t_seconds) + " s");
   Instant i;
   i.jd_ut = julian_date(time);
   i.jd_tt = i.jd_ut + delta_t_seconds / 86400.0;
@@ -509,10 +501,10 @@ EquatorialPosition moon_apparent_equatorial(double jd_tt) {
 
 void validate(const Observer& o) {
   if (!std::isfinite(o.latitude_deg) || o.latitude_deg < -90.0 || o.latitude_deg > 90.0)
-    throw Error("latitude must be in [-90, 90] degrees, got " + number(o.latitude_deg));
+    throw Error("latitude must be in [-90, 90] degrees, got " + number_text(o.latitude_deg));
   if (!std::isfinite(o.longitude_deg)) throw Error("longitude must be a finite number of degrees");
   if (!std::isfinite(o.height_m) || o.height_m < -1e4 || o.height_m > 1e8)
-    throw Error("the observer's height must be in [-1e4, 1e8] metres, got " + number(o.height_m));
+    throw Error("the observer's height must be in [-1e4, 1e8] metres, got " + number_text(o.height_m));
 }
 
 glm::dvec3 earth_fixed_position(const Observer& o) {

@@ -15,24 +15,17 @@
 
 #include "atmos/atmosphere.hpp"
 #include "atmos/colour.hpp"
+#include "astronomy/angles.hpp"
+#include "physics/checks.hpp"
 
 namespace atmos {
 
 namespace {
 
-constexpr double kDegree = M_PI / 180.0;
-constexpr double kArcsecond = 1.0 / 3600.0;
+using astronomy::kArcsecond;
+using astronomy::kDegree;
+using astronomy::wrap_360;
 
-std::string number(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", v);
-  return buffer;
-}
-
-double wrap_360(double x) {
-  const double r = std::fmod(x, 360.0);
-  return r < 0.0 ? r + 360.0 : r;
-}
 
 // The V band's effective wavelength and zero point (Bessell, Castelli & Plez
 // 1998, Table A2: f_λ = 363.1e-11 erg cm⁻² s⁻¹ Å⁻¹ = 3.631e-11 W m⁻² nm⁻¹
@@ -83,11 +76,11 @@ std::vector<CatalogueStar> parse_bright_star_catalogue(std::istream& in, const s
     if (!(fields >> dec >> ra_hours >> v))
       throw Error(where + "expected the declination (deg), right ascension (h) and V magnitude");
     if (!std::isfinite(dec) || dec < -90.0 || dec > 90.0)
-      throw Error(where + "declination " + number(dec) + " is outside [-90, 90] degrees");
+      throw Error(where + "declination " + number_text(dec) + " is outside [-90, 90] degrees");
     if (!std::isfinite(ra_hours) || ra_hours < 0.0 || ra_hours >= 24.0)
-      throw Error(where + "right ascension " + number(ra_hours) + " is outside [0, 24) hours");
+      throw Error(where + "right ascension " + number_text(ra_hours) + " is outside [0, 24) hours");
     if (!std::isfinite(v) || v < -2.0 || v > 16.0)
-      throw Error(where + "V magnitude " + number(v) + " is outside [-2, 16]");
+      throw Error(where + "V magnitude " + number_text(v) + " is outside [-2, 16]");
     CatalogueStar s;
     s.declination_deg = dec;
     s.right_ascension_deg = ra_hours * 15.0;
@@ -149,7 +142,8 @@ std::vector<CatalogueStar> parse_kstars_catalogue(std::istream& in, const std::s
                                            dec_s >= 0.0 && dec_s <= 60.0))
       throw Error(where + "declination \"" + line.substr(10, 9) + "\" is not ±ddmmss.s");
     const double dec = (sign == '-' ? -1.0 : 1.0) * (dec_d + dec_m / 60.0 + dec_s / 3600.0);
-    if (dec < -90.0 || dec > 90.0) throw Error(where + "declination " + number(dec) + " is outside [-90, 90] degrees");
+    if (dec < -90.0 || dec > 90.0)
+      throw Error(where + "declination " + number_text(dec) + " is outside [-90, 90] degrees");
     const double v = column_number(line, 46, 6), bv = column_number(line, 52, 5);
     if (!std::isfinite(v) || v < -2.0 || v > 16.0)
       throw Error(where + "V magnitude \"" + line.substr(45, 6) + "\" is not a number in [-2, 16]");
@@ -259,7 +253,7 @@ EquatorialPosition apparent_place(const EquatorialPosition& j2000, double jd_tt)
 
 double temperature_from_b_minus_v(double bv) {
   if (!std::isfinite(bv) || bv < -0.4 || bv > 2.0)
-    throw Error("B-V colour index must be in [-0.4, 2.0] magnitudes, got " + number(bv));
+    throw Error("B-V colour index must be in [-0.4, 2.0] magnitudes, got " + number_text(bv));
   return 4600.0 * (1.0 / (0.92 * bv + 1.7) + 1.0 / (0.92 * bv + 0.62));
 }
 

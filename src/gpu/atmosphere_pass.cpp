@@ -24,12 +24,12 @@
 #include "gpu/shader_source.hpp"
 #include "gpu/star_catalogue_bins.hpp"
 #include "physics/parameters.hpp"
+#include "physics/checks.hpp"
 
 namespace atmos {
 
 namespace {
 
-constexpr int kMaxImageSize = 16384;
 
 // Texture units of the pass (the layout(binding) of atmosphere_pass.frag.glsl;
 // 0-7: the tables, gpu::TableUnit). Colour and albedo share a unit: a
@@ -47,13 +47,6 @@ constexpr GLuint kInstantSpaceMultipleScatteringUnit = 17;  // instant mode, cam
 // gpu::set_stencil_export (gpu/atmosphere_pass.hpp).
 std::atomic<bool> stencil_export_enabled{true};
 
-bool is_finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-
-std::string number(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", x);
-  return buffer;
-}
 
 // Width, height and internal format of level 0 of an engine texture; throws
 // when `name` is not a 2D texture.
@@ -451,7 +444,7 @@ void check_planet_frame(const PlanetFrame& frame) {
   if (!is_finite(frame.centre))
     throw Error("invalid planet frame: centre is not finite");
   if (!(frame.units_per_metre > 0.0 && std::isfinite(frame.units_per_metre)))
-    throw Error("invalid planet frame: units_per_metre " + number(frame.units_per_metre) + " must be > 0");
+    throw Error("invalid planet frame: units_per_metre " + number_text(frame.units_per_metre) + " must be > 0");
 }
 
 }  // namespace
@@ -522,7 +515,7 @@ void AtmospherePass::set_ground_albedo(const glm::dvec3& albedo) {
                 "with PrecomputeOptions::ground_albedo_response)");
   for (int c = 0; c < 3; ++c)
     if (!(albedo[c] >= 0.0 && albedo[c] <= 1.0))
-      throw Error("AtmospherePass::set_ground_albedo: albedo " + number(albedo[c]) + " is outside [0, 1]");
+      throw Error("AtmospherePass::set_ground_albedo: albedo " + number_text(albedo[c]) + " is outside [0, 1]");
   // Over Earth the scattering table's light moves by about 1 % per 0.01 of
   // albedo (tests/ground_albedo_test.cpp): a change of 0.001 or less, about
   // 0.1 %, keeps the tables.
@@ -585,9 +578,9 @@ void AtmospherePass::bind_textures(int first_unit, int parameters_binding) const
 namespace {
 
 void check_frame_size(const FrameInput& input) {
-  if (input.width < 1 || input.height < 1 || input.width > kMaxImageSize || input.height > kMaxImageSize)
+  if (input.width < 1 || input.height < 1 || input.width > gpu::kMaxImageSize || input.height > gpu::kMaxImageSize)
     throw Error("plugin input: frame size " + std::to_string(input.width) + "x" + std::to_string(input.height) +
-                " outside 1.." + std::to_string(kMaxImageSize));
+                " outside 1.." + std::to_string(gpu::kMaxImageSize));
 }
 
 // The frame's PassFrame from its numbers (checked before), in the pass's

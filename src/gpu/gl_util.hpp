@@ -26,6 +26,10 @@
 
 namespace atmos::gpu {
 
+// The largest image width or height a pass draws, pixels (the smallest
+// GL_MAX_TEXTURE_SIZE of current GPUs).
+inline constexpr int kMaxImageSize = 16384;
+
 // Compiles and links a vertex + fragment program; throws atmos::Error with
 // the first error lines of the info log, their line numbers mapped back to
 // the files of the assembled source ("functions.glsl:57(12): error: ...").

@@ -12,25 +12,11 @@
 
 #include "physics/moons.hpp"
 #include "physics/parameters.hpp"
+#include "physics/checks.hpp"
 
 namespace atmos::gpu {
 
 namespace {
-
-bool is_finite(const glm::dmat4& m) {
-  for (int c = 0; c < 4; ++c)
-    for (int r = 0; r < 4; ++r)
-      if (!std::isfinite(m[c][r])) return false;
-  return true;
-}
-
-bool is_finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-
-std::string number(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", x);
-  return buffer;
-}
 
 // The view matrix must be rigid (rotation + translation): the pass turns
 // its inverse into a rotation and a camera position.
@@ -111,13 +97,13 @@ void validate_frame_numbers(const FrameInput& input) {
   check_perspective(input.projection);
   if (input.depth_encoding == DepthEncoding::logarithmic &&
       !(input.log_depth_far > 0.0 && std::isfinite(input.log_depth_far)))
-    throw Error("plugin input: logarithmic depth needs log_depth_far > 0, got " + number(input.log_depth_far));
+    throw Error("plugin input: logarithmic depth needs log_depth_far > 0, got " + number_text(input.log_depth_far));
   if (!is_finite(input.sun_direction) || glm::length(input.sun_direction) == 0.0)
     throw Error("plugin input: the sun direction is zero or not finite");
   if (!(input.sun_illuminance_lux >= 0.0 && std::isfinite(input.sun_illuminance_lux)))
-    throw Error("plugin input: sun_illuminance_lux " + number(input.sun_illuminance_lux) + " must be >= 0");
+    throw Error("plugin input: sun_illuminance_lux " + number_text(input.sun_illuminance_lux) + " must be >= 0");
   if (!(input.nits_per_unit > 0.0 && std::isfinite(input.nits_per_unit)))
-    throw Error("plugin input: nits_per_unit " + number(input.nits_per_unit) + " must be > 0");
+    throw Error("plugin input: nits_per_unit " + number_text(input.nits_per_unit) + " must be > 0");
   if (input.shadow_map != 0) {
     if (!is_finite(input.shadow_matrix)) throw Error("plugin input: the shadow matrix is not finite");
     if (input.shadow_matrix[0][3] != 0.0 || input.shadow_matrix[1][3] != 0.0 || input.shadow_matrix[2][3] != 0.0 ||
@@ -125,7 +111,7 @@ void validate_frame_numbers(const FrameInput& input) {
       throw Error("plugin input: the shadow matrix is not affine (the sun's shadow map needs an orthographic "
                   "projection)");
     if (!(input.shadow_bias_m >= 0.0 && std::isfinite(input.shadow_bias_m)))
-      throw Error("plugin input: shadow_bias_m " + number(input.shadow_bias_m) + " must be >= 0");
+      throw Error("plugin input: shadow_bias_m " + number_text(input.shadow_bias_m) + " must be >= 0");
     if (input.shadow_steps < 1 || input.shadow_steps > 256)
       throw Error("plugin input: shadow_steps " + std::to_string(input.shadow_steps) + " outside 1..256");
   }

@@ -24,6 +24,7 @@
 #include "gpu/atmosphere_pass.hpp"
 #include "gpu/camera_cpp.hpp"
 #include "gpu/gl_util.hpp"
+#include "physics/checks.hpp"
 #include "gpu/shader_source.hpp"
 #include "gpu/star_catalogue_bins.hpp"
 #include "physics/moons.hpp"
@@ -35,7 +36,6 @@ namespace atmos {
 
 namespace {
 
-constexpr int kMaxImageSize = 16384;
 // The GPU draws the image in tiles of at most this size: the read-back buffer
 // stays small (64 MiB) for any image size, and no single draw runs long
 // enough to trip a desktop driver's watchdog.
@@ -43,7 +43,6 @@ constexpr int kTileSize = 2048;
 // render.frag.glsl: `moons_eclipse`, after the moons (gpu::kMoonsLocation, 45..49).
 constexpr GLint kMoonsEclipseLocation = 50;
 
-bool is_finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 std::string to_string(const glm::dvec3& v) {
   char buffer[96];
@@ -119,9 +118,9 @@ void validate_camera(const Camera& camera) {
   if (glm::length(glm::cross(glm::normalize(camera.forward), glm::normalize(camera.up))) < 1e-6)
     throw Error("invalid camera: up " + to_string(camera.up) + " is parallel to forward " +
                 to_string(camera.forward));
-  if (camera.width < 1 || camera.width > kMaxImageSize || camera.height < 1 || camera.height > kMaxImageSize)
+  if (camera.width < 1 || camera.width > gpu::kMaxImageSize || camera.height < 1 || camera.height > gpu::kMaxImageSize)
     throw Error("invalid camera: image size " + std::to_string(camera.width) + "x" + std::to_string(camera.height) +
-                " outside 1.." + std::to_string(kMaxImageSize));
+                " outside 1.." + std::to_string(gpu::kMaxImageSize));
   switch (camera.projection) {
     case Projection::perspective:
       if (!(camera.fov_deg > 0.0 && camera.fov_deg < 180.0))

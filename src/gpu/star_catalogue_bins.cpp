@@ -13,6 +13,7 @@
 #include "atmos/atmosphere.hpp"
 #include "atmos/colour.hpp"
 #include "gpu/gl_util.hpp"
+#include "physics/checks.hpp"
 
 namespace atmos::gpu {
 
@@ -23,12 +24,6 @@ constexpr int kCellCount = 6 * kCells * kCells;
 // The V band's effective wavelength (Bessell, Castelli & Plez 1998,
 // Table A2), where atmos::Star gives the irradiance.
 constexpr double kVEffectiveWavelengthNm = 545.0;
-
-std::string number(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", v);
-  return buffer;
-}
 
 // Planck's law (Planck 1901) at `wavelength_nm` over its value at 545 nm:
 // B(λ, T) ∝ λ⁻⁵ / (exp(hc / (λ k T)) − 1).
@@ -249,9 +244,9 @@ void validate_stars(const std::vector<Star>& stars) {
     if (!(std::isfinite(d.x) && std::isfinite(d.y) && std::isfinite(d.z)) || glm::length(d) == 0.0)
       throw Error(which + "its direction is zero or not finite");
     if (!std::isfinite(s.v_band_irradiance) || s.v_band_irradiance < 0.0)
-      throw Error(which + "its irradiance " + gpu::number(s.v_band_irradiance) + " is negative or not finite");
+      throw Error(which + "its irradiance " + number_text(s.v_band_irradiance) + " is negative or not finite");
     if (!(s.temperature_k >= 1000.0 && s.temperature_k <= 100000.0))
-      throw Error(which + "its temperature " + gpu::number(s.temperature_k) + " K is outside [1000, 100000]");
+      throw Error(which + "its temperature " + number_text(s.temperature_k) + " K is outside [1000, 100000]");
   }
 }
 

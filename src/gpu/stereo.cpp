@@ -22,27 +22,22 @@
 #include <string>
 
 #include "atmos/atmosphere.hpp"
+#include "physics/checks.hpp"
 
 namespace atmos {
 namespace {
-
-std::string number(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", x);
-  return buffer;
-}
 
 void validate_fov(const FieldOfView& fov, const char* what) {
   const double limit = 0.5 * M_PI;
   for (double angle : {fov.left_rad, fov.right_rad, fov.up_rad, fov.down_rad})
     if (!(std::abs(angle) < limit))
-      throw Error(std::string(what) + ": field of view angle " + number(angle) + " rad is not in (-pi/2, pi/2)");
+      throw Error(std::string(what) + ": field of view angle " + number_text(angle) + " rad is not in (-pi/2, pi/2)");
   if (!(fov.left_rad < fov.right_rad))
-    throw Error(std::string(what) + ": field of view left " + number(fov.left_rad) + " rad is not left of right " +
-                number(fov.right_rad));
+    throw Error(std::string(what) + ": field of view left " + number_text(fov.left_rad) + " rad is not left of right " +
+                number_text(fov.right_rad));
   if (!(fov.down_rad < fov.up_rad))
-    throw Error(std::string(what) + ": field of view down " + number(fov.down_rad) + " rad is not below up " +
-                number(fov.up_rad));
+    throw Error(std::string(what) + ": field of view down " + number_text(fov.down_rad) + " rad is not below up " +
+                number_text(fov.up_rad));
 }
 
 struct Tangents {
@@ -74,10 +69,10 @@ std::array<Eye, 2> stereo_eyes(const Camera& head, const StereoRig& rig) {
   if (head.projection != Projection::perspective)
     throw Error("stereo_eyes: the head camera must use the perspective projection");
   if (!(rig.interpupillary_m >= 0.0 && rig.interpupillary_m <= 1e7))
-    throw Error("stereo_eyes: interpupillary distance " + number(rig.interpupillary_m) +
+    throw Error("stereo_eyes: interpupillary distance " + number_text(rig.interpupillary_m) +
                 " m is not in [0, 1e7]");
   if (!(rig.convergence_m > 0.0))
-    throw Error("stereo_eyes: convergence distance " + number(rig.convergence_m) + " m is not > 0");
+    throw Error("stereo_eyes: convergence distance " + number_text(rig.convergence_m) + " m is not > 0");
 
   const glm::dvec3 forward = glm::normalize(head.forward);
   const glm::dvec3 right = glm::normalize(glm::cross(forward, head.up));
@@ -108,8 +103,8 @@ Camera eye_camera(const Eye& eye, int width, int height) {
   const double vertical = (t.up - t.down) / double(height);
   if (width < 1 || height < 1 || !(std::abs(horizontal - vertical) <= 1e-6 * vertical))
     throw Error("eye_camera: " + std::to_string(width) + "x" + std::to_string(height) +
-                " pixels over this field of view are not square (" + number(horizontal) + " and " +
-                number(vertical) + " per pixel)");
+                " pixels over this field of view are not square (" + number_text(horizontal) + " and " +
+                number_text(vertical) + " per pixel)");
   Camera camera;
   camera.position = eye.position;
   camera.forward = eye.forward;
@@ -190,7 +185,8 @@ glm::dmat4 view_matrix(const Eye& eye) {
 glm::dmat4 projection_matrix(const FieldOfView& fov, double near, double far) {
   validate_fov(fov, "projection_matrix");
   if (!(near > 0.0 && far > near && std::isfinite(far)))
-    throw Error("projection_matrix: needs 0 < near < far < infinity, got " + number(near) + " and " + number(far));
+    throw Error("projection_matrix: needs 0 < near < far < infinity, got " + number_text(near) + " and " +
+                number_text(far));
   const Tangents t = tangents(fov);
   return glm::frustum(t.left * near, t.right * near, t.down * near, t.up * near, near, far);
 }
@@ -198,7 +194,7 @@ glm::dmat4 projection_matrix(const FieldOfView& fov, double near, double far) {
 glm::dmat4 reversed_z_projection(const FieldOfView& fov, double near) {
   validate_fov(fov, "reversed_z_projection");
   if (!(near > 0.0 && std::isfinite(near)))
-    throw Error("reversed_z_projection: needs a finite near > 0, got " + number(near));
+    throw Error("reversed_z_projection: needs a finite near > 0, got " + number_text(near));
   const Tangents t = tangents(fov);
   // x_ndc = (2 x / -z - (r + l)) / (r - l), likewise y; depth = near / -z.
   glm::dmat4 p(0.0);

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "atmos/atmosphere.hpp"
+#include "physics/checks.hpp"
 
 namespace atmos {
 
@@ -18,12 +19,6 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kDegree = M_PI / 180.0;
-
-std::string number(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
 
 }  // namespace
 
@@ -66,7 +61,7 @@ const PlanetParameter& planet_parameter(const std::string& name) {
 std::string valid_range_text(const PlanetParameter& p) {
   if (p.min == 0 && !p.min_inclusive && std::isinf(p.max)) return "positive";
   const std::string unit = std::string(p.unit) == "1" ? "" : std::string(" ") + p.unit;
-  return "in " + std::string(p.min_inclusive ? "[" : "(") + number(p.min) + ", " + number(p.max) +
+  return "in " + std::string(p.min_inclusive ? "[" : "(") + number_text(p.min) + ", " + number_text(p.max) +
          (p.max_inclusive ? "]" : ")") + unit;
 }
 
@@ -77,7 +72,7 @@ void check_planet_parameter(const std::string& name, double value_si, const std:
   const bool below = p.max_inclusive ? v <= p.max : v < p.max;
   if (!(std::isfinite(v) && above && below)) {
     const std::string unit = std::string(p.unit) == "1" ? "" : std::string(" ") + p.unit;
-    throw Error(what + " must be " + valid_range_text(p) + ", got " + number(v) + unit);
+    throw Error(what + " must be " + valid_range_text(p) + ", got " + number_text(v) + unit);
   }
 }
 

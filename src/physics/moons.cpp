@@ -7,17 +7,14 @@
 #include <string>
 
 #include "atmos/atmosphere.hpp"
+#include "physics/checks.hpp"
 
 namespace atmos {
 
-namespace {
-bool finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-}  // namespace
-
 Moon moon_in_sky(const glm::dvec3& observer, const glm::dvec3& direction, double angular_radius_rad,
                  double distance_m) {
-  if (!finite(observer)) throw Error("moon: the observer's position is not finite");
-  if (!finite(direction) || std::abs(glm::length(direction) - 1.0) > 1e-6)
+  if (!is_finite(observer)) throw Error("moon: the observer's position is not finite");
+  if (!is_finite(direction) || std::abs(glm::length(direction) - 1.0) > 1e-6)
     throw Error("moon: the direction must be a finite unit vector");
   if (!(angular_radius_rad > 0.0) || angular_radius_rad > 10.0 * M_PI / 180.0)
     throw Error("moon: the angular radius must be in (0, 10] degrees, got " +
@@ -32,7 +29,7 @@ void validate_moons(const std::vector<Moon>& moons, double top_radius_m) {
     throw Error("at most " + std::to_string(kMaxMoons) + " moons are supported, got " + std::to_string(moons.size()));
   for (size_t i = 0; i < moons.size(); ++i) {
     const std::string which = "moon " + std::to_string(i + 1) + ": ";
-    if (!finite(moons[i].centre_m)) throw Error(which + "its centre is not finite");
+    if (!is_finite(moons[i].centre_m)) throw Error(which + "its centre is not finite");
     if (!(moons[i].radius_m > 0.0) || !std::isfinite(moons[i].radius_m))
       throw Error(which + "its radius must be finite and > 0");
     // Float positions in the shaders: ~1e-7 relative; 1e12 m keeps 0.1 km.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include "atmos/atmosphere.hpp"
@@ -9,8 +10,7 @@
 namespace atmos::planet {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kQuarterPi = 0.25 * kPi;
+constexpr double kQuarterPi = 0.25 * std::numbers::pi;
 
 // Right-handed frames (U x V = N), faces +x, -x, +y, -y, +z, -z.
 constexpr std::array<FaceFrame, 6> kFrames = {{
@@ -21,14 +21,6 @@ constexpr std::array<FaceFrame, 6> kFrames = {{
     {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}},
     {{0, 0, -1}, {1, 0, 0}, {0, -1, 0}},
 }};
-
-// t(c) = tan(c pi/4), odd exactly (the sign applied after tan of |c|) and
-// exactly +-1 at c = +-1, where tan(pi/4) rounds to 0.9999999999999999.
-double equal_angle_tan(double c) {
-  const double m = std::abs(c);
-  const double t = m == 1.0 ? 1.0 : std::tan(m * kQuarterPi);
-  return std::copysign(t, c);
-}
 
 // w_i = N_i + alpha U_i + beta V_i: each product with an integer in
 // {-1, 0, 1} and each sum with at most one non-zero term is exact.
@@ -154,7 +146,13 @@ TileKey neighbour(const TileKey& key, int edge) {
   return TileKey{next, key.level, std::uint32_t((xu + n - 1) / 2), std::uint32_t((yv + n - 1) / 2)};
 }
 
-double max_grid_edge_angle(int level) { return 0.5 * kPi * std::ldexp(1.0, -level); }
+double equal_angle_tan(double c) {
+  const double m = std::abs(c);
+  const double t = m == 1.0 ? 1.0 : std::tan(m * kQuarterPi);
+  return std::copysign(t, c);
+}
+
+double max_grid_edge_angle(int level) { return 0.5 * std::numbers::pi * std::ldexp(1.0, -level); }
 
 double max_tile_diagonal_angle(int level) {
   // sigma_max sqrt(2) (pi/2) / 2^level with sigma_max = 2/sqrt(3).

@@ -96,4 +96,9 @@ const FaceFrame& face_frame(int face);
 double max_grid_edge_angle(int level);
 double max_tile_diagonal_angle(int level);
 
+// t(c) = tan(c pi/4) of an equal-angle coordinate c = 2u - 1 in [-1, 1]: odd
+// exactly (the sign applied after tan of |c|) and exactly +-1 at c = +-1,
+// where tan(pi/4) rounds to 0.9999999999999999.
+double equal_angle_tan(double c);
+
 }  // namespace atmos::planet

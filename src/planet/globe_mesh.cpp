@@ -2,6 +2,7 @@
 
 #include <glm/geometric.hpp>
 
+#include <numbers>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -12,7 +13,6 @@ namespace atmos::planet {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // Vertex spacing above which the albedo is averaged over the vertex's cell.
 constexpr double kAlbedoFilterSpacing_m = 2000.0;
 
@@ -212,7 +212,7 @@ std::vector<glm::vec3> MeshBuilder::vertex_albedos(const TileKey& key) const {
 }
 
 double MeshBuilder::spacing_m(int level) const {
-  return radius_m_ * (0.5 * kPi) / (std::ldexp(1.0, level) * double(kTileQuads));
+  return radius_m_ * (0.5 * std::numbers::pi) / (std::ldexp(1.0, level) * double(kTileQuads));
 }
 
 double MeshBuilder::skirt_depth_m(int level) const {

@@ -7,6 +7,7 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/type_ptr.hpp>
 #include <glm/mat4x4.hpp>
+#include <numbers>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -29,7 +30,6 @@ namespace atmos {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kGravity = 9.81;  // m s^-2, the waves' dispersion ω² = g k (deep water)
 constexpr int kMaxWaves = 32;      // OCEAN_MAX_WAVES of ocean_waves.glsl
 constexpr int kSkyMapSize = 64;    // OCEAN_SKY_MAP_SIZE of ocean_light_maps.glsl
@@ -68,7 +68,7 @@ std::vector<planet::OceanWave> make_waves(double wind_speed, glm::dvec2 budget) 
   if (!(wind_speed > 0.5)) return waves;  // calm: the slopes are all the BRDF's
   const double omega_0 = kGravity / wind_speed;
   const double omega_p = std::pow(0.8 * 0.74, 0.25) * omega_0;
-  const double omega_lo = 0.75 * omega_p, omega_hi = std::sqrt(kGravity * 2.0 * kPi / 0.1);
+  const double omega_lo = 0.75 * omega_p, omega_hi = std::sqrt(kGravity * 2.0 * std::numbers::pi / 0.1);
   const double step = std::log(omega_hi / omega_lo) / kMaxWaves;
   glm::dvec2 variance(0.0);
   for (int i = 0; i < kMaxWaves; ++i) {
@@ -81,13 +81,13 @@ std::vector<planet::OceanWave> make_waves(double wind_speed, glm::dvec2 budget) 
     w.amplitude = std::sqrt(2.0 * s * (hi - lo));
     // cos² spreading on [-π/2, π/2]: F(θ) = (θ + π/2 + sin(2θ)/2) / π, inverted by bisection.
     const double u = std::fmod(0.5 + 0.6180339887498949 * i, 1.0);
-    double a = -0.5 * kPi, b = 0.5 * kPi;
+    double a = -0.5 * std::numbers::pi, b = 0.5 * std::numbers::pi;
     for (int it = 0; it < 50; ++it) {
       const double m = 0.5 * (a + b);
-      ((m + 0.5 * kPi + 0.5 * std::sin(2.0 * m)) / kPi < u ? a : b) = m;
+      ((m + 0.5 * std::numbers::pi + 0.5 * std::sin(2.0 * m)) / std::numbers::pi < u ? a : b) = m;
     }
     w.angle = 0.5 * (a + b) * (i % 2 == 0 ? 1.0 : -1.0);
-    w.phase = 2.0 * kPi * std::fmod(0.3 + 0.7548776662466927 * i, 1.0);
+    w.phase = 2.0 * std::numbers::pi * std::fmod(0.3 + 0.7548776662466927 * i, 1.0);
     const double slope = 0.5 * w.amplitude * w.amplitude * w.k * w.k;
     variance += slope * glm::dvec2(std::cos(w.angle) * std::cos(w.angle), std::sin(w.angle) * std::sin(w.angle));
     waves.push_back(w);
@@ -219,7 +219,7 @@ void ocean_wind_axes(const glm::dvec3& nadir, double wind_azimuth_deg, glm::dvec
   if (glm::length(east) < 1e-6) east = glm::cross(glm::dvec3(0.0, 1.0, 0.0), nadir);
   east = glm::normalize(east);
   const glm::dvec3 north = glm::cross(nadir, east);
-  const double azimuth = wind_azimuth_deg * kPi / 180.0;
+  const double azimuth = wind_azimuth_deg * std::numbers::pi / 180.0;
   upwind = std::cos(azimuth) * north + std::sin(azimuth) * east;
   crosswind = glm::cross(nadir, upwind);
 }
@@ -234,7 +234,7 @@ void set_ocean_wave_uniforms(const std::vector<OceanWave>& waves, const glm::dve
     field.wave_vector[i] = glm::dvec4(k, w.amplitude);
     field.wave_in_wind[i] = glm::dvec4(w.k * std::cos(w.angle), w.k * std::sin(w.angle), w.k, w.amplitude);
     const double phase = glm::dot(k, camera_m) + w.phase - w.omega * time_s;
-    field.wave_phase[i] = phase - 2.0 * kPi * std::floor(phase / (2.0 * kPi));
+    field.wave_phase[i] = phase - 2.0 * std::numbers::pi * std::floor(phase / (2.0 * std::numbers::pi));
   }
 }
 }  // namespace planet
@@ -427,7 +427,7 @@ struct Ocean::Impl {
     });
     if (lake_mask) {
       // The texels' spacing on the lakes' sphere: a face spans 90 degrees.
-      const double spacing = 0.5 * kPi / n * level_radius_m[kLakes];
+      const double spacing = 0.5 * std::numbers::pi / n * level_radius_m[kLakes];
       std::vector<glm::dvec3> directions(static_cast<size_t>(n));
       std::vector<std::uint8_t> valid(static_cast<size_t>(n));
       for (int row = 0; row < 6 * n; ++row) {
@@ -472,7 +472,7 @@ struct Ocean::Impl {
   // change by one step when it moves farther (where the waves are smaller
   // than the pixels but for cameras near the sea flying that far).
   void anchor_at(const glm::dvec3& nadir) {
-    if (anchored && glm::dot(nadir, anchor) > std::cos(0.5 * kPi / 180.0)) return;
+    if (anchored && glm::dot(nadir, anchor) > std::cos(0.5 * std::numbers::pi / 180.0)) return;
     anchored = true;
     anchor = nadir;
     planet::ocean_wind_axes(nadir, settings.wind_azimuth_deg, upwind, crosswind);

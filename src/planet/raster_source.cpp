@@ -2,6 +2,7 @@
 
 #include <cpl_error.h>
 #include <gdal.h>
+#include <numbers>
 #include <ogr_srs_api.h>
 
 #include <glm/geometric.hpp>
@@ -18,8 +19,7 @@ namespace atmos::planet {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegree = kPi / 180.0;
+constexpr double kDegree = std::numbers::pi / 180.0;
 constexpr float kInvalid = std::numeric_limits<float>::quiet_NaN();
 
 // GDAL reports errors through a per-thread handler; this one keeps the last

@@ -2,6 +2,7 @@
 
 #include <glm/geometric.hpp>
 
+#include <numbers>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -21,8 +22,7 @@ namespace atmos::planet {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegree = kPi / 180.0;
+constexpr double kDegree = std::numbers::pi / 180.0;
 // The open ocean's albedo, about 0.06 for the sun above 25 degrees (Payne
 // 1972), slightly blue from the light the water sends back up.
 const glm::vec3 kSeaAlbedo(0.045f, 0.06f, 0.08f);
@@ -50,13 +50,13 @@ class CoastDistanceGrid {
       land_row(lat, longitudes.data(), longitudes.size(), land.data() + std::size_t(j) * std::size_t(width));
     });
     const std::vector<float> to_sea = distance_to(land, 0), to_land = distance_to(land, 1);
-    const double half_cell = 0.5 * radius_m * kPi / height;
+    const double half_cell = 0.5 * radius_m * std::numbers::pi / height;
     distance_m_.resize(n);
     for (std::size_t k = 0; k < n; ++k)
       distance_m_[k] = land[k] ? float(to_sea[k] - half_cell) : float(half_cell - to_land[k]);
   }
 
-  double cell_size_m() const { return radius_m_ * kPi / height_; }
+  double cell_size_m() const { return radius_m_ * std::numbers::pi / height_; }
 
   // Bilinear between cell centres, wrapped in longitude.
   double operator()(const glm::dvec3& d) const {
@@ -82,7 +82,7 @@ class CoastDistanceGrid {
     const double inf = std::numeric_limits<double>::infinity();
     std::vector<double> d(land.size());
     for (std::size_t k = 0; k < land.size(); ++k) d[k] = land[k] == target ? 0.0 : inf;
-    const double dlat = radius_m_ * kPi / height_, dlon = 2.0 * kPi / width_;
+    const double dlat = radius_m_ * std::numbers::pi / height_, dlon = 2.0 * std::numbers::pi / width_;
     const auto index = [&](int i, int j) {
       return std::size_t(j) * std::size_t(width_) + std::size_t(((i % width_) + width_) % width_);
     };
@@ -114,7 +114,7 @@ class CoastDistanceGrid {
       }
     }
     // A grid without a cell of the target class: infinitely far.
-    const double far = 4.0 * radius_m_ * kPi;
+    const double far = 4.0 * radius_m_ * std::numbers::pi;
     std::vector<float> out(d.size());
     for (std::size_t k = 0; k < d.size(); ++k) out[k] = float(std::min(d[k], far));
     return out;
@@ -192,7 +192,7 @@ std::unique_ptr<Surface::Data> open_data(const PlanetSurface& s, double radius_m
           });
     } else {
       const RasterSource& imagery = *data->imagery;
-      const double spacing = radius_m * kPi / height;
+      const double spacing = radius_m * std::numbers::pi / height;
       data->coast = std::make_unique<CoastDistanceGrid>(
           width, height, radius_m, [&](double lat, const double* lons, std::size_t count, std::uint8_t* out) {
             for (std::size_t i = 0; i < count; ++i) {
@@ -373,7 +373,7 @@ void Surface::albedos(const glm::dvec3* directions, std::size_t n, double spacin
 glm::dvec3 Surface::sample_direction(double u, double v, double w) const {
   if (data_->elevation && w < 0.5) return data_->elevation->direction_in_extent(u, v);
   // Uniform on the sphere (Archimedes: z uniform in [-1, 1]).
-  const double z = 2.0 * u - 1.0, phi = 2.0 * kPi * v, r = std::sqrt(std::max(0.0, 1.0 - z * z));
+  const double z = 2.0 * u - 1.0, phi = 2.0 * std::numbers::pi * v, r = std::sqrt(std::max(0.0, 1.0 - z * z));
   return {r * std::cos(phi), r * std::sin(phi), z};
 }
 

@@ -10,7 +10,7 @@
 namespace atmos::planet {
 namespace {
 
-constexpr double kInfinity = std::numeric_limits<double>::infinity();
+constexpr double kUnbounded = std::numeric_limits<double>::infinity();
 
 bool finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
@@ -24,14 +24,6 @@ bool finite(const glm::dmat4& m) {
 double dot(const glm::dvec3& a, const glm::dvec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 
 glm::dvec3 to_vec(const std::array<int, 3>& a) { return glm::dvec3(double(a[0]), double(a[1]), double(a[2])); }
-
-// tan(c pi/4) of an equal-angle coordinate c = 2u - 1, exact at +-1 (as
-// cube_sphere.cpp).
-double equal_angle_tan(double c) {
-  const double m = std::abs(c);
-  const double t = m == 1.0 ? 1.0 : std::tan(m * 0.25 * 3.14159265358979323846);
-  return std::copysign(t, c);
-}
 
 void validate(const LodCamera& camera, const LodSettings& settings, const ReliefBounds& bounds) {
   if (!finite(camera.position)) throw Error("select_tiles: the camera position is not finite");
@@ -124,7 +116,7 @@ double nearest_chord_squared(const glm::dvec3& c, const Footprint& f) {
     const double x = cu / cn, y = cv / cn;
     if (x >= f.tan_u0 && x <= f.tan_u1 && y >= f.tan_v0 && y <= f.tan_v1) return 0.0;
   }
-  double best = kInfinity;
+  double best = kUnbounded;
   for (const glm::dvec3& corner : f.corner) {
     const glm::dvec3 d = c - corner;
     best = std::min(best, dot(d, d));
@@ -315,7 +307,7 @@ struct Traversal {
     tile.max_height_m = h_hi;
     tile.quadrants = quadrants;
     if (key.level == 0) {
-      tile.morph_start_m = tile.morph_end_m = kInfinity;
+      tile.morph_start_m = tile.morph_end_m = kUnbounded;
     } else {
       tile.morph_end_m = ranges[std::size_t(key.level)];
       tile.morph_start_m = fraction * tile.morph_end_m;
@@ -354,7 +346,7 @@ std::vector<double> level_ranges_m(const LodCamera& camera, const LodSettings& s
   const int finest = finest_level(settings, bounds);
   const double k = camera.viewport_height_px / (2.0 * camera.tan_half_fov_y);
   const double f = settings.morph_start_fraction;
-  std::vector<double> r(std::size_t(finest + 1), kInfinity);
+  std::vector<double> r(std::size_t(finest + 1), kUnbounded);
   double finer = 0.0;  // r_{L+1}, none below the finest level
   for (int level = finest; level >= 1; --level) {
     const double coarser = checked_error(bounds, level_spacing_m(level - 1, settings, bounds));

@@ -35,6 +35,7 @@
 #include "gpu/shader_source.hpp"
 #include "data/embedded_files.hpp"
 #include "post/tone_mapping_cpp.hpp"
+#include "physics/checks.hpp"
 
 namespace atmos {
 
@@ -63,12 +64,6 @@ constexpr int kToneMapBlock = 2;
 // column strip of kReduceRows pixels.
 constexpr int kReduceColumns = 64;
 constexpr int kReduceRows = 32;
-
-std::string number(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", x);
-  return buffer;
-}
 
 const char* embedded(const char* path) {
   const char* text = data::embedded_file(path);
@@ -149,7 +144,7 @@ void require(bool ok, const std::string& message) {
 }
 
 void require_finite(double v, const char* name) {
-  require(std::isfinite(v), std::string(name) + " must be a finite number (got " + number(v) + ")");
+  require(std::isfinite(v), std::string(name) + " must be a finite number (got " + number_text(v) + ")");
 }
 
 void validate(const PostSettings& s) {
@@ -160,22 +155,22 @@ void validate(const PostSettings& s) {
   require_finite(s.exposure_ev, "exposure_ev");
   require_finite(s.bloom.strength, "bloom strength");
   require(s.bloom.strength >= 0.0 && s.bloom.strength <= 1.0,
-          "bloom strength must be in [0, 1] (got " + number(s.bloom.strength) + ")");
+          "bloom strength must be in [0, 1] (got " + number_text(s.bloom.strength) + ")");
   require_finite(s.bloom.threshold, "bloom threshold");
-  require(s.bloom.threshold >= 0.0, "bloom threshold must be >= 0 (got " + number(s.bloom.threshold) + ")");
+  require(s.bloom.threshold >= 0.0, "bloom threshold must be >= 0 (got " + number_text(s.bloom.threshold) + ")");
   const AutoExposureSettings& a = s.auto_exposure;
   require_finite(a.key, "auto-exposure key");
-  require(a.key > 0.0, "auto-exposure key must be > 0 (got " + number(a.key) + ")");
+  require(a.key > 0.0, "auto-exposure key must be > 0 (got " + number_text(a.key) + ")");
   require_finite(a.compensation_ev, "exposure compensation");
   require_finite(a.min_ev, "auto-exposure min_ev");
   require_finite(a.max_ev, "auto-exposure max_ev");
   require(a.min_ev <= a.max_ev,
-          "auto-exposure min_ev (" + number(a.min_ev) + ") is above max_ev (" + number(a.max_ev) + ")");
+          "auto-exposure min_ev (" + number_text(a.min_ev) + ") is above max_ev (" + number_text(a.max_ev) + ")");
   require_finite(a.brightening_tau_s, "brightening time constant");
   require_finite(a.darkening_tau_s, "darkening time constant");
   require(a.brightening_tau_s >= 0.0 && a.darkening_tau_s >= 0.0,
-          "adaptation time constants must be >= 0 s (got " + number(a.brightening_tau_s) + ", " +
-              number(a.darkening_tau_s) + ")");
+          "adaptation time constants must be >= 0 s (got " + number_text(a.brightening_tau_s) + ", " +
+              number_text(a.darkening_tau_s) + ")");
 }
 
 // A 2D texture of at least level 0 = width x height; returns its internal format.
@@ -475,9 +470,9 @@ std::uint32_t PostProcess::process(const PostInput& in, const PostSettings& sett
   require(in.width >= 1 && in.height >= 1,
           "image size must be at least 1x1 (got " + std::to_string(in.width) + "x" + std::to_string(in.height) + ")");
   require_finite(in.nits_per_unit, "nits_per_unit");
-  require(in.nits_per_unit > 0.0, "nits_per_unit must be > 0 (got " + number(in.nits_per_unit) + ")");
+  require(in.nits_per_unit > 0.0, "nits_per_unit must be > 0 (got " + number_text(in.nits_per_unit) + ")");
   require_finite(in.dt_s, "dt_s");
-  require(in.dt_s >= 0.0, "dt_s must be >= 0 (got " + number(in.dt_s) + ")");
+  require(in.dt_s >= 0.0, "dt_s must be >= 0 (got " + number_text(in.dt_s) + ")");
   gpu::clear_gl_errors();
   check_texture(in.colour, in.width, in.height, "input colour");
   GLuint output = 0;

@@ -20,13 +20,6 @@ namespace {
 
 constexpr std::uint64_t kPlanetStream = 1;
 
-std::string number(double x) {
-  std::ostringstream o;
-  o.precision(6);
-  o << x;
-  return o.str();
-}
-
 // ∫ density dh over the atmosphere [0, thickness]: the column (m) that turns
 // a vertical optical depth into a coefficient at the reference density.
 double column_length(const DensityProfile& d, double thickness) {
@@ -138,16 +131,16 @@ Spectrum random_solar(Random& r, std::string& recipe) {
   const double kind = r.uniform();
   if (kind < 0.4) {
     const double scale = r.log_uniform(0.01, 4.0);
-    recipe += " solar=table x" + number(scale);
+    recipe += " solar=table x" + number_text(scale, 6);
     return solar_spectrum_table().scaled(scale);
   }
   if (kind < 0.8) {
     const double t = r.log_uniform(2000.0, 50000.0), total = r.log_uniform(1.0, 1e4);
-    recipe += " solar=blackbody " + number(t) + " K " + number(total) + " W/m2";
+    recipe += " solar=blackbody " + number_text(t, 6) + " K " + number_text(total, 6) + " W/m2";
     return blackbody_spectrum(t, total);
   }
   const double v = r.log_uniform(1e-3, 10.0);
-  recipe += " solar=constant " + number(v);
+  recipe += " solar=constant " + number_text(v, 6);
   return Spectrum::constant(v);
 }
 
@@ -295,11 +288,11 @@ PlanetCase make_planet(std::uint64_t seed, int planet) {
       // Up to 100x, keeping every coefficient within validate()'s 1 m^-1.
       const double factor = std::min(r.log_uniform(0.01, 100.0), 1.0 / largest_coefficient(p.atmosphere));
       scale_density(p.atmosphere, factor);
-      p.recipe += " density-scale=" + number(factor);
+      p.recipe += " density-scale=" + number_text(factor, 6);
     }
     if (r.chance(0.3)) {
       const std::string solar =
-          r.chance(0.5) ? std::string("table") : "blackbody:" + number(std::round(r.log_uniform(1000.0, 1e5)));
+          r.chance(0.5) ? std::string("table") : "blackbody:" + number_text(std::round(r.log_uniform(1000.0, 1e5)), 6);
       set_solar_spectrum(p.atmosphere, solar);
       p.recipe += " solar=" + solar;
     }
@@ -334,30 +327,31 @@ std::string describe(const PlanetCase& p) {
   const Atmosphere& a = p.atmosphere;
   std::ostringstream o;
   o << "planet " << p.index << ": " << p.recipe << "\n";
-  o << "  radii " << number(a.bottom_radius_m) << " .. " << number(a.top_radius_m) << " m, sun radius "
-    << number(a.sun_angular_radius_rad) << " rad, " << a.wavelengths_nm.size() << " wavelengths";
+  o << "  radii " << number_text(a.bottom_radius_m, 6) << " .. " << number_text(a.top_radius_m, 6) << " m, sun radius "
+    << number_text(a.sun_angular_radius_rad, 6) << " rad, " << a.wavelengths_nm.size() << " wavelengths";
   if (a.wavelengths_nm.size() == 3)
-    o << " (" << number(a.wavelengths_nm[0]) << ", " << number(a.wavelengths_nm[1]) << ", "
-      << number(a.wavelengths_nm[2]) << " nm)";
-  o << "\n  ground albedo at 550 nm " << number(a.ground_albedo.at(550.0)) << ", solar irradiance at 550 nm "
-    << number(a.solar_irradiance.at(550.0)) << " W/m2/nm\n";
+    o << " (" << number_text(a.wavelengths_nm[0], 6) << ", " << number_text(a.wavelengths_nm[1], 6) << ", "
+      << number_text(a.wavelengths_nm[2], 6) << " nm)";
+  o << "\n  ground albedo at 550 nm " << number_text(a.ground_albedo.at(550.0), 6) << ", solar irradiance at 550 nm "
+    << number_text(a.solar_irradiance.at(550.0), 6) << " W/m2/nm\n";
   for (const Constituent& c : a.constituents) {
     o << "  " << c.name << ": ";
     if (c.density.kind == DensityProfile::Kind::exponential) {
-      o << "exponential H " << number(c.density.scale_height_m) << " m";
+      o << "exponential H " << number_text(c.density.scale_height_m, 6) << " m";
     } else {
       o << "piecewise";
-      for (const auto& k : c.density.knots) o << " (" << number(k.first) << " m, " << number(k.second) << ")";
+      for (const auto& k : c.density.knots)
+        o << " (" << number_text(k.first, 6) << " m, " << number_text(k.second, 6) << ")";
     }
-    o << ", scattering(550) " << number(c.scattering.at(550.0)) << " /m, absorption(550) "
-      << number(c.absorption.at(550.0)) << " /m, phase ";
+    o << ", scattering(550) " << number_text(c.scattering.at(550.0), 6) << " /m, absorption(550) "
+      << number_text(c.absorption.at(550.0), 6) << " /m, phase ";
     switch (c.phase.kind) {
       case PhaseFunction::Kind::rayleigh: o << "rayleigh"; break;
-      case PhaseFunction::Kind::henyey_greenstein: o << "HG g(550) " << number(c.phase.g.at(550.0)); break;
-      case PhaseFunction::Kind::cornette_shanks: o << "CS g(550) " << number(c.phase.g.at(550.0)); break;
+      case PhaseFunction::Kind::henyey_greenstein: o << "HG g(550) " << number_text(c.phase.g.at(550.0), 6); break;
+      case PhaseFunction::Kind::cornette_shanks: o << "CS g(550) " << number_text(c.phase.g.at(550.0), 6); break;
       case PhaseFunction::Kind::double_henyey_greenstein:
-        o << "DHG g(550) " << number(c.phase.g.at(550.0)) << " g_back " << number(c.phase.g_back.at(550.0))
-          << " w " << number(c.phase.forward_weight.at(550.0));
+        o << "DHG g(550) " << number_text(c.phase.g.at(550.0), 6) << " g_back "
+          << number_text(c.phase.g_back.at(550.0), 6) << " w " << number_text(c.phase.forward_weight.at(550.0), 6);
         break;
     }
     o << "\n";
@@ -372,8 +366,8 @@ std::string describe(const PlanetCase& p) {
   o << "  runs: plugin " << (p.surfaces == SurfaceMode::lit_colour ? "lit colour" : "G-buffer")
     << (p.shadow_map ? ", shadow map" : "") << (p.plugin_stars ? ", stars" : "")
     << (p.moons ? "; moons" : "; no moons") << "\n";
-  o << "  engine frame: centre (" << number(p.frame.centre.x) << ", " << number(p.frame.centre.y) << ", "
-    << number(p.frame.centre.z) << "), units per metre " << number(p.frame.units_per_metre);
+  o << "  engine frame: centre (" << number_text(p.frame.centre.x, 6) << ", " << number_text(p.frame.centre.y, 6)
+    << ", " << number_text(p.frame.centre.z, 6) << "), units per metre " << number_text(p.frame.units_per_metre, 6);
   return o.str();
 }
 

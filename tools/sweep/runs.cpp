@@ -20,14 +20,9 @@ namespace {
 
 constexpr std::uint64_t kRunStream = 2;
 
-std::string number(double x) {
-  std::ostringstream o;
-  o.precision(9);
-  o << x;
-  return o.str();
+std::string vec(const glm::dvec3& v) {
+  return "(" + number_text(v.x, 9) + ", " + number_text(v.y, 9) + ", " + number_text(v.z, 9) + ")";
 }
-
-std::string vec(const glm::dvec3& v) { return "(" + number(v.x) + ", " + number(v.y) + ", " + number(v.z) + ")"; }
 
 // The unit vector of v, or `fallback` when v is zero.
 glm::dvec3 direction_or(const glm::dvec3& v, const glm::dvec3& fallback) {
@@ -145,7 +140,8 @@ Frustum random_frustum(Random& r, double aspect, DepthEncoding encoding, double 
     kind = encoding == DepthEncoding::logarithmic ? "logarithmic" : (infinite ? "standard infinite" : "standard finite");
   }
   if (shift_x != 0.0 || shift_y != 0.0) kind += ", off-centre";
-  kind += ", near " + number(f.near) + ", far " + number(f.far) + ", fov " + number(glm::degrees(fov)) + " deg";
+  kind += ", near " + number_text(f.near, 9) + ", far " + number_text(f.far, 9) + ", fov " +
+          number_text(glm::degrees(fov), 9) + " deg";
   f.projection = p;
   return f;
 }
@@ -411,7 +407,7 @@ const char* format_name(std::uint32_t f) {
 
 std::string moons_text(const std::vector<Moon>& moons) {
   std::string s = std::to_string(moons.size()) + " moons";
-  for (const Moon& m : moons) s += "; centre " + vec(m.centre_m) + " m radius " + number(m.radius_m) + " m";
+  for (const Moon& m : moons) s += "; centre " + vec(m.centre_m) + " m radius " + number_text(m.radius_m, 9) + " m";
   return s;
 }
 
@@ -424,35 +420,34 @@ std::string describe(const RunCase& run) {
     const char* projection = c.camera.projection == Projection::perspective ? "perspective"
                              : c.camera.projection == Projection::fisheye   ? "fisheye"
                                                                             : "equirect";
-    o << "renderer: camera " << vec(c.camera.position) << " m (|r| " << number(glm::length(c.camera.position))
+    o << "renderer: camera " << vec(c.camera.position) << " m (|r| " << number_text(glm::length(c.camera.position), 9)
       << "), forward " << vec(c.camera.forward) << ", up " << vec(c.camera.up) << ", " << projection << " fov "
-      << number(c.camera.fov_deg) << ", " << c.camera.width << "x" << c.camera.height << "\n  sun " << vec(c.sun)
-      << ", stars " << (c.stars ? "on" : "off") << ", " << moons_text(c.moons);
+      << number_text(c.camera.fov_deg, 9) << ", " << c.camera.width << "x" << c.camera.height << "\n  sun "
+      << vec(c.sun) << ", stars " << (c.stars ? "on" : "off") << ", " << moons_text(c.moons);
     return o.str();
   }
   const PluginCase& c = run.plugin;
   const FrameInput& in = c.input;
-  o << "plugin: camera " << vec(c.camera_planet) << " m planet-centred (|r| " << number(glm::length(c.camera_planet))
-    << "), " << in.width << "x" << in.height << ", "
+  o << "plugin: camera " << vec(c.camera_planet) << " m planet-centred (|r| "
+    << number_text(glm::length(c.camera_planet), 9) << "), " << in.width << "x" << in.height << ", "
     << (in.surfaces == SurfaceMode::lit_colour ? "lit colour" : "G-buffer") << ", depth "
     << (in.depth_encoding == DepthEncoding::standard     ? "standard"
         : in.depth_encoding == DepthEncoding::reversed_z ? "reversed-Z"
-                                                         : "logarithmic (F " + number(in.log_depth_far) + ")")
+                                                         : "logarithmic (F " + number_text(in.log_depth_far, 9) + ")")
     << " in " << format_name(c.depth_format) << " (" << c.depth_content << ")\n  projection " << c.projection_kind
     << "\n  view row-major:";
   for (int row = 0; row < 4; ++row) {
     o << " [";
-    for (int col = 0; col < 4; ++col) o << (col ? " " : "") << number(in.view[col][row]);
+    for (int col = 0; col < 4; ++col) o << (col ? " " : "") << number_text(in.view[col][row], 9);
     o << "]";
   }
-  o << "\n  sun " << vec(in.sun_direction) << ", sun lux " << number(in.sun_illuminance_lux) << ", nits per unit "
-    << number(in.nits_per_unit) << ", sun disc " << (in.sun_disc ? "on" : "off") << ", stars "
-    << (in.stars ? "on" : "off") << ", timed " << (in.timed ? "yes" : "no") << "\n  colour "
-    << format_name(c.colour_format) << ", output " << format_name(c.output_format) << ", "
-    << moons_text(in.moons);
+  o << "\n  sun " << vec(in.sun_direction) << ", sun lux " << number_text(in.sun_illuminance_lux, 9)
+    << ", nits per unit " << number_text(in.nits_per_unit, 9) << ", sun disc " << (in.sun_disc ? "on" : "off")
+    << ", stars " << (in.stars ? "on" : "off") << ", timed " << (in.timed ? "yes" : "no") << "\n  colour "
+    << format_name(c.colour_format) << ", output " << format_name(c.output_format) << ", " << moons_text(in.moons);
   if (c.shadow_size > 0)
     o << "\n  shadow map " << c.shadow_size << "^2 " << format_name(c.shadow_format) << ", steps "
-      << in.shadow_steps << ", bias " << number(in.shadow_bias_m) << " m";
+      << in.shadow_steps << ", bias " << number_text(in.shadow_bias_m, 9) << " m";
   return o.str();
 }
 

@@ -29,13 +29,6 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-std::string number(double x) {
-  std::ostringstream o;
-  o.precision(9);
-  o << x;
-  return o.str();
-}
-
 // Largest finite value of a half float (IEEE 754 binary16), and of the
 // 11- and 10-bit floats of R11F_G11F_B10F.
 constexpr double kHalfMax = 65504.0;
@@ -142,9 +135,9 @@ struct Outcome {
 
 std::string pixel_message(const PixelCheck& c, const char* rows) {
   std::ostringstream o;
-  o << c.nan << " NaN, " << c.inf << " infinite, " << c.negative << " negative pixels; first at (" << c.x << ", "
-    << c.y << ") " << rows << ": (" << number(c.value.x) << ", " << number(c.value.y) << ", " << number(c.value.z)
-    << ")";
+  o << c.nan << " NaN, " << c.inf << " infinite, " << c.negative << " negative pixels; first at (" << c.x << ", " << c.y
+    << ") " << rows << ": (" << number_text(c.value.x, 9) << ", " << number_text(c.value.y, 9) << ", "
+    << number_text(c.value.z, 9) << ")";
   return o.str();
 }
 
@@ -259,6 +252,13 @@ void catching(F&& f, std::string& kind, std::string& message) {
 }
 
 }  // namespace
+
+std::string number_text(double x, int digits) {
+  std::ostringstream o;
+  o.precision(digits);
+  o << x;
+  return o.str();
+}
 
 int current_run_index() { return g_current_run.load(); }
 
@@ -397,7 +397,7 @@ SweepResult run_sweep(const SweepOptions& options) {
       }
       if (options.log)
         options.log("planet " + std::to_string(planet) + ": " + state->planet.recipe + "; prepared in " +
-                    number(seconds_since(planet_start)) + " s" +
+                    number_text(seconds_since(planet_start), 9) + " s" +
                     (state->error_kind.empty() ? "" : " (" + state->error_kind + ": " + state->error + ")"));
     }
 
@@ -423,7 +423,12 @@ SweepResult run_sweep(const SweepOptions& options) {
                             : run_plugin(*state->pass, run.plugin, state->to_radiance, result);
               if (run.target == Target::plugin && options.log && run.plugin.input.timed) {
                 const PassTimings& t = state->pass->last_timings();
-                options.log("  timings: sky view " + number(t.sky_view_ms) + " ms, volume " + number(t.volume_ms) + " ms, composite " + number(t.composite_ms) + " ms, |r| " + number(glm::length(run.plugin.camera_planet)) + (run.plugin.shadow_size ? " shadows" : "") + (run.plugin.input.moons.empty() ? "" : " moons") + " " + std::to_string(run.plugin.input.width) + "x" + std::to_string(run.plugin.input.height));
+                options.log("  timings: sky view " + number_text(t.sky_view_ms, 9) + " ms, volume " +
+                            number_text(t.volume_ms, 9) + " ms, composite " + number_text(t.composite_ms, 9) +
+                            " ms, |r| " + number_text(glm::length(run.plugin.camera_planet), 9) +
+                            (run.plugin.shadow_size ? " shadows" : "") +
+                            (run.plugin.input.moons.empty() ? "" : " moons") + " " +
+                            std::to_string(run.plugin.input.width) + "x" + std::to_string(run.plugin.input.height));
               }
               if (outcome.kind.empty()) {
                 const std::string gl = take_gl_errors();
@@ -437,9 +442,8 @@ SweepResult run_sweep(const SweepOptions& options) {
         const double run_seconds = seconds_since(t0);
         result.render_seconds += run_seconds;
         if (options.log)
-          options.log("run " + std::to_string(index) + " " +
-                      (run.target == Target::renderer ? "renderer" : "plugin") + " " + number(run_seconds) + " s " +
-                      (outcome.kind.empty() ? "passed" : outcome.kind));
+          options.log("run " + std::to_string(index) + " " + (run.target == Target::renderer ? "renderer" : "plugin") +
+                      " " + number_text(run_seconds, 9) + " s " + (outcome.kind.empty() ? "passed" : outcome.kind));
         failure.kind = outcome.kind;
         failure.message = outcome.message;
       }

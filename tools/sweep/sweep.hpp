@@ -31,6 +31,10 @@ namespace atmos::sweep {
 
 class Random;
 
+// `x` with `digits` significant digits, as the recipes and reports print it
+// (6 in a planet's recipe, 9 in a run's, so that a replay rebuilds it).
+std::string number_text(double x, int digits);
+
 enum class Target { renderer, plugin };
 // Which targets the runs exercise: each run of `both` picks one at random.
 enum class Targets { both, renderer_only, plugin_only };
