@@ -48,6 +48,7 @@
 namespace atmos {
 namespace {
 
+constexpr double kPi = std::numbers::pi;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 using physics::gauss_legendre;
@@ -120,7 +121,7 @@ Kernel azimuthal_kernel(const PhaseFunction& phase, double wavelength_nm, const 
                         double mu_0) {
   const int n = int(mu.size());
   std::vector<double> phi, phi_weight;
-  gauss_legendre(512, 0.0, std::numbers::pi, phi, phi_weight);
+  gauss_legendre(512, 0.0, kPi, phi, phi_weight);
   std::vector<double> cos_phi(phi.size());
   for (size_t k = 0; k < phi.size(); ++k) cos_phi[k] = std::cos(phi[k]);
   Kernel kernel{MatrixXd(n, n + 1), MatrixXd(n, n + 1)};
@@ -170,8 +171,8 @@ Layer homogeneous_layer(double tau, double omega, const Kernel& kernel, const st
     }
     // The beam of unit normal irradiance is a radiance of 1 / (2π) per unit
     // "weight" in the azimuthal mean.
-    layer.beam_up(i) = path * kernel.opposite(i, n) / (2.0 * std::numbers::pi);
-    layer.beam_down(i) = path * kernel.same(i, n) / (2.0 * std::numbers::pi);
+    layer.beam_up(i) = path * kernel.opposite(i, n) / (2.0 * kPi);
+    layer.beam_down(i) = path * kernel.same(i, n) / (2.0 * kPi);
   }
   layer.r_bottom = layer.r_top;
   layer.t_up = layer.t_down;
@@ -301,7 +302,7 @@ PlaneParallelFluxes reference_plane_parallel_fluxes(const Atmosphere& atmosphere
     ground.r_bottom = MatrixXd::Zero(n, n);
     ground.t_down = MatrixXd::Zero(n, n);
     ground.t_up = MatrixXd::Zero(n, n);
-    ground.beam_up = VectorXd::Constant(n, albedo * mu_s / std::numbers::pi);
+    ground.beam_up = VectorXd::Constant(n, albedo * mu_s / kPi);
     ground.beam_down = VectorXd::Zero(n);
     ground.e = 0.0;
     // d: the diffuse light down at the ground, with the bounces between the
@@ -311,8 +312,8 @@ PlaneParallelFluxes reference_plane_parallel_fluxes(const Atmosphere& atmosphere
     const double sun = atmosphere.solar_irradiance.at(lambda);
     double diffuse = 0.0, upward = 0.0;
     for (int i = 0; i < n; ++i) {
-      diffuse += 2.0 * std::numbers::pi * mu[size_t(i)] * w[size_t(i)] * d(i);
-      upward += 2.0 * std::numbers::pi * mu[size_t(i)] * w[size_t(i)] * whole.beam_up(i);
+      diffuse += 2.0 * kPi * mu[size_t(i)] * w[size_t(i)] * d(i);
+      upward += 2.0 * kPi * mu[size_t(i)] * w[size_t(i)] * whole.beam_up(i);
       out.upward_radiance_top[l][size_t(i)] = sun * whole.beam_up(i);
       out.downward_radiance_ground[l][size_t(i)] = sun * d(i);
     }

@@ -65,6 +65,7 @@ namespace atmos {
 namespace {
 
 using glm::dvec3;
+constexpr double kPi = std::numbers::pi;
 constexpr int kMaxWavelengths = 12;
 using Spec = std::array<double, kMaxWavelengths>;
 
@@ -79,18 +80,18 @@ constexpr std::array<double, 4> kGaussW = {0.3478548451374538, 0.652145154862546
 // Phase functions, cos θ between incident and scattered propagation directions.
 
 // Rayleigh: p(μ) = 3/(16π) (1 + μ²).
-double rayleigh_phase(double mu) { return 3.0 / (16.0 * std::numbers::pi) * (1.0 + mu * mu); }
+double rayleigh_phase(double mu) { return 3.0 / (16.0 * kPi) * (1.0 + mu * mu); }
 
 // Henyey–Greenstein: p(μ) = (1 - g²) / (4π (1 + g² - 2gμ)^{3/2}).
 double henyey_greenstein_phase(double g, double mu) {
   const double k = 1.0 + g * g - 2.0 * g * mu;
-  return (1.0 - g * g) / (4.0 * std::numbers::pi * k * std::sqrt(k));
+  return (1.0 - g * g) / (4.0 * kPi * k * std::sqrt(k));
 }
 
 // Cornette–Shanks: p(μ) = 3/(8π) (1 - g²)(1 + μ²) / ((2 + g²)(1 + g² - 2gμ)^{3/2}).
 double cornette_shanks_phase(double g, double mu) {
   const double k = 1.0 + g * g - 2.0 * g * mu;
-  return 3.0 / (8.0 * std::numbers::pi) * (1.0 - g * g) * (1.0 + mu * mu) / ((2.0 + g * g) * k * std::sqrt(k));
+  return 3.0 / (8.0 * kPi) * (1.0 - g * g) * (1.0 + mu * mu) / ((2.0 + g * g) * k * std::sqrt(k));
 }
 
 // Henyey–Greenstein inverse CDF: with ξ uniform in [0,1),
@@ -535,7 +536,7 @@ bool blocked_by_planet(const Model& m, const dvec3& o, const dvec3& d) {
 dvec3 sample_sun(const Model& m, const dvec3& s, reference_detail::Random& rnd, double& mu2) {
   const double xi1 = rnd.uniform();
   const double x = xi1 * m.one_minus_cos_alpha;  // 1 - cos θ, without cancellation
-  const double phi = 2.0 * std::numbers::pi * rnd.uniform();
+  const double phi = 2.0 * kPi * rnd.uniform();
   dvec3 b1, b2;
   basis(s, b1, b2);
   const double sin_theta = std::sqrt(std::max(0.0, x * (2.0 - x)));
@@ -920,13 +921,13 @@ void follow_path(const Context& ctx, Vertex v, Spec beta, int order, reference_d
       if (sw > 0.0) {
         const Spec t = sun_transmittance(m, v.p, w);
         for (int l = 0; l < m.n; ++l)
-          out[size_t(l)] += beta[size_t(l)] * m.albedo[size_t(l)] / std::numbers::pi * m.sun_nee[size_t(l)] * sw *
-                            cos_n * t[size_t(l)];
+          out[size_t(l)] +=
+              beta[size_t(l)] * m.albedo[size_t(l)] / kPi * m.sun_nee[size_t(l)] * sw * cos_n * t[size_t(l)];
       }
       if (order >= ctx.max_order) return;
       // Cosine-weighted hemisphere: cos θ = √ξ1, φ = 2π ξ2.
       const double mu = std::sqrt(rnd.uniform());
-      next_dir = direction_around(normal, mu, 2.0 * std::numbers::pi * rnd.uniform());
+      next_dir = direction_around(normal, mu, 2.0 * kPi * rnd.uniform());
       if (glm::dot(next_dir, normal) <= 0.0) return;  // rounding at grazing angles
       for (int l = 0; l < m.n; ++l) beta[size_t(l)] *= m.albedo[size_t(l)];
     } else {
@@ -985,7 +986,7 @@ void follow_path(const Context& ctx, Vertex v, Spec beta, int order, reference_d
         }
       }
       const double mu_s = sample_phase(m.phase[chosen][chosen_l], rnd);
-      next_dir = direction_around(v.d_in, mu_s, 2.0 * std::numbers::pi * rnd.uniform());
+      next_dir = direction_around(v.d_in, mu_s, 2.0 * kPi * rnd.uniform());
       const double mu = glm::dot(next_dir, v.d_in);
       std::array<Spec, 4> p{};
       double q = 0.0;
@@ -1287,10 +1288,10 @@ ReferenceResult irradiance_chunk(const Atmosphere& atmosphere, const glm::dvec3&
     // Sky: ω' cosine-weighted about n (density (n·ω')/π, stratified in cos²θ),
     // estimate π · L(x, ω').
     const double mu = std::sqrt(u);
-    const dvec3 d = direction_around(n, mu, 2.0 * std::numbers::pi * rnd.uniform());
+    const dvec3 d = direction_around(n, mu, 2.0 * kPi * rnd.uniform());
     build_segment(m, x, d, ws.first);
     const Spec l_sky = radiance_sample(ctx, ws.first, shadow_plan(m, ws.first, ctx.sun), rnd.uniform(), rnd, ws.path);
-    for (int l = 0; l < m.n; ++l) out[size_t(l)] += std::numbers::pi * l_sky[size_t(l)];
+    for (int l = 0; l < m.n; ++l) out[size_t(l)] += kPi * l_sky[size_t(l)];
     return out;
   });
 }
