@@ -2,7 +2,7 @@
 # Installs what is needed, builds with warnings as errors, and runs a tier of
 # the tests (CTest, one test per GoogleTest suite; tests/CMakeLists.txt):
 #
-#   bash scripts/test.sh          the default tier (15-20 minutes from a
+#   bash scripts/test.sh          the default tier (about 15 minutes from a
 #                                 fresh clone on 2 cores): the unit tests
 #                                 (invariants, fast paths against the shared
 #                                 definitions, cache, post, globe) built with
