@@ -26,8 +26,8 @@
 
 namespace atmos::gpu {
 
-// The largest image width or height a pass draws, pixels (the smallest
-// GL_MAX_TEXTURE_SIZE of current GPUs).
+// The largest image width or height a pass draws, pixels: the smallest
+// GL_MAX_TEXTURE_SIZE that OpenGL 4.5 allows an implementation.
 inline constexpr int kMaxImageSize = 16384;
 
 // Compiles and links a vertex + fragment program; throws atmos::Error with
