@@ -8,8 +8,8 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "atmos/atmosphere.hpp"
 #include "astronomy/angles.hpp"
+#include "atmos/atmosphere.hpp"
 #include "physics/checks.hpp"
 
 namespace atmos {

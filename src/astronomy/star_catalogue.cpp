@@ -6,16 +6,15 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <istream>
 #include <limits>
 #include <sstream>
 
+#include "astronomy/angles.hpp"
 #include "atmos/atmosphere.hpp"
 #include "atmos/colour.hpp"
-#include "astronomy/angles.hpp"
 #include "physics/checks.hpp"
 
 namespace atmos {
@@ -25,7 +24,6 @@ namespace {
 using astronomy::kArcsecond;
 using astronomy::kDegree;
 using astronomy::wrap_360;
-
 
 // The V band's effective wavelength and zero point (Bessell, Castelli & Plez
 // 1998, Table A2: f_λ = 363.1e-11 erg cm⁻² s⁻¹ Å⁻¹ = 3.631e-11 W m⁻² nm⁻¹

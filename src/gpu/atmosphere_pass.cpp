@@ -10,7 +10,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstdio>
 #include <functional>
 #include <mutex>
 #include <set>
@@ -23,13 +22,12 @@
 #include "gpu/instant.hpp"
 #include "gpu/shader_source.hpp"
 #include "gpu/star_catalogue_bins.hpp"
-#include "physics/parameters.hpp"
 #include "physics/checks.hpp"
+#include "physics/parameters.hpp"
 
 namespace atmos {
 
 namespace {
-
 
 // Texture units of the pass (the layout(binding) of atmosphere_pass.frag.glsl;
 // 0-7: the tables, gpu::TableUnit). Colour and albedo share a unit: a
@@ -46,7 +44,6 @@ constexpr GLuint kInstantSpaceMultipleScatteringUnit = 17;  // instant mode, cam
 
 // gpu::set_stencil_export (gpu/atmosphere_pass.hpp).
 std::atomic<bool> stencil_export_enabled{true};
-
 
 // Width, height and internal format of level 0 of an engine texture; throws
 // when `name` is not a 2D texture.

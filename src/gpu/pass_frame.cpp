@@ -6,13 +6,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <memory>
 #include <string>
 
+#include "physics/checks.hpp"
 #include "physics/moons.hpp"
 #include "physics/parameters.hpp"
-#include "physics/checks.hpp"
 
 namespace atmos::gpu {
 
@@ -43,7 +42,6 @@ void check_perspective(const glm::dmat4& projection) {
   if (!(projection[0][0] != 0.0 && projection[1][1] != 0.0))
     throw Error("plugin input: degenerate projection matrix (zero field of view scale)");
 }
-
 
 // Whether some surface the camera can see may have the sun below 10°
 // (LOW_SUN_MU_S_TABLE), where aerial perspective integrates single

@@ -24,9 +24,9 @@
 #include "gpu/atmosphere_pass.hpp"
 #include "gpu/camera_cpp.hpp"
 #include "gpu/gl_util.hpp"
-#include "physics/checks.hpp"
 #include "gpu/shader_source.hpp"
 #include "gpu/star_catalogue_bins.hpp"
+#include "physics/checks.hpp"
 #include "physics/moons.hpp"
 #include "physics/parameters.hpp"
 #include "physics/radiance_to_camera_cpp.hpp"
@@ -42,7 +42,6 @@ namespace {
 constexpr int kTileSize = 2048;
 // render.frag.glsl: `moons_eclipse`, after the moons (gpu::kMoonsLocation, 45..49).
 constexpr GLint kMoonsEclipseLocation = 50;
-
 
 std::string to_string(const glm::dvec3& v) {
   char buffer[96];

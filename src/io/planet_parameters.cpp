@@ -8,7 +8,6 @@
 
 #include <cmath>
 #include <limits>
-#include <sstream>
 
 #include "atmos/atmosphere.hpp"
 #include "physics/checks.hpp"

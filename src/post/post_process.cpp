@@ -34,8 +34,8 @@
 #include "gpu/gl_util.hpp"
 #include "gpu/shader_source.hpp"
 #include "data/embedded_files.hpp"
-#include "post/tone_mapping_cpp.hpp"
 #include "physics/checks.hpp"
+#include "post/tone_mapping_cpp.hpp"
 
 namespace atmos {
 
