@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <thread>
 
 #include "atmos/eclipse.hpp"
 #include "atmos/globe.hpp"
@@ -325,6 +326,14 @@ class EngineFrame {
       glFinish();
       if (sea_ms != nullptr) *sea_ms = ms_since(sea_start);
     }
+    pass_.render(input(globe, view));
+    glFinish();
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    return ms_since(t0);
+  }
+
+  // The pass's input for the globe's view.
+  atmos::FrameInput input(const atmos::Globe& globe, const atmos::GlobeView& view) const {
     atmos::FrameInput input;
     input.colour = colour_;
     input.depth = depth_;
@@ -340,10 +349,7 @@ class EngineFrame {
     const atmos::GlobeShadowMap shadow = globe.shadow_map_for_pass();
     input.shadow_map = shadow.texture;
     input.shadow_matrix = shadow.matrix;
-    pass_.render(input);
-    glFinish();
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    return ms_since(t0);
+    return input;
   }
 
  private:
@@ -354,8 +360,8 @@ class EngineFrame {
 
 }  // namespace
 
-void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, int width, int height,
-                const FigureSink& sink) {
+void time_globe(atmos::GlContext& context, const atmos::Atmosphere& atmosphere, const atmos::Tables& tables,
+                int width, int height, const FigureSink& sink) {
   atmos::AtmospherePass pass(atmosphere, tables, atmos::PlanetFrame{});
   EngineFrame frame(pass, width, height);
   {
@@ -410,10 +416,31 @@ void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables
     }
   }
   {
-    // The descent: tiles streamed as a viewer would.
+    // The descent: tiles streamed as a viewer would, after the pass's
+    // programs for the flight were linked and compiled beforehand by
+    // AtmospherePass::link_programs (ProgramScope::flight) from the first
+    // frame's view, in a shared context on a second thread as an engine
+    // would while it loads (`globe.descent.link_programs`, s).
     atmos::Globe globe(atmosphere, atmos::load_surface("earth"), pass, atmos::GlobeSettings{});
     const double first = 2.5 * atmosphere.bottom_radius_m, last = 2.0;
     const int frames = 40;
+    {
+      const auto start = std::chrono::steady_clock::now();
+      std::unique_ptr<atmos::GlContext> linker_context = context.create_shared();
+      std::exception_ptr linker_error;
+      std::thread linker([&, input = frame.input(globe, globe_view(globe, atmosphere, first, width, height))] {
+        try {
+          linker_context->make_current();
+          pass.link_programs(input, atmos::ProgramScope::flight);
+        } catch (...) {
+          linker_error = std::current_exception();
+        }
+        linker_context.reset();
+      });
+      linker.join();
+      if (linker_error) std::rethrow_exception(linker_error);
+      sink({"globe.descent.link_programs", seconds_since(start), "s"});
+    }
     std::vector<double> times;
     for (int f = 0; f < frames; ++f) {
       const double altitude = std::exp(std::log(first) + (std::log(last) - std::log(first)) * f / (frames - 1));
@@ -528,7 +555,7 @@ void run_all(const atmos::Atmosphere& atmosphere, const atmos::PrecomputeOptions
   time_instant(atmosphere, width, height, sink);
   time_ground_albedo(atmosphere, options, sink);
   time_post(renderer, camera, sink);
-  time_globe(atmosphere, tables, width, height, sink);
+  time_globe(*context, atmosphere, tables, width, height, sink);
   time_water(atmosphere, tables, width, height, sink);
 }
 

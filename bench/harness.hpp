@@ -135,14 +135,17 @@ void time_post(atmos::Renderer& renderer, const atmos::Camera& camera, const Fig
 // from the farthest cascade, from 2 m and 10 km (`globe.2m.shadows.*`,
 // `globe.10km.shadows.*`): the frame, the terrain (shadow maps included),
 // the CPU time of the cascades' selections, and the triangles and tile
-// draws into the shadow maps. Then a descent of 40
-// frames from 2.5 radii to 2 m with tiles streamed by the globe's
-// background thread (at most GlobeSettings::max_tiles_per_frame uploads a
-// frame): `globe.descent.first` (the new globe's first frame, with the
-// driver's compilation of its programs), then over the other 39
+// draws into the shadow maps. Then a descent of 40 frames from 2.5 radii to
+// 2 m with tiles streamed by the globe's background thread (at most
+// GlobeSettings::max_tiles_per_frame uploads a frame) and the pass's
+// programs for the flight linked and compiled by
+// AtmospherePass::link_programs (ProgramScope::flight) in a context of
+// `context`'s share group on another thread, the viewer's way:
+// `globe.descent.first` (the new globe's first frame, with the driver's
+// compilation of its programs), then over the other 39
 // `globe.descent.median`, `.max` and `.max_over_median`.
-void time_globe(const atmos::Atmosphere& atmosphere, const atmos::Tables& tables, int width, int height,
-                const FigureSink& sink);
+void time_globe(atmos::GlContext& context, const atmos::Atmosphere& atmosphere, const atmos::Tables& tables,
+                int width, int height, const FigureSink& sink);
 
 // The sea (atmos::Ocean, Earth) over the globe at width x height, over the
 // Pacific at 0°, 150° W from 2 m, 1 km and 400 km above the sea level

@@ -23,8 +23,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "atmos/atmosphere.hpp"
@@ -302,6 +304,99 @@ TEST_F(Plugin, LinksAFramesProgramsBeforeItsFirstDraw) {
   size_t differing = 0;
   for (size_t i = 0; i < drawn.size(); ++i) differing += drawn[i] == expected[i] ? 0 : 1;
   EXPECT_EQ(differing, 0u);
+}
+
+// Links the programs of `numbers` (ProgramScope `scope`) into `pass` in a
+// context of the suite's share group on another thread while this thread
+// draws with the same pass (`draw`); returns what `draw` drew.
+std::vector<glm::vec3> draw_while_linking_elsewhere(atmos::GlContext& context, atmos::AtmospherePass& pass,
+                                                    const atmos::FrameInput& numbers, atmos::ProgramScope scope,
+                                                    const std::function<std::vector<glm::vec3>()>& draw) {
+  std::unique_ptr<atmos::GlContext> shared = context.create_shared();
+  std::string linker_error;
+  std::thread linker([&] {
+    try {
+      shared->make_current();
+      pass.link_programs(numbers, scope);
+    } catch (const std::exception& e) {
+      linker_error = e.what();
+    }
+    shared.reset();
+  });
+  std::vector<glm::vec3> drawn;
+  try {
+    drawn = draw();
+  } catch (...) {
+    linker.join();
+    throw;
+  }
+  linker.join();
+  EXPECT_TRUE(linker_error.empty()) << linker_error;
+  return drawn;
+}
+
+// link_programs() in a context of the pass's share group on another thread,
+// while this thread draws with the same pass: the frame is the one a pass
+// with its own programs draws, bit for bit (render() takes or waits for
+// the programs the other thread links, and the other thread draws its new
+// programs only into its own scratch targets).
+TEST_F(Plugin, LinksOnAnotherThreadWhileDrawing) {
+  const Shot shot = comparison_shots().front().second;
+  EngineFrame first = make_engine_frame(shot), second = make_engine_frame(shot);
+  const std::vector<glm::vec3> expected = run(first);
+  atmos::AtmospherePass pass(*earth_, *tables_, engine_frame(), atmos::PassPrograms::none);
+  atmos::FrameInput numbers = second.input;
+  numbers.depth = numbers.colour = 0;
+  const std::vector<glm::vec3> drawn = draw_while_linking_elsewhere(
+      *context_, pass, numbers, atmos::ProgramScope::view, [&] { return run(second, false, &pass); });
+  EXPECT_TRUE(pass.programs_linked(numbers));
+  ASSERT_EQ(drawn.size(), expected.size());
+  size_t differing = 0;
+  for (size_t i = 0; i < drawn.size(); ++i) differing += drawn[i] == expected[i] ? 0 : 1;
+  EXPECT_EQ(differing, 0u);
+}
+
+// The same view moved along its camera's vertical to `altitude` (m).
+FrameInput at_altitude(const FrameInput& input, double altitude) {
+  const PlanetFrame f = engine_frame();
+  const glm::dvec3 eye = glm::dvec3(glm::inverse(input.view)[3]);
+  const glm::dvec3 offset = (eye - f.centre) / f.units_per_metre;
+  const double radius = glm::length(offset);
+  const glm::dvec3 delta = offset / radius * ((kEarthRadius + altitude - radius) * f.units_per_metre);
+  FrameInput moved = input;
+  moved.view = input.view * glm::translate(glm::dmat4(1.0), -delta);
+  return moved;
+}
+
+// The full tier's (tests/CMakeLists.txt): a flight's programs take about 20
+// s to link and compile on llvmpipe.
+class PluginFlight : public Plugin {};
+
+// With ProgramScope::flight, link_programs() links the programs of the same
+// view from the blend band of the volume (20 km), from higher in the
+// atmosphere (60 km) and from above it (150 km, 2.5 radii) too, on another
+// thread while this one draws, the frame bit for bit as above; bad numbers
+// are the error render() gives.
+TEST_F(PluginFlight, LinksAFlightsPrograms) {
+  const Shot shot = comparison_shots().front().second;
+  EngineFrame first = make_engine_frame(shot), second = make_engine_frame(shot);
+  const std::vector<glm::vec3> expected = run(first);
+  atmos::AtmospherePass pass(*earth_, *tables_, engine_frame(), atmos::PassPrograms::none);
+  atmos::FrameInput numbers = second.input;
+  numbers.depth = numbers.colour = 0;
+  for (const double altitude : {20e3, 60e3, 150e3, 2.5 * kEarthRadius})
+    EXPECT_FALSE(pass.programs_linked(at_altitude(numbers, altitude))) << altitude << " m";
+  const std::vector<glm::vec3> drawn = draw_while_linking_elsewhere(
+      *context_, pass, numbers, atmos::ProgramScope::flight, [&] { return run(second, false, &pass); });
+  ASSERT_EQ(drawn.size(), expected.size());
+  size_t differing = 0;
+  for (size_t i = 0; i < drawn.size(); ++i) differing += drawn[i] == expected[i] ? 0 : 1;
+  EXPECT_EQ(differing, 0u);
+  for (const double altitude : {20e3, 60e3, 150e3, 2.5 * kEarthRadius})
+    EXPECT_TRUE(pass.programs_linked(at_altitude(numbers, altitude))) << altitude << " m";
+  atmos::FrameInput bad = numbers;
+  bad.projection[0][0] = std::nan("");
+  EXPECT_THROW(pass.link_programs(bad, atmos::ProgramScope::flight), atmos::Error);
 }
 
 // A pass of an atmosphere that differs from the suite's in values only (a

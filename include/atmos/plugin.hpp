@@ -195,6 +195,12 @@ enum class PassPrograms {
   none,
 };
 
+// The views whose programs AtmospherePass::link_programs() prepares.
+enum class ProgramScope {
+  view,    // the input's view alone
+  flight,  // the input's view and the same view from the ground to beyond the atmosphere over its point
+};
+
 class AtmospherePass {
  public:
   // Uploads the tables and compiles the shaders (`programs`) in the CURRENT
@@ -230,18 +236,24 @@ class AtmospherePass {
   std::uint32_t render(const FrameInput& input);
 
   // Links the programs that render(input) would draw with and that are not
-  // linked yet, without drawing: the sky-view table's, the volume's and the
-  // composite's variants of that camera, sun, moons, shadows, stars and
-  // surface mode. The input's textures are not read (they may be 0); its
-  // matrices, size and sun are checked as render() checks them. It may run
-  // on several threads at once, each with its own current context that
-  // shares objects with the pass's (a GL share group: a shared context of
-  // the engine's window), while no thread calls render(): each program is
-  // linked by one of them, so that more cores compile. The driver may still
-  // compile a program's machine code at its first draw. Throws
-  // atmos::Error as render() does (a program another thread links is not
-  // waited for).
-  void link_programs(const FrameInput& input);
+  // linked yet: the sky-view table's, the volume's and the composite's
+  // variants of that camera, sun, moons, shadows, stars and surface mode.
+  // Each new program is drawn once in the CURRENT context over 3x3 pixels of
+  // scratch textures with the formats of the input's (those of docs/plugin.md
+  // where its textures are 0): drivers that compile machine code at a
+  // program's first draw (Mesa's llvmpipe) compile it here, and with a
+  // shader cache (Mesa's, on by default) reuse it in the engine's context.
+  // The input's textures are not read; its matrices, size and sun are
+  // checked as render() checks them. With ProgramScope::flight, also the
+  // programs of the same view from the other altitudes of a flight over the
+  // camera's point, from the ground to beyond the atmosphere, nearest
+  // first. It may run on several threads at once, each with its own current
+  // context that shares objects with the pass's (a GL share group: a shared
+  // context of the engine's window), and while the engine's thread calls
+  // render(): each program is linked by one of them, render() waits for one
+  // being linked elsewhere instead of linking it twice. Throws atmos::Error
+  // as render() does.
+  void link_programs(const FrameInput& input, ProgramScope scope = ProgramScope::view);
   // Whether every program render(input) would draw with is linked (then
   // render() links none; the driver may still compile machine code at the
   // first draw). The input's textures are not read. Throws atmos::Error as

@@ -115,6 +115,11 @@ class GlContext {
   GlContext(const GlContext&) = delete;
   GlContext& operator=(const GlContext&) = delete;
 
+  // A new context in this one's share group (textures, buffers, programs),
+  // for another thread: make it current there, and destroy it there (its
+  // destructor releases it from the calling thread). The calling thread's
+  // current context stays current. Throws atmos::Error as create_headless().
+  std::unique_ptr<GlContext> create_shared();
   // Makes the context current on the calling thread (no-op when it already is).
   void make_current();
   // GL_RENDERER and GL_VERSION, e.g. "llvmpipe (LLVM 15.0.6, 256 bits), OpenGL 4.5 (Core Profile) Mesa 22.3.6".

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <condition_variable>
 #include <functional>
 #include <mutex>
 #include <set>
@@ -120,10 +121,12 @@ struct AtmospherePass::Impl {
   std::unique_ptr<gpu::GpuTimer> timer;
   // The program variants (gpu::PassVariant::index), compiled on first use.
   GLuint programs[gpu::PassVariant::kCount] = {};
-  // link_programs(): the slots of all programs, guarded by the mutex, and
-  // those some caller is linking.
+  // The slots of all programs, guarded by the mutex, those some caller is
+  // linking (link_programs(), render()), and the signal of a slot's
+  // program published or given up.
   std::mutex link_mutex;
   std::set<const GLuint*> linking;
+  std::condition_variable published;
   // The aerial-perspective volume: its compute programs (sun high, sun low,
   // eclipse) and textures (see composite.glsl).
   GLuint volume_programs[3] = {0, 0, 0};
@@ -437,6 +440,202 @@ FramePrograms frame_programs(AtmospherePass::Impl& p, const physics::PassFrame& 
   return out;
 }
 
+// The uniforms of a composite draw's program for this frame (the moons'
+// for the shading draws of an eclipse).
+void set_composite_uniforms(const Draw& draw, const physics::PassFrame& frame, bool star_catalogue,
+                            const glm::dmat3& world_from_star_catalogue) {
+  const GLuint program = draw.program;
+  glProgramUniform3f(program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
+  glProgramUniform3f(program, 1, frame.sun_direction.x, frame.sun_direction.y, frame.sun_direction.z);
+  glProgramUniformMatrix4fv(program, 2, 1, GL_FALSE, glm::value_ptr(frame.inverse_projection));
+  glProgramUniformMatrix3fv(program, 6, 1, GL_FALSE, glm::value_ptr(frame.view_to_world));
+  glProgramUniform1i(program, 9, frame.depth_encoding);
+  glProgramUniform1f(program, 10, frame.log2_depth_far);
+  glProgramUniformMatrix3fv(program, 12, 1, GL_FALSE, glm::value_ptr(frame.radiance_to_srgb));
+  glProgramUniform1f(program, 15, frame.light_scale);
+  glProgramUniform1i(program, 16, frame.sun_disc ? 1 : 0);
+  glProgramUniform1i(program, 18, frame.shadow_steps);
+  glProgramUniformMatrix4fv(program, 19, 1, GL_FALSE, glm::value_ptr(frame.shadow_matrix));
+  glProgramUniform1f(program, 24, frame.ap_t_far);
+  glProgramUniform1f(program, 25, frame.ap_t_min);
+  glProgramUniform1f(program, 27, frame.shadow_depth_bias);
+  glProgramUniform1f(program, 28, frame.volume_weight);
+  glProgramUniform3fv(program, 29, 1, glm::value_ptr(frame.inverse_sun_srgb));
+  glProgramUniform4fv(program, 30, 1, glm::value_ptr(frame.depth_column));
+  glProgramUniform1f(program, 31, frame.depth_column_view_z);
+  glProgramUniform1f(program, 32, frame.stars.sigma);
+  glProgramUniformMatrix4fv(program, 33, 1, GL_FALSE, glm::value_ptr(frame.world_to_clip));
+  glProgramUniform1f(program, 37, frame.surface_shell_radius);
+  gpu::set_sky_view_frame_uniforms(program, frame.sky_view);
+  if (frame.moons.count > 0 && !draw.classify) gpu::set_moons_uniforms(program, frame.moons);
+  gpu::set_star_catalogue_uniforms(program, star_catalogue, world_from_star_catalogue);
+}
+
+// One composite draw over the bound framebuffer, with its stencil state.
+void draw_composite(const Draw& draw) {
+  if (draw.export_stencil) {
+    // Every pixel's bits, as the program exports them.
+    glStencilMask(0xFF);
+    glStencilFunc(GL_ALWAYS, 0, 0xFF);
+    glStencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
+    glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+  } else if (draw.classify) {
+    // Set this draw's bit where the classifying program keeps the pixel.
+    glStencilMask(GLuint(draw.bits));
+    if (draw.sky_only)
+      glStencilFunc(GL_EQUAL, draw.bits | kSkyBit, GLuint(kSkyBit));
+    else
+      glStencilFunc(GL_ALWAYS, draw.bits, 0xFF);
+    glStencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
+    glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+  } else {
+    glStencilMask(0);
+    glStencilFunc(GL_EQUAL, draw.bits, GLuint(draw.compare));
+    glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  }
+  glUseProgram(draw.program);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+}
+
+// The uniforms of the aerial-perspective volume's compute program for this
+// frame (the moons' in an eclipse).
+void set_volume_uniforms(GLuint program, const physics::PassFrame& frame) {
+  if (frame.moons.count > 0) gpu::set_moons_uniforms(program, frame.moons);
+  glProgramUniform3f(program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
+  glProgramUniform3f(program, 1, frame.sun_direction.x, frame.sun_direction.y, frame.sun_direction.z);
+  glProgramUniform1f(program, 24, frame.ap_t_far);
+  glProgramUniform1f(program, 25, frame.ap_t_min);
+  gpu::set_sky_view_frame_uniforms(program, frame.sky_view);
+}
+
+// Draws and dispatches each program of `fresh` once, with the state
+// render() would for this frame, over 3 x 3 pixels of scratch textures in
+// the CURRENT context: drivers that compile a program's machine code at its
+// first draw for the draw's state (llvmpipe) compile it here, and those with
+// a shader cache (Mesa's, on by default) reuse that code in every context.
+// It may run while other contexts render with these programs (a program is
+// shared by the passes of an atmosphere's structure, gpu::shared_program):
+// it sets no uniform, writes scratch objects only and reads the shared
+// tables. The shading draws' stencil test fails at every pixel (the mask
+// holds a bit no class has), so that they run no fragment; the classifying
+// draws and the compute programs run over a few pixels with whatever
+// uniforms the programs hold (no loop of theirs depends on one).
+void warm_up_programs(AtmospherePass::Impl& p, const physics::PassFrame& frame, const FrameInput& input,
+                      const FramePrograms& programs, const std::set<GLuint>& fresh) {
+  if (fresh.empty()) return;
+  std::vector<GLuint> textures;
+  const auto scratch = [&textures](GLuint like, GLint format) {
+    textures.push_back(gpu::warm_up_texture_like(like, format));
+    return textures.back();
+  };
+  GLuint framebuffer = 0, vertex_array = 0, stencil = 0, column_buffer = 0;
+  const auto columns = [&column_buffer] {
+    const std::vector<GLint> zeros(size_t(SPACE_VOLUME_WIDTH) * SPACE_VOLUME_HEIGHT, 0);
+    glCreateBuffers(1, &column_buffer);
+    glNamedBufferStorage(column_buffer, GLsizeiptr(sizeof(GLint) * zeros.size()), zeros.data(), 0);
+    return column_buffer;
+  };
+  const auto release = [&] {
+    if (column_buffer != 0) glDeleteBuffers(1, &column_buffer);
+    glDeleteTextures(GLsizei(textures.size()), textures.data());
+    if (framebuffer != 0) glDeleteFramebuffers(1, &framebuffer);
+    if (vertex_array != 0) glDeleteVertexArrays(1, &vertex_array);
+    if (stencil != 0) glDeleteRenderbuffers(1, &stencil);
+  };
+  try {
+    const GLuint volume_like = p.volume[0];
+    // The volumes' compute programs, over one work group.
+    for (const GLuint program : {programs.volume, programs.space}) {
+      if (program == 0 || fresh.count(program) == 0) continue;
+      glUseProgram(program);
+      p.tables->bind_parameters();
+      for (GLuint unit = 0; unit < 5; ++unit) {
+        glBindTextureUnit(unit, p.tables->texture(int(unit)));
+        glBindSampler(unit, 0);
+      }
+      if (p.instant) {
+        glBindTextureUnit(gpu::kInstantMultipleScatteringUnit, p.tables->instant_multiple_scattering_texture());
+        glBindSampler(gpu::kInstantMultipleScatteringUnit, 0);
+      }
+      // The space volume's column list: zeros.
+      if (program == programs.space) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, columns());
+      for (GLuint i = 0; i < 4; ++i)
+        glBindImageTexture(i, scratch(volume_like, GL_RGBA32F), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+      glDispatchCompute(1, 1, 1);
+      for (GLuint i = 0; i < 4; ++i) glBindImageTexture(i, 0, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
+    }
+
+    // The composite's draws, each with its stencil state.
+    std::vector<Draw> draws;
+    for (const Draw& draw : programs.draws)
+      if (fresh.count(draw.program) > 0) draws.push_back(draw);
+    if (!draws.empty()) {
+      const bool star_catalogue = frame.stars.enabled && !p.star_catalogue.empty();
+      if (star_catalogue) p.star_catalogue.bind(double(frame.stars.sigma));
+      p.tables->bind();
+      for (GLuint unit = 0; unit < gpu::kTableUnitCount; ++unit) glBindSampler(unit, 0);
+      // The sky-view table and the volumes are written by the frames of
+      // other contexts: scratch copies of their formats instead.
+      for (int i = 0; i < 3; ++i)
+        glBindTextureUnit(gpu::kSkyViewRayleighUnit + GLuint(i), scratch(p.tables->sky_view_texture(i), GL_RGBA32F));
+      glBindTextureUnit(kDepthUnit, scratch(input.depth, GL_DEPTH_COMPONENT32F));
+      if (input.surfaces == SurfaceMode::lit_colour) {
+        glBindTextureUnit(kColourUnit, scratch(input.colour, GL_RGBA16F));
+        glBindTextureUnit(kNormalUnit, 0);
+      } else {
+        glBindTextureUnit(kAlbedoUnit, scratch(input.albedo, GL_RGBA16F));
+        glBindTextureUnit(kNormalUnit, scratch(input.normal, GL_RGBA16F));
+      }
+      glBindTextureUnit(kShadowUnit, input.shadow_map != 0 ? scratch(input.shadow_map, GL_DEPTH_COMPONENT32F) : 0);
+      for (GLuint unit : {kDepthUnit, kColourUnit, kNormalUnit}) glBindSampler(unit, p.depth_sampler);
+      glBindSampler(kShadowUnit, p.shadow_sampler);
+      for (GLuint i = 0; i < 4; ++i) {
+        glBindTextureUnit(kVolumeUnit + i, scratch(frame.space_volume ? p.space_volume[0] : volume_like, GL_RGBA32F));
+        glBindSampler(kVolumeUnit + i, 0);
+      }
+      glBindTextureUnit(kSpaceRegularColumnsUnit, scratch(p.space_regular_columns, GL_RGBA32F));
+      glBindSampler(kSpaceRegularColumnsUnit, 0);
+      if (p.instant) {
+        glBindTextureUnit(kInstantSpaceMultipleScatteringUnit, p.tables->instant_multiple_scattering_texture());
+        glBindSampler(kInstantSpaceMultipleScatteringUnit, 0);
+      }
+      glCreateFramebuffers(1, &framebuffer);
+      glNamedFramebufferTexture(framebuffer, GL_COLOR_ATTACHMENT0, scratch(input.output, GL_RGBA32F), 0);
+      glCreateRenderbuffers(1, &stencil);
+      glNamedRenderbufferStorage(stencil, GL_STENCIL_INDEX8, 3, 3);
+      glNamedFramebufferRenderbuffer(framebuffer, GL_STENCIL_ATTACHMENT, GL_RENDERBUFFER, stencil);
+      glNamedFramebufferDrawBuffer(framebuffer, GL_COLOR_ATTACHMENT0);
+      glCreateVertexArrays(1, &vertex_array);
+      glBindVertexArray(vertex_array);
+      glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+      glViewport(0, 0, 3, 3);
+      glDisable(GL_BLEND);
+      glDisable(GL_DEPTH_TEST);
+      glDisable(GL_SCISSOR_TEST);
+      glDisable(GL_CULL_FACE);
+      glDisable(GL_FRAMEBUFFER_SRGB);
+      glEnable(GL_STENCIL_TEST);
+      glStencilMask(0xFF);
+      const GLint no_class = 0x80;
+      glClearNamedFramebufferiv(framebuffer, GL_STENCIL, 0, &no_class);
+      for (const Draw& draw : draws) draw_composite(draw);
+      glStencilMask(0xFF);
+      glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+      glDisable(GL_STENCIL_TEST);
+      glBindFramebuffer(GL_FRAMEBUFFER, 0);
+      glBindVertexArray(0);
+      if (star_catalogue) gpu::StarCatalogueBuffers::unbind();
+    }
+    gpu::check_gl("while drawing the atmosphere pass's new programs once");
+  } catch (...) {
+    release();
+    throw;
+  }
+  release();
+}
+
 void check_planet_frame(const PlanetFrame& frame) {
   if (!is_finite(frame.centre))
     throw Error("invalid planet frame: centre is not finite");
@@ -622,41 +821,124 @@ bool AtmospherePass::programs_linked(const FrameInput& input) const {
   return all;
 }
 
-void AtmospherePass::link_programs(const FrameInput& input) {
+namespace {
+
+// The views link_programs(input, ProgramScope::flight) prepares: the input's
+// camera moved along its vertical to an altitude in each of the pass's
+// regimes (gpu/atmosphere_pass.hpp, make_pass_frame): on the ground (the
+// aerial-perspective volume alone), in the band where the volume blends into
+// the exact evaluation, higher in the atmosphere (the sky-view table and the
+// exact evaluation), and above the atmosphere near it and far from it
+// (the space volume, or none); the input's own view first, then the others
+// by their distance in log-altitude from it, so that the nearest are
+// prepared first.
+std::vector<FrameInput> flight_views(const AtmospherePass::Impl& p, const FrameInput& input) {
+  const physics::AtmosphereParams& params = p.tables->params();
+  const glm::dvec3 eye = glm::dvec3(glm::inverse(input.view)[3]);  // engine units
+  const glm::dvec3 offset = (eye - p.frame.centre) / p.frame.units_per_metre;
+  const double radius = glm::length(offset);
+  const glm::dvec3 up = offset / radius;
+  const double bottom = double(params.bottom_radius);
+  const double top = double(params.top_radius) - bottom;
+  const double altitude = std::max(radius - bottom, 1.0);
+  std::vector<double> altitudes = {10.0, 0.5 * (gpu::kVolumeBlendAltitude + gpu::kVolumeMaxAltitude),
+                                   0.5 * (gpu::kVolumeMaxAltitude + top), 1.5 * top, 2.5 * bottom};
+  std::sort(altitudes.begin(), altitudes.end(), [altitude](double a, double b) {
+    return std::abs(std::log(a / altitude)) < std::abs(std::log(b / altitude));
+  });
+  std::vector<FrameInput> views = {input};
+  for (double a : altitudes) {
+    // The view's rotation about the moved eye: view' = view T(-delta).
+    FrameInput moved = input;
+    const glm::dvec3 delta = up * ((a - (radius - bottom)) * p.frame.units_per_metre);
+    moved.view = input.view * glm::translate(glm::dmat4(1.0), -delta);
+    views.push_back(moved);
+  }
+  return views;
+}
+
+}  // namespace
+
+void AtmospherePass::link_programs(const FrameInput& input, ProgramScope scope) {
   Impl& p = *impl_;
   gpu::require_gl_context("the engine plugin (atmos::AtmospherePass::link_programs)");
-  const physics::PassFrame frame = frame_without_textures(p, input);
-  // Each missing program is claimed by the first caller that needs it,
-  // linked outside the lock (the other callers link others meanwhile), then
-  // published in its slot.
-  const ResolveProgram claim_and_link = [&p](GLuint& slot, const std::function<GLuint()>& link) -> GLuint {
-    {
-      std::lock_guard<std::mutex> lock(p.link_mutex);
-      if (slot != 0 || p.linking.count(&slot) > 0) return slot;
-      p.linking.insert(&slot);
+  (void)frame_without_textures(p, input);  // the input checked before its camera moves
+  // The frames to prepare: with ProgramScope::flight, at each altitude also
+  // the frame with the sun low somewhere in view if it is not (or not if
+  // it is) and, above the atmosphere, with the space volume if without (or
+  // without if with): a flight looks around, and a view's terminator or
+  // regular columns change with its direction.
+  std::vector<std::pair<FrameInput, physics::PassFrame>> frames;
+  const std::vector<FrameInput> views = scope == ProgramScope::flight ? flight_views(p, input) : std::vector{input};
+  for (const FrameInput& view : views) {
+    const physics::PassFrame frame = frame_without_textures(p, view);
+    frames.emplace_back(view, frame);
+    if (scope != ProgramScope::flight) continue;
+    physics::PassFrame other = frame;
+    other.low_sun = !frame.low_sun;
+    frames.emplace_back(view, other);
+    if (!physics::camera_uses_sky_view(p.tables->params(), frame.camera) && frame.moons.count == 0 &&
+        input.shadow_map == 0) {
+      for (const bool low_sun : {frame.low_sun, !frame.low_sun}) {
+        other.low_sun = low_sun;
+        other.space_volume = !frame.space_volume;
+        frames.emplace_back(view, other);
+      }
     }
-    GLuint program = 0;
-    try {
-      program = link();
-    } catch (...) {
+  }
+  for (const auto& item : frames) {
+    const FrameInput& view = item.first;
+    const physics::PassFrame& frame = item.second;
+    // Each missing program is claimed by the first caller that needs it
+    // (render() waits for it, other link_programs() calls skip it), linked
+    // and drawn once outside the lock, then published in its slot.
+    std::vector<std::pair<GLuint*, GLuint>> claimed;
+    std::set<GLuint> fresh;
+    const ResolveProgram claim_and_link = [&](GLuint& slot, const std::function<GLuint()>& link) -> GLuint {
+      {
+        std::lock_guard<std::mutex> lock(p.link_mutex);
+        if (slot != 0 || p.linking.count(&slot) > 0) return slot;
+        p.linking.insert(&slot);
+      }
+      claimed.emplace_back(&slot, 0);
+      claimed.back().second = link();
+      fresh.insert(claimed.back().second);
+      return claimed.back().second;
+    };
+    const auto give_up = [&p, &claimed] {
       std::lock_guard<std::mutex> lock(p.link_mutex);
-      p.linking.erase(&slot);
+      for (auto& [slot, program] : claimed) {
+        gpu::release_program(program);
+        p.linking.erase(slot);
+      }
+      p.published.notify_all();
+    };
+    try {
+      if (physics::camera_uses_sky_view(p.tables->params(), frame.camera)) {
+        const GLuint program =
+            claim_and_link(p.tables->sky_view_program(frame.camera, frame.sun_direction, frame.moons), [&] {
+              return p.tables->link_sky_view_program(frame.camera, frame.sun_direction, frame.moons);
+            });
+        if (fresh.count(program) > 0)
+          p.tables->warm_up_sky_view(program);
+      }
+      const FramePrograms programs = frame_programs(p, frame, view, claim_and_link);
+      warm_up_programs(p, frame, view, programs, fresh);
+      gpu::check_gl("while linking the atmosphere pass's programs");
+      // The programs are drawn with in another context of the share group:
+      // its commands must have completed here (OpenGL 4.5 core, 5.3.1).
+      glFinish();
+    } catch (...) {
+      give_up();
       throw;
     }
     std::lock_guard<std::mutex> lock(p.link_mutex);
-    slot = program;
-    p.linking.erase(&slot);
-    return program;
-  };
-  if (physics::camera_uses_sky_view(p.tables->params(), frame.camera)) {
-    claim_and_link(p.tables->sky_view_program(frame.camera, frame.sun_direction, frame.moons),
-                   [&] { return p.tables->link_sky_view_program(frame.camera, frame.sun_direction, frame.moons); });
+    for (auto& [slot, program] : claimed) {
+      *slot = program;
+      p.linking.erase(slot);
+    }
+    p.published.notify_all();
   }
-  (void)frame_programs(p, frame, input, claim_and_link);
-  gpu::check_gl("while linking the atmosphere pass's programs");
-  // The programs are drawn with in another context of the share group: its
-  // commands must have completed there (OpenGL 4.5 core, 5.3.1).
-  glFinish();
 }
 
 std::uint32_t AtmospherePass::render(const FrameInput& input) {
@@ -704,10 +986,33 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   const glm::vec3 camera_f = frame.camera;
   const glm::vec3 sun_f = frame.sun_direction;
   // The programs of this frame, linked now where they are not yet.
-  const FramePrograms programs = frame_programs(p, frame, input, [](GLuint& slot, const std::function<GLuint()>& link) {
-    if (slot == 0) slot = link();
-    return slot;
-  });
+  // A program another thread is linking (link_programs) is waited for.
+  const ResolveProgram link_or_wait = [&p](GLuint& slot, const std::function<GLuint()>& link) -> GLuint {
+    std::unique_lock<std::mutex> lock(p.link_mutex);
+    p.published.wait(lock, [&] { return slot != 0 || p.linking.count(&slot) == 0; });
+    if (slot != 0) return slot;
+    p.linking.insert(&slot);
+    lock.unlock();
+    GLuint program = 0;
+    try {
+      program = link();
+    } catch (...) {
+      lock.lock();
+      p.linking.erase(&slot);
+      p.published.notify_all();
+      throw;
+    }
+    lock.lock();
+    slot = program;
+    p.linking.erase(&slot);
+    p.published.notify_all();
+    return program;
+  };
+  if (physics::camera_uses_sky_view(p.tables->params(), frame.camera)) {
+    link_or_wait(p.tables->sky_view_program(frame.camera, frame.sun_direction, frame.moons),
+                 [&] { return p.tables->link_sky_view_program(frame.camera, frame.sun_direction, frame.moons); });
+  }
+  const FramePrograms programs = frame_programs(p, frame, input, link_or_wait);
 
   // --- The output target. ---
   GLuint output = input.output;
@@ -735,9 +1040,6 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   glDisable(GL_FRAMEBUFFER_SRGB);
   glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
 
-  // With moons (make_pass_frame: physics::make_moons, once per frame): the
-  // eclipse variants, which read them from the uniforms (set_moons_uniforms).
-  const bool eclipse = frame.moons.count > 0;
   // Pass 1: this frame's sky-view table, for cameras in the atmosphere
   // (eclipsed, over the full azimuth, with moons).
   PassTimings timings;
@@ -753,11 +1055,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   if (frame.volume && p.instant) {
     const GLuint volume_program = programs.volume;
     glUseProgram(volume_program);
-    glProgramUniform3f(volume_program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
-    glProgramUniform3f(volume_program, 1, frame.sun_direction.x, frame.sun_direction.y, frame.sun_direction.z);
-    glProgramUniform1f(volume_program, 24, frame.ap_t_far);
-    glProgramUniform1f(volume_program, 25, frame.ap_t_min);
-    gpu::set_sky_view_frame_uniforms(volume_program, frame.sky_view);
+    set_volume_uniforms(volume_program, frame);
     p.tables->bind_parameters();
     glBindTextureUnit(0, p.tables->texture(0));
     glBindSampler(0, 0);
@@ -772,12 +1070,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   } else if (frame.volume) {
     const GLuint volume_program = programs.volume;
     glUseProgram(volume_program);
-    if (eclipse) gpu::set_moons_uniforms(volume_program, frame.moons);
-    glProgramUniform3f(volume_program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
-    glProgramUniform3f(volume_program, 1, frame.sun_direction.x, frame.sun_direction.y, frame.sun_direction.z);
-    glProgramUniform1f(volume_program, 24, frame.ap_t_far);
-    glProgramUniform1f(volume_program, 25, frame.ap_t_min);
-    gpu::set_sky_view_frame_uniforms(volume_program, frame.sky_view);
+    set_volume_uniforms(volume_program, frame);
     p.tables->bind_parameters();
     for (GLuint unit = 0; unit < 5; ++unit) {
       glBindTextureUnit(unit, p.tables->texture(int(unit)));
@@ -846,35 +1139,9 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     throw Error("plugin: this OpenGL driver cannot render to the output texture with an 8-bit stencil buffer");
 
   const std::vector<Draw>& draws = programs.draws;
-  const physics::SkyViewFrame sky_view = frame.sky_view;
   const bool star_catalogue = frame.stars.enabled && !p.star_catalogue.empty();
-  for (const Draw& draw : draws) {
-    const GLuint program = draw.program;
-    glProgramUniform3f(program, 0, frame.camera.x, frame.camera.y, frame.camera.z);
-    glProgramUniform3f(program, 1, frame.sun_direction.x, frame.sun_direction.y, frame.sun_direction.z);
-    glProgramUniformMatrix4fv(program, 2, 1, GL_FALSE, glm::value_ptr(frame.inverse_projection));
-    glProgramUniformMatrix3fv(program, 6, 1, GL_FALSE, glm::value_ptr(frame.view_to_world));
-    glProgramUniform1i(program, 9, frame.depth_encoding);
-    glProgramUniform1f(program, 10, frame.log2_depth_far);
-    glProgramUniformMatrix3fv(program, 12, 1, GL_FALSE, glm::value_ptr(frame.radiance_to_srgb));
-    glProgramUniform1f(program, 15, frame.light_scale);
-    glProgramUniform1i(program, 16, frame.sun_disc ? 1 : 0);
-    glProgramUniform1i(program, 18, frame.shadow_steps);
-    glProgramUniformMatrix4fv(program, 19, 1, GL_FALSE, glm::value_ptr(frame.shadow_matrix));
-    glProgramUniform1f(program, 24, frame.ap_t_far);
-    glProgramUniform1f(program, 25, frame.ap_t_min);
-    glProgramUniform1f(program, 27, frame.shadow_depth_bias);
-    glProgramUniform1f(program, 28, frame.volume_weight);
-    glProgramUniform3fv(program, 29, 1, glm::value_ptr(frame.inverse_sun_srgb));
-    glProgramUniform4fv(program, 30, 1, glm::value_ptr(frame.depth_column));
-    glProgramUniform1f(program, 31, frame.depth_column_view_z);
-    glProgramUniform1f(program, 32, frame.stars.sigma);
-    glProgramUniformMatrix4fv(program, 33, 1, GL_FALSE, glm::value_ptr(frame.world_to_clip));
-    glProgramUniform1f(program, 37, frame.surface_shell_radius);
-    gpu::set_sky_view_frame_uniforms(program, sky_view);
-    if (eclipse && !draw.classify) gpu::set_moons_uniforms(program, frame.moons);
-    gpu::set_star_catalogue_uniforms(program, star_catalogue, input.world_from_star_catalogue);
-  }
+  for (const Draw& draw : draws)
+    set_composite_uniforms(draw, frame, star_catalogue, input.world_from_star_catalogue);
   if (star_catalogue) p.star_catalogue.bind(double(frame.stars.sigma));
   p.tables->bind();
   for (GLuint unit = 0; unit < gpu::kTableUnitCount; ++unit) glBindSampler(unit, 0);
@@ -907,31 +1174,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   glStencilMask(0xFF);
   const GLint clear_stencil = 0;
   glClearNamedFramebufferiv(p.framebuffer, GL_STENCIL, 0, &clear_stencil);
-  for (const Draw& draw : draws) {
-    if (draw.export_stencil) {
-      // Every pixel's bits, as the program exports them.
-      glStencilMask(0xFF);
-      glStencilFunc(GL_ALWAYS, 0, 0xFF);
-      glStencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
-      glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-    } else if (draw.classify) {
-      // Set this draw's bit where the classifying program keeps the pixel.
-      glStencilMask(GLuint(draw.bits));
-      if (draw.sky_only)
-        glStencilFunc(GL_EQUAL, draw.bits | kSkyBit, GLuint(kSkyBit));
-      else
-        glStencilFunc(GL_ALWAYS, draw.bits, 0xFF);
-      glStencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
-      glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-    } else {
-      glStencilMask(0);
-      glStencilFunc(GL_EQUAL, draw.bits, GLuint(draw.compare));
-      glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
-      glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-    }
-    glUseProgram(draw.program);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-  }
+  for (const Draw& draw : draws) draw_composite(draw);
   glStencilMask(0xFF);
   glDisable(GL_STENCIL_TEST);
   if (input.timed) timings.composite_ms = p.timer->end_ms();

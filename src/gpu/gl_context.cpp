@@ -71,9 +71,10 @@ void release_display(EGLDisplay display) {
   }
 }
 
-// Creates a 4.5 core context on `display` and makes it current, or returns
+// Creates a 4.5 core context on `display` (in the share group of `share`
+// unless it is EGL_NO_CONTEXT) and makes it current, or returns
 // EGL_NO_CONTEXT with the reason in `problem`.
-EGLContext create_context(EGLDisplay display, std::string& problem) {
+EGLContext create_context(EGLDisplay display, std::string& problem, EGLContext share = EGL_NO_CONTEXT) {
   if (display == EGL_NO_DISPLAY) {
     problem = egl_failure("getting the display");
     return EGL_NO_CONTEXT;
@@ -116,7 +117,7 @@ EGLContext create_context(EGLDisplay display, std::string& problem) {
                                        EGL_CONTEXT_OPENGL_PROFILE_MASK,
                                        EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
                                        EGL_NONE};
-  EGLContext context = eglCreateContext(display, config, EGL_NO_CONTEXT, context_attributes);
+  EGLContext context = eglCreateContext(display, config, share, context_attributes);
   if (context == EGL_NO_CONTEXT) return fail(egl_failure("eglCreateContext(OpenGL 4.5 core)"));
   if (eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context) != EGL_TRUE) {
     std::string why = egl_failure("eglMakeCurrent(no surface)");
@@ -184,6 +185,18 @@ std::unique_ptr<GlContext> GlContext::create_headless() {
   throw Error("no OpenGL 4.5 context: " + problems);
 }
 
+std::unique_ptr<GlContext> GlContext::create_shared() {
+  // Created current on this thread (as create_context checks its version),
+  // then this context made current again.
+  const EGLContext previous = eglGetCurrentContext();
+  std::string problem;
+  EGLContext context = create_context(display_, problem, context_);
+  if (previous != EGL_NO_CONTEXT) eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, previous);
+  else eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+  if (context == EGL_NO_CONTEXT) throw Error("no shared OpenGL 4.5 context: " + problem);
+  return std::unique_ptr<GlContext>(new GlContext(display_, context));
+}
+
 GlContext::~GlContext() {
   if (eglGetCurrentContext() == context_)
     eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
@@ -192,6 +205,9 @@ GlContext::~GlContext() {
 }
 
 void GlContext::make_current() {
+  // The bound API is per thread (EGL 1.5, 3.7): a new thread starts with
+  // OpenGL ES's.
+  eglBindAPI(EGL_OPENGL_API);
   if (eglGetCurrentContext() == context_) return;
   if (eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_) != EGL_TRUE)
     throw Error("cannot make the OpenGL context current on this thread: " + egl_failure("eglMakeCurrent") +

@@ -291,6 +291,46 @@ GLuint shared_compute_program(const AssembledSource& compute_source) {
   return acquire_program("compute\n" + compute_source.text, [&] { return link_compute_program(compute_source); });
 }
 
+GLuint warm_up_texture_like(GLuint like, GLint format) {
+  GLint target = GL_TEXTURE_2D;
+  GLint width = 3, height = 3, depth = 1;
+  if (like != 0 && glIsTexture(like) == GL_TRUE) {
+    glGetTextureParameteriv(like, GL_TEXTURE_TARGET, &target);
+    glGetTextureLevelParameteriv(like, 0, GL_TEXTURE_INTERNAL_FORMAT, &format);
+    glGetTextureLevelParameteriv(like, 0, GL_TEXTURE_WIDTH, &width);
+    glGetTextureLevelParameteriv(like, 0, GL_TEXTURE_HEIGHT, &height);
+    glGetTextureLevelParameteriv(like, 0, GL_TEXTURE_DEPTH, &depth);
+  }
+  const auto side = [](GLint n) { return n > 0 && (n & (n - 1)) == 0 ? 2 : 3; };
+  GLuint texture = 0;
+  glCreateTextures(GLenum(target), 1, &texture);
+  if (target == GL_TEXTURE_3D)
+    glTextureStorage3D(texture, 1, GLenum(format), side(width), side(height), side(depth));
+  else
+    glTextureStorage2D(texture, 1, GLenum(format), side(width), side(height));
+  // The sampling state, also part of that key where no sampler object is bound.
+  if (like != 0 && glIsTexture(like) == GL_TRUE) {
+    for (const GLenum parameter : {GL_TEXTURE_MIN_FILTER, GL_TEXTURE_MAG_FILTER, GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T,
+                                   GL_TEXTURE_WRAP_R, GL_TEXTURE_COMPARE_MODE, GL_TEXTURE_COMPARE_FUNC}) {
+      GLint value = 0;
+      glGetTextureParameteriv(like, parameter, &value);
+      glTextureParameteri(texture, parameter, value);
+    }
+  }
+  const bool depth_format = format == GL_DEPTH_COMPONENT16 || format == GL_DEPTH_COMPONENT24 ||
+                            format == GL_DEPTH_COMPONENT32 || format == GL_DEPTH_COMPONENT32F;
+  const bool depth_stencil = format == GL_DEPTH24_STENCIL8 || format == GL_DEPTH32F_STENCIL8;
+  if (depth_format) {
+    const float one = 1.0f;
+    glClearTexImage(texture, 0, GL_DEPTH_COMPONENT, GL_FLOAT, &one);
+  } else if (depth_stencil) {
+    glClearTexImage(texture, 0, GL_DEPTH_STENCIL, GL_UNSIGNED_INT_24_8, nullptr);
+  } else {
+    glClearTexImage(texture, 0, GL_RGBA, GL_FLOAT, nullptr);
+  }
+  return texture;
+}
+
 void release_program(GLuint& program) {
   if (program == 0) return;
   bool last = true;
@@ -614,6 +654,44 @@ GLuint GpuTables::link_sky_view_program(const glm::vec3& camera, const glm::vec3
   vertex.append("vertex shader", fullscreen_vertex_shader_source());
   return shared_program(vertex, instant() ? instant_sky_view_fragment_shader_source(*params_, *spectral_, low_sun)
                                           : sky_view_fragment_shader_source(*params_, *spectral_, low_sun, eclipse));
+}
+
+void GpuTables::warm_up_sky_view(GLuint program) const {
+  GLuint textures[3] = {0, 0, 0};
+  GLuint framebuffer = 0, vertex_array = 0;
+  for (int i = 0; i < 3; ++i) textures[i] = warm_up_texture_like(sky_view_textures_[i], GL_RGBA32F);
+  glCreateFramebuffers(1, &framebuffer);
+  const GLenum buffers[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+  for (int i = 0; i < 3; ++i) glNamedFramebufferTexture(framebuffer, buffers[i], textures[i], 0);
+  glNamedFramebufferDrawBuffers(framebuffer, 3, buffers);
+  glCreateVertexArrays(1, &vertex_array);
+  glUseProgram(program);
+  for (GLuint unit = 0; unit < 5; ++unit) {
+    glBindTextureUnit(unit, textures_[unit]);
+    glBindSampler(unit, 0);
+  }
+  bind_parameters();
+  if (instant()) {
+    glBindTextureUnit(kInstantMultipleScatteringUnit, instant_multiple_scattering_);
+    glBindSampler(kInstantMultipleScatteringUnit, 0);
+  }
+  for (GLuint unit : {kSkyViewRayleighUnit, kSkyViewAerosolUnit, kSkyViewSurfaceUnit}) glBindTextureUnit(unit, 0);
+  glDisable(GL_BLEND);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_STENCIL_TEST);
+  glDisable(GL_SCISSOR_TEST);
+  glDisable(GL_CULL_FACE);
+  glDisable(GL_FRAMEBUFFER_SRGB);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glBindVertexArray(vertex_array);
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+  glViewport(0, 0, 3, 3);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  glBindVertexArray(0);
+  glDeleteVertexArrays(1, &vertex_array);
+  glDeleteFramebuffers(1, &framebuffer);
+  glDeleteTextures(3, textures);
 }
 
 double GpuTables::update_sky_view(const glm::vec3& camera, const glm::vec3& sun, const physics::SkyViewFrame& frame,

@@ -48,6 +48,15 @@ GLuint shared_compute_program(const AssembledSource& compute_source);
 // Drops the caller's reference to a program of shared_program (or deletes
 // any other program); sets `program` to 0.
 void release_program(GLuint& program);
+
+// A zeroed texture for a warm-up draw that a driver compiles for as it
+// would for `like` (0: a 2D texture of `format`): the same target, internal
+// format and sampling parameters, each side 2 where `like`'s is a power of
+// two and 3 where not. llvmpipe keys the machine code of a shader by the
+// formats and sampling state of the textures it samples and by whether
+// their sides are powers of two (Mesa, lp_state_fs.h:
+// lp_fragment_shader_variant_key).
+GLuint warm_up_texture_like(GLuint like, GLint format);
 // The programs link_program and link_compute_program have linked in this
 // process.
 long linked_program_count();
@@ -190,6 +199,14 @@ class GpuTables {
   // the tables bound to units 0..4. With moons, the eclipsed table (the
   // frame must then have full_azimuth). The instant mode's tables compute
   // the instant mode's table (without moons).
+  // Draws `program` (a sky-view program of sky_view_program's) once over 3x3
+  // pixels of scratch targets of the table's formats in the CURRENT
+  // context, with the state of update_sky_view: drivers that compile
+  // machine code at the first draw compile it here (see
+  // AtmospherePass::link_programs). It sets no uniform (other contexts may
+  // be drawing with the program): the draw runs with those the program
+  // holds, over pixels nobody reads.
+  void warm_up_sky_view(GLuint program) const;
   double update_sky_view(const glm::vec3& camera, const glm::vec3& sun, const physics::SkyViewFrame& frame,
                          GpuTimer* timer, const physics::Moons& moons = physics::no_moons());
   // The slot of the program update_sky_view draws with for that camera,
