@@ -356,6 +356,21 @@ TEST_F(Plugin, LinksOnAnotherThreadWhileDrawing) {
   EXPECT_EQ(differing, 0u);
 }
 
+// A stop already asked for: link_programs() links nothing (a thread that
+// prepares programs is told so when its pass is about to go).
+TEST_F(Plugin, LinksNothingOnceStopped) {
+  const Shot shot = comparison_shots().front().second;
+  EngineFrame e = make_engine_frame(shot);
+  atmos::AtmospherePass pass(*earth_, *tables_, engine_frame(), atmos::PassPrograms::none);
+  atmos::FrameInput numbers = e.input;
+  numbers.depth = numbers.colour = 0;
+  const std::atomic<bool> stop{true};
+  pass.link_programs(numbers, atmos::ProgramScope::flight, &stop);
+  EXPECT_FALSE(pass.programs_linked(numbers));
+  pass.link_programs(numbers);
+  EXPECT_TRUE(pass.programs_linked(numbers));
+}
+
 // The same view moved along its camera's vertical to `altitude` (m).
 FrameInput at_altitude(const FrameInput& input, double altitude) {
   const PlanetFrame f = engine_frame();

@@ -42,6 +42,7 @@
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -251,9 +252,11 @@ class AtmospherePass {
   // context that shares objects with the pass's (a GL share group: a shared
   // context of the engine's window), and while the engine's thread calls
   // render(): each program is linked by one of them, render() waits for one
-  // being linked elsewhere instead of linking it twice. Throws atmos::Error
-  // as render() does.
-  void link_programs(const FrameInput& input, ProgramScope scope = ProgramScope::view);
+  // being linked elsewhere instead of linking it twice. With `stop`, it
+  // returns before the next program once *stop is true (those linked are
+  // kept). Throws atmos::Error as render() does.
+  void link_programs(const FrameInput& input, ProgramScope scope = ProgramScope::view,
+                     const std::atomic<bool>* stop = nullptr);
   // Whether every program render(input) would draw with is linked (then
   // render() links none; the driver may still compile machine code at the
   // first draw). The input's textures are not read. Throws atmos::Error as

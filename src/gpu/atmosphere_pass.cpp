@@ -859,7 +859,7 @@ std::vector<FrameInput> flight_views(const AtmospherePass::Impl& p, const FrameI
 
 }  // namespace
 
-void AtmospherePass::link_programs(const FrameInput& input, ProgramScope scope) {
+void AtmospherePass::link_programs(const FrameInput& input, ProgramScope scope, const std::atomic<bool>* stop) {
   Impl& p = *impl_;
   gpu::require_gl_context("the engine plugin (atmos::AtmospherePass::link_programs)");
   (void)frame_without_textures(p, input);  // the input checked before its camera moves
@@ -887,6 +887,7 @@ void AtmospherePass::link_programs(const FrameInput& input, ProgramScope scope) 
     }
   }
   for (const auto& item : frames) {
+    if (stop != nullptr && stop->load()) return;
     const FrameInput& view = item.first;
     const physics::PassFrame& frame = item.second;
     // Each missing program is claimed by the first caller that needs it
@@ -895,6 +896,7 @@ void AtmospherePass::link_programs(const FrameInput& input, ProgramScope scope) 
     std::vector<std::pair<GLuint*, GLuint>> claimed;
     std::set<GLuint> fresh;
     const ResolveProgram claim_and_link = [&](GLuint& slot, const std::function<GLuint()>& link) -> GLuint {
+      if (stop != nullptr && stop->load()) return 0;
       {
         std::lock_guard<std::mutex> lock(p.link_mutex);
         if (slot != 0 || p.linking.count(&slot) > 0) return slot;
