@@ -837,7 +837,7 @@ std::vector<FrameInput> flight_views(const AtmospherePass::Impl& p, const FrameI
   const glm::dvec3 eye = glm::dvec3(glm::inverse(input.view)[3]);  // engine units
   const glm::dvec3 offset = (eye - p.frame.centre) / p.frame.units_per_metre;
   const double radius = glm::length(offset);
-  const glm::dvec3 up = offset / radius;
+  const glm::dvec3 up = radius > 0.0 ? offset / radius : glm::dvec3(0.0, 0.0, 1.0);
   const double bottom = double(params.bottom_radius);
   const double top = double(params.top_radius) - bottom;
   const double altitude = std::max(radius - bottom, 1.0);
