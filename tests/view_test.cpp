@@ -154,6 +154,21 @@ TEST(ViewCli, ScriptFliesTheCameraAndDragsASlider) {
   EXPECT_GT(std::sqrt(moved), 9e3);
 }
 
+// A jump to a view whose programs the pass has not linked (orbit, from the
+// ground): they are linked and compiled first on a thread of the viewer's in the
+// shared context, then the camera jumps (a scripted session waits for
+// them, so that its path is the script's). The full tier's: the orbit's
+// programs take about 10 s to compile on llvmpipe.
+TEST(ViewCliLong, JumpPreparesItsProgramsFirst) {
+  SKIP_WITHOUT_VIEWER();
+  const fs::path script = scratch() / "jump.json";
+  std::ofstream(script) << R"({"events": [{"frame": 2, "key": "3"}, {"frame": 4, "mouse": [0, 0]}]})";
+  const CliRun r = view("--surface sphere --no-ui --script " + script.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("jump 3: its programs prepared in"), std::string::npos) << r.out;
+  EXPECT_NEAR(figure(r.out, "camera: altitude "), 400e3, 1.0) << r.out;
+}
+
 // --date: the sun and the Moon of that instant over the starting point. In
 // the totality of 8 April 2024 at Mazatlan the sky is dark; an hour later,
 // with the Moon off the sun, it is a day sky again.

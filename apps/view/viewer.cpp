@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -22,6 +23,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "atmos/image.hpp"
@@ -302,9 +304,27 @@ class Viewer {
 
   // The frame's inputs from the camera, the sun and the look.
   SceneFrame scene_frame(int width, int height, double top_radius_m);
+  SceneFrame scene_frame_at(const CameraPose& pose, int width, int height, double top_radius_m);
   // The camera, sun and moons of the viewer's start over the planet of
   // `tables` (the ground at its datum until the globe is built).
   void place_camera(const PlanetTables& tables);
+
+  // Jumps (keys 1-4, the panel's buttons): the programs of the view at the
+  // destination are linked and compiled first on a thread in the shared
+  // context (AtmospherePass::link_programs), while this thread draws on
+  // where the camera is; the camera jumps once they are ready (a scripted
+  // session waits for them, so that its path does not depend on the
+  // machine). New tables are taken once no jump is being prepared, and no
+  // jump is prepared while a swap is pending: both use the shared context.
+  // Returns whether the jump was deferred.
+  bool prepare_jump(int which, int width, int height, bool wait);
+  void finish_jump();
+  std::thread jump_linker_;
+  std::atomic<bool> jump_linking_{false};
+  std::exception_ptr jump_error_;
+  int pending_jump_ = 0;
+  double jump_start_s_ = 0.0;
+  int requested_jump_ = 0;  // the panel's button, this frame
 
   const ViewOptions& o_;
   GLFWwindow* shared_context_ = nullptr;
@@ -347,8 +367,12 @@ class Viewer {
 };
 
 SceneFrame Viewer::scene_frame(int width, int height, double top_radius_m) {
+  return scene_frame_at(flight_->pose(), width, height, top_radius_m);
+}
+
+SceneFrame Viewer::scene_frame_at(const CameraPose& pose, int width, int height, double top_radius_m) {
   SceneFrame sf;
-  sf.pose = flight_->pose();
+  sf.pose = pose;
   sf.fov_deg = look_.fov_deg;
   sf.width = width;
   sf.height = height;
@@ -406,6 +430,58 @@ void Viewer::swap_scene(PlanetTables&& tables) {
 
 bool Viewer::swap_ready() const {
   return (scene_->rebind_pending() && !scene_->linking()) || (next_scene_ && !next_scene_->linking());
+}
+
+bool Viewer::prepare_jump(int which, int width, int height, bool wait) {
+  if (!shared_context_ || width < 1 || height < 1 || swap_pending() || scene_->linking()) return false;
+  if (jump_linking_.load()) return true;  // one jump at a time: this one is dropped
+  Flight destination = *flight_;
+  destination.jump(which, ground());
+  const SceneFrame sf = scene_frame_at(destination.pose(), width, height, scene_->top_radius_m());
+  if (scene_->programs_linked(sf)) return false;
+  if (jump_linker_.joinable()) jump_linker_.join();
+  pending_jump_ = which;
+  jump_start_s_ = now_s();
+  jump_error_ = nullptr;
+  jump_linking_ = true;
+  const Scene* scene = scene_.get();
+  GLFWwindow* shared = shared_context_;
+  jump_linker_ = std::thread([this, scene, shared, sf] {
+    glfwMakeContextCurrent(shared);
+    try {
+      scene->link_programs(sf);
+    } catch (...) {
+      jump_error_ = std::current_exception();
+    }
+    glfwMakeContextCurrent(nullptr);
+    jump_linking_ = false;
+  });
+  const char* names[] = {"", "the ground", "10 km", "orbit", "2.5 radii"};
+  message_ = std::string("jump to ") + names[which] + ": compiling its view's programs";
+  message_is_error_ = false;
+  if (wait) finish_jump();
+  return true;
+}
+
+void Viewer::finish_jump() {
+  if (jump_linker_.joinable()) jump_linker_.join();
+  const int which = pending_jump_;
+  pending_jump_ = 0;
+  message_.clear();
+  if (jump_error_) {
+    // Not prepared: the jump's first frame links them on this thread, as
+    // without a shared context.
+    try {
+      std::rethrow_exception(jump_error_);
+    } catch (const std::exception& e) {
+      message_ = e.what();
+      message_is_error_ = true;
+    }
+  } else {
+    std::printf("jump %d: its programs prepared in %.2f s\n", which, now_s() - jump_start_s_);
+    std::fflush(stdout);
+  }
+  flight_->jump(which, ground());
 }
 
 void Viewer::finish_swap(int frame) {
@@ -590,7 +666,7 @@ void Viewer::panel() {
     const char* jumps[] = {"1 ground", "2 10 km", "3 orbit", "4 2.5 radii"};
     for (int k = 0; k < 4; ++k) {
       if (k) ImGui::SameLine();
-      if (ImGui::Button(jumps[k])) flight_->jump(k + 1, g);
+      if (ImGui::Button(jumps[k])) requested_jump_ = k + 1;
     }
     ImGui::TextDisabled("drag: look; WASD, Q/E: fly; Esc: quit");
     ImGui::TextDisabled("Shift: 10x faster, Ctrl: 10x slower");
@@ -881,6 +957,7 @@ int Viewer::run() {
   struct Release {
     Viewer& v;
     ~Release() {
+      if (v.jump_linker_.joinable()) v.jump_linker_.join();  // it links for the scene's pass
       v.job_.reset();
       v.next_scene_.reset();
       v.scene_.reset();
@@ -975,6 +1052,8 @@ int Viewer::run() {
     const double dt = frame == 0 ? 0.0 : frame_start - previous_s;
     previous_s = frame_start;
     glfwPollEvents();
+    int frame_width = 0, frame_height = 0;
+    glfwGetFramebufferSize(window_, &frame_width, &frame_height);
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
     ImGui::NewFrame();
@@ -994,7 +1073,7 @@ int Viewer::run() {
         swapped = true;
         settle_until = frame + 1 + kFramesAfterSwap;
       }
-    } else if (std::optional<PlanetTables> t = job_->take_result()) {
+    } else if (std::optional<PlanetTables> t = pending_jump_ == 0 ? job_->take_result() : std::nullopt) {
       try {
         swap_scene(std::move(*t));
         message_.clear();
@@ -1035,9 +1114,13 @@ int Viewer::run() {
         }
       }
       dragging = script->dragging(frame);
+      if (input.jump != jump_none && prepare_jump(input.jump, frame_width, frame_height, true)) input.jump = jump_none;
       flight_->update(input, frame == 0 ? 0.0 : kScriptStepS, ground());
     } else {
       input = window_input();
+      if (input.jump == jump_none) input.jump = std::exchange(requested_jump_, 0);
+      if (input.jump != jump_none && prepare_jump(input.jump, frame_width, frame_height, false)) input.jump = jump_none;
+      if (pending_jump_ != 0 && !jump_linking_.load()) finish_jump();
       flight_->update(input, dt, ground());
     }
     if (o_.ui) panel();
