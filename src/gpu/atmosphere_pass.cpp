@@ -611,11 +611,7 @@ void warm_up_programs(AtmospherePass::Impl& p, const physics::PassFrame& frame, 
       glBindVertexArray(vertex_array);
       glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
       glViewport(0, 0, 3, 3);
-      glDisable(GL_BLEND);
-      glDisable(GL_DEPTH_TEST);
-      glDisable(GL_SCISSOR_TEST);
-      glDisable(GL_CULL_FACE);
-      glDisable(GL_FRAMEBUFFER_SRGB);
+      gpu::set_full_screen_state();
       glEnable(GL_STENCIL_TEST);
       glStencilMask(0xFF);
       const GLint no_class = 0x80;
@@ -1034,13 +1030,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   if (glCheckNamedFramebufferStatus(p.framebuffer, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
     throw Error("plugin: the output texture cannot be rendered to by this OpenGL driver");
 
-  glDisable(GL_BLEND);
-  glDisable(GL_DEPTH_TEST);
-  glDisable(GL_STENCIL_TEST);
-  glDisable(GL_SCISSOR_TEST);
-  glDisable(GL_CULL_FACE);
-  glDisable(GL_FRAMEBUFFER_SRGB);
-  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  gpu::set_full_screen_state();
 
   // Pass 1: this frame's sky-view table, for cameras in the atmosphere
   // (eclipsed, over the full azimuth, with moons).

@@ -291,6 +291,16 @@ GLuint shared_compute_program(const AssembledSource& compute_source) {
   return acquire_program("compute\n" + compute_source.text, [&] { return link_compute_program(compute_source); });
 }
 
+void set_full_screen_state() {
+  glDisable(GL_BLEND);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_STENCIL_TEST);
+  glDisable(GL_SCISSOR_TEST);
+  glDisable(GL_CULL_FACE);
+  glDisable(GL_FRAMEBUFFER_SRGB);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+}
+
 GLuint warm_up_texture_like(GLuint like, GLint format) {
   GLint target = GL_TEXTURE_2D;
   GLint width = 3, height = 3, depth = 1;
@@ -656,6 +666,20 @@ GLuint GpuTables::link_sky_view_program(const glm::vec3& camera, const glm::vec3
                                           : sky_view_fragment_shader_source(*params_, *spectral_, low_sun, eclipse));
 }
 
+void GpuTables::bind_sky_view_inputs() const {
+  for (GLuint unit = 0; unit < 5; ++unit) {
+    glBindTextureUnit(unit, textures_[unit]);
+    glBindSampler(unit, 0);
+  }
+  bind_parameters();
+  if (instant()) {
+    glBindTextureUnit(kInstantMultipleScatteringUnit, instant_multiple_scattering_);
+    glBindSampler(kInstantMultipleScatteringUnit, 0);
+  }
+  // The table's own textures must not be bound for reading while drawn to.
+  for (GLuint unit : {kSkyViewRayleighUnit, kSkyViewAerosolUnit, kSkyViewSurfaceUnit}) glBindTextureUnit(unit, 0);
+}
+
 void GpuTables::warm_up_sky_view(GLuint program) const {
   GLuint textures[3] = {0, 0, 0};
   GLuint framebuffer = 0, vertex_array = 0;
@@ -666,23 +690,8 @@ void GpuTables::warm_up_sky_view(GLuint program) const {
   glNamedFramebufferDrawBuffers(framebuffer, 3, buffers);
   glCreateVertexArrays(1, &vertex_array);
   glUseProgram(program);
-  for (GLuint unit = 0; unit < 5; ++unit) {
-    glBindTextureUnit(unit, textures_[unit]);
-    glBindSampler(unit, 0);
-  }
-  bind_parameters();
-  if (instant()) {
-    glBindTextureUnit(kInstantMultipleScatteringUnit, instant_multiple_scattering_);
-    glBindSampler(kInstantMultipleScatteringUnit, 0);
-  }
-  for (GLuint unit : {kSkyViewRayleighUnit, kSkyViewAerosolUnit, kSkyViewSurfaceUnit}) glBindTextureUnit(unit, 0);
-  glDisable(GL_BLEND);
-  glDisable(GL_DEPTH_TEST);
-  glDisable(GL_STENCIL_TEST);
-  glDisable(GL_SCISSOR_TEST);
-  glDisable(GL_CULL_FACE);
-  glDisable(GL_FRAMEBUFFER_SRGB);
-  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  bind_sky_view_inputs();
+  set_full_screen_state();
   glBindVertexArray(vertex_array);
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
   glViewport(0, 0, 3, 3);
@@ -704,17 +713,7 @@ double GpuTables::update_sky_view(const glm::vec3& camera, const glm::vec3& sun,
   glProgramUniform3f(program, 7, sun.x, sun.y, sun.z);
   set_sky_view_frame_uniforms(program, frame);
   if (eclipse) set_moons_uniforms(program, moons);
-  for (GLuint unit = 0; unit < 5; ++unit) {
-    glBindTextureUnit(unit, textures_[unit]);
-    glBindSampler(unit, 0);
-  }
-  bind_parameters();
-  if (instant()) {
-    glBindTextureUnit(kInstantMultipleScatteringUnit, instant_multiple_scattering_);
-    glBindSampler(kInstantMultipleScatteringUnit, 0);
-  }
-  // The table's own textures must not be bound for reading while drawn to.
-  for (GLuint unit : {kSkyViewRayleighUnit, kSkyViewAerosolUnit, kSkyViewSurfaceUnit}) glBindTextureUnit(unit, 0);
+  bind_sky_view_inputs();
   glBindVertexArray(vertex_array_);
   glBindFramebuffer(GL_FRAMEBUFFER, sky_view_framebuffer_);
   glViewport(0, 0, SKY_VIEW_WIDTH, SKY_VIEW_HEIGHT);

@@ -49,6 +49,11 @@ GLuint shared_compute_program(const AssembledSource& compute_source);
 // any other program); sets `program` to 0.
 void release_program(GLuint& program);
 
+// The fixed-function state of atmos's full-screen passes: no blending,
+// depth, stencil or scissor test, no culling, no sRGB conversion, every
+// colour channel written.
+void set_full_screen_state();
+
 // A zeroed texture for a warm-up draw that a driver compiles for as it
 // would for `like` (0: a 2D texture of `format`): the same target, internal
 // format and sampling parameters, each side 2 where `like`'s is a power of
@@ -218,6 +223,11 @@ class GpuTables {
   GLuint link_sky_view_program(const glm::vec3& camera, const glm::vec3& sun, const physics::Moons& moons) const;
 
  private:
+  // Binds what the sky-view programs read: the tables on units 0..4 (and
+  // the instant mode's multiple scattering), the parameter block; unbinds
+  // the sky-view table's own units, which they draw to.
+  void bind_sky_view_inputs() const;
+
   void release();
   void create_sky_view_target();
   void create_parameter_buffer();
