@@ -144,6 +144,17 @@ class Plugin : public atmos_test::EarthGpuTest {
   }
   void SetUp() override { ASSERT_TRUE(pass_ != nullptr) << error_; }
 
+  // The suite's first comparison shot (10 m up at noon, lit colour) as an
+  // engine frame to draw again, the frame the suite's pass draws of it, and
+  // its input without textures (link_programs reads none): the programs are
+  // those the suite's pass compiled, so the driver's cache keeps this cheap.
+  struct ShotToRelink {
+    EngineFrame frame;
+    std::vector<glm::vec3> expected;
+    atmos::FrameInput numbers;
+  };
+  static ShotToRelink shot_to_relink();  // after comparison_shots
+
   // Runs the pass (`pass`, else the suite's) on an engine frame; returns
   // the output (rows bottom-up).
   static std::vector<glm::vec3> run(EngineFrame& e, bool depth_component = false,
@@ -276,6 +287,15 @@ TEST_F(Plugin, MatchesCpuTwin) {
   }
 }
 
+Plugin::ShotToRelink Plugin::shot_to_relink() {
+  const Shot shot = comparison_shots().front().second;
+  EngineFrame first = make_engine_frame(shot);
+  ShotToRelink r{make_engine_frame(shot), run(first), {}};
+  r.numbers = r.frame.input;
+  r.numbers.depth = r.numbers.colour = 0;
+  return r;
+}
+
 // The pixels where two frames of the same size differ at all; every pixel
 // if their sizes differ.
 size_t differing_pixels(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
@@ -287,17 +307,11 @@ size_t differing_pixels(const std::vector<glm::vec3>& a, const std::vector<glm::
 
 // A pass built without programs (PassPrograms::none) links, before any
 // draw, exactly the programs a frame draws with (link_programs), and then
-// draws it as the suite's pass does, bit for bit. The frame is the suite's
-// first comparison shot (10 m up at noon, lit colour): the programs are
-// those the suite's pass compiled, so the driver's cache keeps this cheap.
+// draws it as the suite's pass does, bit for bit (shot_to_relink).
 TEST_F(Plugin, LinksAFramesProgramsBeforeItsFirstDraw) {
-  const Shot shot = comparison_shots().front().second;
-  EngineFrame first = make_engine_frame(shot), second = make_engine_frame(shot);
-  const std::vector<glm::vec3> expected = run(first);
+  ShotToRelink s = shot_to_relink();
+  const atmos::FrameInput& numbers = s.numbers;
   atmos::AtmospherePass pass(*earth_, *tables_, engine_frame(), atmos::PassPrograms::none);
-  // Textures are not read: a frame of numbers alone.
-  atmos::FrameInput numbers = second.input;
-  numbers.depth = numbers.colour = 0;
   EXPECT_FALSE(pass.programs_linked(numbers));
   pass.link_programs(numbers);
   EXPECT_TRUE(pass.programs_linked(numbers));
@@ -308,8 +322,8 @@ TEST_F(Plugin, LinksAFramesProgramsBeforeItsFirstDraw) {
   atmos::FrameInput bad = numbers;
   bad.width = 0;
   EXPECT_THROW(pass.link_programs(bad), atmos::Error);
-  const std::vector<glm::vec3> drawn = run(second, false, &pass);
-  EXPECT_EQ(differing_pixels(drawn, expected), 0u);
+  const std::vector<glm::vec3> drawn = run(s.frame, false, &pass);
+  EXPECT_EQ(differing_pixels(drawn, s.expected), 0u);
 }
 
 // Links the programs of `numbers` (ProgramScope `scope`) into `pass` in a
@@ -347,16 +361,13 @@ std::vector<glm::vec3> draw_while_linking_elsewhere(atmos::GlContext& context, a
 // the programs the other thread links, and the other thread draws its new
 // programs only into its own scratch targets).
 TEST_F(Plugin, LinksOnAnotherThreadWhileDrawing) {
-  const Shot shot = comparison_shots().front().second;
-  EngineFrame first = make_engine_frame(shot), second = make_engine_frame(shot);
-  const std::vector<glm::vec3> expected = run(first);
+  ShotToRelink s = shot_to_relink();
+  const atmos::FrameInput& numbers = s.numbers;
   atmos::AtmospherePass pass(*earth_, *tables_, engine_frame(), atmos::PassPrograms::none);
-  atmos::FrameInput numbers = second.input;
-  numbers.depth = numbers.colour = 0;
   const std::vector<glm::vec3> drawn = draw_while_linking_elsewhere(
-      *context_, pass, numbers, atmos::ProgramScope::view, [&] { return run(second, false, &pass); });
+      *context_, pass, numbers, atmos::ProgramScope::view, [&] { return run(s.frame, false, &pass); });
   EXPECT_TRUE(pass.programs_linked(numbers));
-  EXPECT_EQ(differing_pixels(drawn, expected), 0u);
+  EXPECT_EQ(differing_pixels(drawn, s.expected), 0u);
 }
 
 // A stop already asked for: link_programs() links nothing (a thread that
@@ -396,17 +407,14 @@ class PluginFlight : public Plugin {};
 // thread while this one draws, the frame bit for bit as above; bad numbers
 // are the error render() gives.
 TEST_F(PluginFlight, LinksAFlightsPrograms) {
-  const Shot shot = comparison_shots().front().second;
-  EngineFrame first = make_engine_frame(shot), second = make_engine_frame(shot);
-  const std::vector<glm::vec3> expected = run(first);
+  ShotToRelink s = shot_to_relink();
+  const atmos::FrameInput& numbers = s.numbers;
   atmos::AtmospherePass pass(*earth_, *tables_, engine_frame(), atmos::PassPrograms::none);
-  atmos::FrameInput numbers = second.input;
-  numbers.depth = numbers.colour = 0;
   for (const double altitude : {20e3, 60e3, 150e3, 2.5 * kEarthRadius})
     EXPECT_FALSE(pass.programs_linked(at_altitude(numbers, altitude))) << altitude << " m";
   const std::vector<glm::vec3> drawn = draw_while_linking_elsewhere(
-      *context_, pass, numbers, atmos::ProgramScope::flight, [&] { return run(second, false, &pass); });
-  EXPECT_EQ(differing_pixels(drawn, expected), 0u);
+      *context_, pass, numbers, atmos::ProgramScope::flight, [&] { return run(s.frame, false, &pass); });
+  EXPECT_EQ(differing_pixels(drawn, s.expected), 0u);
   for (const double altitude : {20e3, 60e3, 150e3, 2.5 * kEarthRadius})
     EXPECT_TRUE(pass.programs_linked(at_altitude(numbers, altitude))) << altitude << " m";
   atmos::FrameInput bad = numbers;
