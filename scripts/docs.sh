@@ -36,7 +36,10 @@ if [ -n "$(git -C "$root" status --porcelain --untracked-files=no 2>/dev/null)" 
   commit="$commit with uncommitted changes"
 fi
 if [ -z "$figures" ] || [ -z "$bench" ]; then
-  ATMOS_BUILD_DIR="$build" bash "$root/scripts/build.sh"
+  # Every test file: the figures' tests are in the release build's and in
+  # the sanitizer build's files alike (a build/ left by scripts/test.sh's
+  # default tier has only the former).
+  ATMOS_BUILD_DIR="$build" bash "$root/scripts/build.sh" -DATMOS_TEST_FILES=all
   mkdir -p "$run"
   export ATMOS_CACHE_DIR="${ATMOS_CACHE_DIR:-$(mktemp -d)}"
 fi
