@@ -71,8 +71,10 @@ Scene::Scene(const PlanetTables& t, bool globe, bool regional_albedo, bool compl
 
 void Scene::start_linker(atmos::AtmospherePass& pass, const EarlyLink& early, bool globe_programs) {
   join_linker();
-  const atmos::FrameInput input = frame_input(early.frame, early.frame.width, early.frame.height,
-                                              view_of(early.frame), projection_of(early.frame));
+  // The frame's targets first (this thread is the GL one), so that the
+  // programs are compiled for their formats.
+  ensure_targets(targets_[0], early.frame.width, early.frame.height);
+  const atmos::FrameInput input = link_input(early.frame);
   linking_ = true;
   atmos::Globe* globe = globe_programs ? globe_.get() : nullptr;
   linker_ = std::thread([this, &pass, globe, make_current = early.make_current, input] {
@@ -213,9 +215,20 @@ GLuint Scene::composite(const SceneFrame& f, Targets& t, const glm::dmat4& view,
   return pass_->render(input);
 }
 
-void Scene::link_programs(const SceneFrame& f) const {
-  pass_->link_programs(frame_input(f, f.width, f.height, view_of(f), projection_of(f)));
+void Scene::link_programs(const SceneFrame& f) const { link_programs(link_input(f)); }
+
+atmos::FrameInput Scene::link_input(const SceneFrame& f) const {
+  atmos::FrameInput input = frame_input(f, f.width, f.height, view_of(f), projection_of(f));
+  const Targets& t = targets_[0];
+  if (t.width == f.width && t.height == f.height) {
+    input.colour = t.colour;
+    input.depth = t.depth;
+    input.output = t.output;
+  }
+  return input;
 }
+
+void Scene::link_programs(const atmos::FrameInput& input) const { pass_->link_programs(input); }
 
 GLuint Scene::render(const SceneFrame& f) {
   Targets& t = targets_[0];

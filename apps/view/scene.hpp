@@ -118,6 +118,12 @@ class Scene {
   // threads at once, each with a current context that shares objects with
   // the scene's, while no thread draws the scene.
   void link_programs(const SceneFrame& frame) const;
+  // The pass's input of `frame` for link_programs on another thread: its
+  // textures (read on this thread, the GL one) are the scene's targets
+  // where they have the frame's size, so that the programs are compiled for
+  // their formats (AtmospherePass::link_programs).
+  atmos::FrameInput link_input(const SceneFrame& frame) const;
+  void link_programs(const atmos::FrameInput& input) const;
   // Waits for the early link's thread; rethrows its error.
   void join_linker();
 

@@ -446,10 +446,10 @@ bool Viewer::prepare_jump(int which, int width, int height, bool wait) {
   jump_linking_ = true;
   const Scene* scene = scene_.get();
   GLFWwindow* shared = shared_context_;
-  jump_linker_ = std::thread([this, scene, shared, sf] {
+  jump_linker_ = std::thread([this, scene, shared, input = scene->link_input(sf)] {
     glfwMakeContextCurrent(shared);
     try {
-      scene->link_programs(sf);
+      scene->link_programs(input);
     } catch (...) {
       jump_error_ = std::current_exception();
     }

@@ -525,8 +525,9 @@ void warm_up_programs(AtmospherePass::Impl& p, const physics::PassFrame& frame, 
                       const FramePrograms& programs, const std::set<GLuint>& fresh) {
   if (fresh.empty()) return;
   std::vector<GLuint> textures;
-  const auto scratch = [&textures](GLuint like, GLint format) {
-    textures.push_back(gpu::warm_up_texture_like(like, format));
+  // The engine's textures given as 0 are taken as the frame's size.
+  const auto scratch = [&textures, &input](GLuint like, GLint format) {
+    textures.push_back(gpu::warm_up_texture_like(like, format, input.width, input.height));
     return textures.back();
   };
   GLuint framebuffer = 0, vertex_array = 0, stencil = 0, column_buffer = 0;

@@ -301,9 +301,9 @@ void set_full_screen_state() {
   glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
 }
 
-GLuint warm_up_texture_like(GLuint like, GLint format) {
+GLuint warm_up_texture_like(GLuint like, GLint format, int width, int height) {
   GLint target = GL_TEXTURE_2D;
-  GLint width = 3, height = 3, depth = 1;
+  GLint depth = 1;
   if (like != 0 && glIsTexture(like) == GL_TRUE) {
     glGetTextureParameteriv(like, GL_TEXTURE_TARGET, &target);
     glGetTextureLevelParameteriv(like, 0, GL_TEXTURE_INTERNAL_FORMAT, &format);

@@ -55,13 +55,13 @@ void release_program(GLuint& program);
 void set_full_screen_state();
 
 // A zeroed texture for a warm-up draw that a driver compiles for as it
-// would for `like` (0: a 2D texture of `format`): the same target, internal
-// format and sampling parameters, each side 2 where `like`'s is a power of
-// two and 3 where not. llvmpipe keys the machine code of a shader by the
-// formats and sampling state of the textures it samples and by whether
-// their sides are powers of two (Mesa, lp_state_fs.h:
+// would for `like` (0: a 2D texture of `format`, `width` x `height`): the
+// same target, internal format and sampling parameters, each side 2 where
+// `like`'s is a power of two and 3 where not. llvmpipe keys the machine
+// code of a shader by the formats and sampling state of the textures it
+// samples and by whether their sides are powers of two (Mesa, lp_state_fs.h:
 // lp_fragment_shader_variant_key).
-GLuint warm_up_texture_like(GLuint like, GLint format);
+GLuint warm_up_texture_like(GLuint like, GLint format, int width = 3, int height = 3);
 // The programs link_program and link_compute_program have linked in this
 // process.
 long linked_program_count();
