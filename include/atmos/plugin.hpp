@@ -241,11 +241,11 @@ class AtmospherePass {
   // variants of that camera, sun, moons, shadows, stars and surface mode.
   // Each new program is drawn once in the CURRENT context over 3x3 pixels of
   // scratch textures like the input's (where its textures are 0: those of
-  // docs/plugin.md at the input's size), for the driver compiles a program
-  // for the formats and sizes it samples: drivers that compile machine code
-  // at a program's first draw (Mesa's llvmpipe) compile it here, and with a
-  // shader cache (Mesa's, on by default) reuse it in the engine's context.
-  // Pass the engine's textures, or textures of their formats and size.
+  // docs/plugin.md at the input's size): drivers that compile machine code
+  // at a program's first draw (Mesa's llvmpipe) compile it here, for the
+  // formats and sizes it samples, and with a shader cache (Mesa's, on by
+  // default) reuse it in the engine's context. So pass the engine's
+  // textures, or textures of their formats and size.
   // The input's textures are not read; its matrices, size and sun are
   // checked as render() checks them. With ProgramScope::flight, also the
   // programs of the same view from the other altitudes of a flight over the
