@@ -1052,8 +1052,9 @@ int Viewer::run() {
     const double dt = frame == 0 ? 0.0 : frame_start - previous_s;
     previous_s = frame_start;
     glfwPollEvents();
-    int frame_width = 0, frame_height = 0;
-    glfwGetFramebufferSize(window_, &frame_width, &frame_height);
+    // The frame's size, before the input: a jump prepares its view at it.
+    int width = 0, height = 0;
+    glfwGetFramebufferSize(window_, &width, &height);
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
     ImGui::NewFrame();
@@ -1114,20 +1115,18 @@ int Viewer::run() {
         }
       }
       dragging = script->dragging(frame);
-      if (input.jump != jump_none && prepare_jump(input.jump, frame_width, frame_height, true)) input.jump = jump_none;
+      if (input.jump != jump_none && prepare_jump(input.jump, width, height, true)) input.jump = jump_none;
       flight_->update(input, frame == 0 ? 0.0 : kScriptStepS, ground());
     } else {
       input = window_input();
       if (input.jump == jump_none) input.jump = std::exchange(requested_jump_, 0);
-      if (input.jump != jump_none && prepare_jump(input.jump, frame_width, frame_height, false)) input.jump = jump_none;
+      if (input.jump != jump_none && prepare_jump(input.jump, width, height, false)) input.jump = jump_none;
       if (pending_jump_ != 0 && !jump_linking_.load()) finish_jump();
       flight_->update(input, dt, ground());
     }
     if (o_.ui) panel();
     if (!script) dragging = ImGui::IsAnyItemActive();
 
-    int width = 0, height = 0;
-    glfwGetFramebufferSize(window_, &width, &height);
     GLuint hdr = 0;
     bool recorded = false;
     if (width > 0 && height > 0) {

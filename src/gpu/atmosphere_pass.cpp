@@ -509,6 +509,49 @@ void set_volume_uniforms(GLuint program, const physics::PassFrame& frame) {
   gpu::set_sky_view_frame_uniforms(program, frame.sky_view);
 }
 
+// The textures a composite draw samples besides the tables: the sky-view
+// table's, the engine's, the volume's and the space volume's regular
+// columns (render(): this frame's; warm_up_programs: scratch ones like them).
+struct CompositeTextures {
+  GLuint sky_view[3] = {0, 0, 0};
+  GLuint depth = 0;
+  GLuint colour = 0;
+  GLuint albedo = 0;
+  GLuint normal = 0;
+  GLuint shadow_map = 0;
+  GLuint volume[4] = {0, 0, 0, 0};
+  GLuint space_regular_columns = 0;
+};
+
+// Binds them and the tables on the units of atmosphere_pass.frag.glsl, with
+// their sampler objects.
+void bind_composite_textures(const AtmospherePass::Impl& p, SurfaceMode surfaces, const CompositeTextures& t) {
+  p.tables->bind();
+  for (GLuint unit = 0; unit < gpu::kTableUnitCount; ++unit) glBindSampler(unit, 0);
+  for (GLuint i = 0; i < 3; ++i) glBindTextureUnit(gpu::kSkyViewRayleighUnit + i, t.sky_view[i]);
+  glBindTextureUnit(kDepthUnit, t.depth);
+  if (surfaces == SurfaceMode::lit_colour) {
+    glBindTextureUnit(kColourUnit, t.colour);
+    glBindTextureUnit(kNormalUnit, 0);
+  } else {
+    glBindTextureUnit(kAlbedoUnit, t.albedo);
+    glBindTextureUnit(kNormalUnit, t.normal);
+  }
+  glBindTextureUnit(kShadowUnit, t.shadow_map);
+  for (GLuint unit : {kDepthUnit, kColourUnit, kNormalUnit}) glBindSampler(unit, p.depth_sampler);
+  glBindSampler(kShadowUnit, p.shadow_sampler);
+  for (GLuint i = 0; i < 4; ++i) {
+    glBindTextureUnit(kVolumeUnit + i, t.volume[i]);
+    glBindSampler(kVolumeUnit + i, 0);
+  }
+  glBindTextureUnit(kSpaceRegularColumnsUnit, t.space_regular_columns);
+  glBindSampler(kSpaceRegularColumnsUnit, 0);
+  if (p.instant) {
+    glBindTextureUnit(kInstantSpaceMultipleScatteringUnit, p.tables->instant_multiple_scattering_texture());
+    glBindSampler(kInstantSpaceMultipleScatteringUnit, 0);
+  }
+}
+
 // Draws and dispatches each program of `fresh` once, with the state
 // render() would for this frame, over 3 x 3 pixels of scratch textures in
 // the CURRENT context: drivers that compile a program's machine code at its
@@ -550,15 +593,7 @@ void warm_up_programs(AtmospherePass::Impl& p, const physics::PassFrame& frame, 
     for (const GLuint program : {programs.volume, programs.space}) {
       if (program == 0 || fresh.count(program) == 0) continue;
       glUseProgram(program);
-      p.tables->bind_parameters();
-      for (GLuint unit = 0; unit < 5; ++unit) {
-        glBindTextureUnit(unit, p.tables->texture(int(unit)));
-        glBindSampler(unit, 0);
-      }
-      if (p.instant) {
-        glBindTextureUnit(gpu::kInstantMultipleScatteringUnit, p.tables->instant_multiple_scattering_texture());
-        glBindSampler(gpu::kInstantMultipleScatteringUnit, 0);
-      }
+      p.tables->bind_integration_inputs();
       // The space volume's column list: zeros.
       if (program == programs.space) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, columns());
       for (GLuint i = 0; i < 4; ++i)
@@ -575,33 +610,22 @@ void warm_up_programs(AtmospherePass::Impl& p, const physics::PassFrame& frame, 
     if (!draws.empty()) {
       const bool star_catalogue = frame.stars.enabled && !p.star_catalogue.empty();
       if (star_catalogue) p.star_catalogue.bind(double(frame.stars.sigma));
-      p.tables->bind();
-      for (GLuint unit = 0; unit < gpu::kTableUnitCount; ++unit) glBindSampler(unit, 0);
-      // The sky-view table and the volumes are written by the frames of
-      // other contexts: scratch copies of their formats instead.
-      for (int i = 0; i < 3; ++i)
-        glBindTextureUnit(gpu::kSkyViewRayleighUnit + GLuint(i), scratch(p.tables->sky_view_texture(i), GL_RGBA32F));
-      glBindTextureUnit(kDepthUnit, scratch(input.depth, GL_DEPTH_COMPONENT32F));
+      // Every texture a frame writes (the sky-view table, the volumes) or
+      // the engine owns: a scratch copy of its format, so that only the
+      // shared tables are read.
+      CompositeTextures t;
+      for (int i = 0; i < 3; ++i) t.sky_view[i] = scratch(p.tables->sky_view_texture(i), GL_RGBA32F);
+      t.depth = scratch(input.depth, GL_DEPTH_COMPONENT32F);
       if (input.surfaces == SurfaceMode::lit_colour) {
-        glBindTextureUnit(kColourUnit, scratch(input.colour, GL_RGBA16F));
-        glBindTextureUnit(kNormalUnit, 0);
+        t.colour = scratch(input.colour, GL_RGBA16F);
       } else {
-        glBindTextureUnit(kAlbedoUnit, scratch(input.albedo, GL_RGBA16F));
-        glBindTextureUnit(kNormalUnit, scratch(input.normal, GL_RGBA16F));
+        t.albedo = scratch(input.albedo, GL_RGBA16F);
+        t.normal = scratch(input.normal, GL_RGBA16F);
       }
-      glBindTextureUnit(kShadowUnit, input.shadow_map != 0 ? scratch(input.shadow_map, GL_DEPTH_COMPONENT32F) : 0);
-      for (GLuint unit : {kDepthUnit, kColourUnit, kNormalUnit}) glBindSampler(unit, p.depth_sampler);
-      glBindSampler(kShadowUnit, p.shadow_sampler);
-      for (GLuint i = 0; i < 4; ++i) {
-        glBindTextureUnit(kVolumeUnit + i, scratch(frame.space_volume ? p.space_volume[0] : volume_like, GL_RGBA32F));
-        glBindSampler(kVolumeUnit + i, 0);
-      }
-      glBindTextureUnit(kSpaceRegularColumnsUnit, scratch(p.space_regular_columns, GL_RGBA32F));
-      glBindSampler(kSpaceRegularColumnsUnit, 0);
-      if (p.instant) {
-        glBindTextureUnit(kInstantSpaceMultipleScatteringUnit, p.tables->instant_multiple_scattering_texture());
-        glBindSampler(kInstantSpaceMultipleScatteringUnit, 0);
-      }
+      if (input.shadow_map != 0) t.shadow_map = scratch(input.shadow_map, GL_DEPTH_COMPONENT32F);
+      for (GLuint& texture : t.volume) texture = scratch(frame.space_volume ? p.space_volume[0] : volume_like, GL_RGBA32F);
+      t.space_regular_columns = scratch(p.space_regular_columns, GL_RGBA32F);
+      bind_composite_textures(p, input.surfaces, t);
       glCreateFramebuffers(1, &framebuffer);
       glNamedFramebufferTexture(framebuffer, GL_COLOR_ATTACHMENT0, scratch(input.output, GL_RGBA32F), 0);
       glCreateRenderbuffers(1, &stencil);
@@ -859,7 +883,7 @@ std::vector<FrameInput> flight_views(const AtmospherePass::Impl& p, const FrameI
 void AtmospherePass::link_programs(const FrameInput& input, ProgramScope scope, const std::atomic<bool>* stop) {
   Impl& p = *impl_;
   gpu::require_gl_context("the engine plugin (atmos::AtmospherePass::link_programs)");
-  (void)frame_without_textures(p, input);  // the input checked before its camera moves
+  if (scope == ProgramScope::flight) (void)frame_without_textures(p, input);  // checked before its camera moves
   // The frames to prepare: with ProgramScope::flight, at each altitude also
   // the frame with the sun low somewhere in view if it is not (or not if
   // it is) and, above the atmosphere, with the space volume if without (or
@@ -1045,30 +1069,11 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
 
   // Pass 2: this frame's aerial-perspective volume, for cameras low in the
   // atmosphere.
-  if (frame.volume && p.instant) {
+  if (frame.volume) {
     const GLuint volume_program = programs.volume;
     glUseProgram(volume_program);
     set_volume_uniforms(volume_program, frame);
-    p.tables->bind_parameters();
-    glBindTextureUnit(0, p.tables->texture(0));
-    glBindSampler(0, 0);
-    glBindTextureUnit(gpu::kInstantMultipleScatteringUnit, p.tables->instant_multiple_scattering_texture());
-    glBindSampler(gpu::kInstantMultipleScatteringUnit, 0);
-    for (GLuint i = 0; i < 4; ++i) glBindImageTexture(i, p.volume[i], 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-    if (input.timed) p.timer->begin();
-    glDispatchCompute((AP_WIDTH + 7) / 8, (AP_HEIGHT + 7) / 8, 1);
-    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
-    if (input.timed) timings.volume_ms = p.timer->end_ms();
-    for (GLuint i = 0; i < 4; ++i) glBindImageTexture(i, 0, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-  } else if (frame.volume) {
-    const GLuint volume_program = programs.volume;
-    glUseProgram(volume_program);
-    set_volume_uniforms(volume_program, frame);
-    p.tables->bind_parameters();
-    for (GLuint unit = 0; unit < 5; ++unit) {
-      glBindTextureUnit(unit, p.tables->texture(int(unit)));
-      glBindSampler(unit, 0);
-    }
+    p.tables->bind_integration_inputs();
     for (GLuint i = 0; i < 4; ++i) glBindImageTexture(i, p.volume[i], 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     if (input.timed) p.timer->begin();
     glDispatchCompute((AP_WIDTH + 7) / 8, (AP_HEIGHT + 7) / 8, 1);
@@ -1090,11 +1095,7 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
     if (count > 0) {
       glNamedBufferSubData(p.space_columns, 0, GLsizeiptr(sizeof(GLint)) * count, columns.order.data());
       glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, p.space_columns);
-      p.tables->bind_parameters();
-      for (GLuint unit = 0; unit < 5; ++unit) {
-        glBindTextureUnit(unit, p.tables->texture(int(unit)));
-        glBindSampler(unit, 0);
-      }
+      p.tables->bind_integration_inputs();
       for (GLuint i = 0; i < 4; ++i)
         glBindImageTexture(i, p.space_volume[i], 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
       const GLuint program = programs.space;
@@ -1136,29 +1137,16 @@ std::uint32_t AtmospherePass::render(const FrameInput& input) {
   for (const Draw& draw : draws)
     set_composite_uniforms(draw, frame, star_catalogue, input.world_from_star_catalogue);
   if (star_catalogue) p.star_catalogue.bind(double(frame.stars.sigma));
-  p.tables->bind();
-  for (GLuint unit = 0; unit < gpu::kTableUnitCount; ++unit) glBindSampler(unit, 0);
-  glBindTextureUnit(kDepthUnit, input.depth);
-  if (input.surfaces == SurfaceMode::lit_colour) {
-    glBindTextureUnit(kColourUnit, input.colour);
-    glBindTextureUnit(kNormalUnit, 0);
-  } else {
-    glBindTextureUnit(kAlbedoUnit, input.albedo);
-    glBindTextureUnit(kNormalUnit, input.normal);
-  }
-  glBindTextureUnit(kShadowUnit, shadows ? input.shadow_map : 0);
-  for (GLuint unit : {kDepthUnit, kColourUnit, kNormalUnit}) glBindSampler(unit, p.depth_sampler);
-  glBindSampler(kShadowUnit, p.shadow_sampler);
-  for (GLuint i = 0; i < 4; ++i) {
-    glBindTextureUnit(kVolumeUnit + i, frame.space_volume ? p.space_volume[i] : p.volume[i]);
-    glBindSampler(kVolumeUnit + i, 0);
-  }
-  glBindTextureUnit(kSpaceRegularColumnsUnit, p.space_regular_columns);
-  if (p.instant) {
-    glBindTextureUnit(kInstantSpaceMultipleScatteringUnit, p.tables->instant_multiple_scattering_texture());
-    glBindSampler(kInstantSpaceMultipleScatteringUnit, 0);
-  }
-  glBindSampler(kSpaceRegularColumnsUnit, 0);
+  CompositeTextures textures;
+  for (int i = 0; i < 3; ++i) textures.sky_view[i] = p.tables->sky_view_texture(i);
+  textures.depth = input.depth;
+  textures.colour = input.colour;
+  textures.albedo = input.albedo;
+  textures.normal = input.normal;
+  textures.shadow_map = shadows ? input.shadow_map : 0;
+  for (GLuint i = 0; i < 4; ++i) textures.volume[i] = frame.space_volume ? p.space_volume[i] : p.volume[i];
+  textures.space_regular_columns = p.space_regular_columns;
+  bind_composite_textures(p, input.surfaces, textures);
   glBindVertexArray(p.vertex_array);
   glBindFramebuffer(GL_FRAMEBUFFER, p.framebuffer);
   glViewport(0, 0, input.width, input.height);

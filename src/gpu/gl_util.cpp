@@ -666,7 +666,7 @@ GLuint GpuTables::link_sky_view_program(const glm::vec3& camera, const glm::vec3
                                           : sky_view_fragment_shader_source(*params_, *spectral_, low_sun, eclipse));
 }
 
-void GpuTables::bind_sky_view_inputs() const {
+void GpuTables::bind_integration_inputs() const {
   for (GLuint unit = 0; unit < 5; ++unit) {
     glBindTextureUnit(unit, textures_[unit]);
     glBindSampler(unit, 0);
@@ -676,6 +676,10 @@ void GpuTables::bind_sky_view_inputs() const {
     glBindTextureUnit(kInstantMultipleScatteringUnit, instant_multiple_scattering_);
     glBindSampler(kInstantMultipleScatteringUnit, 0);
   }
+}
+
+void GpuTables::bind_sky_view_inputs() const {
+  bind_integration_inputs();
   // The table's own textures must not be bound for reading while drawn to.
   for (GLuint unit : {kSkyViewRayleighUnit, kSkyViewAerosolUnit, kSkyViewSurfaceUnit}) glBindTextureUnit(unit, 0);
 }

@@ -180,6 +180,11 @@ class GpuTables {
   // Binds the buffer of the programs' parameter block (parameter_block:
   // ATMOSPHERE, SPECTRAL, the colour matrix) to a uniform-buffer binding.
   void bind_parameters(GLuint binding = kParametersBinding) const;
+  // Binds what the programs that integrate along rays read (the sky-view
+  // table's, the aerial-perspective volumes'): the five tables on units
+  // 0..4 without sampler objects, the instant mode's multiple-scattering
+  // table on kInstantMultipleScatteringUnit, and the parameter block.
+  void bind_integration_inputs() const;
   GLuint texture(int index) const { return textures_[index]; }
   // Whether these are the instant mode's tables, and their multiple-scattering table.
   bool instant() const { return instant_multiple_scattering_ != 0; }
@@ -223,9 +228,8 @@ class GpuTables {
   GLuint link_sky_view_program(const glm::vec3& camera, const glm::vec3& sun, const physics::Moons& moons) const;
 
  private:
-  // Binds what the sky-view programs read: the tables on units 0..4 (and
-  // the instant mode's multiple scattering), the parameter block; unbinds
-  // the sky-view table's own units, which they draw to.
+  // bind_integration_inputs, and the sky-view table's own units unbound:
+  // its programs draw to it.
   void bind_sky_view_inputs() const;
 
   void release();
