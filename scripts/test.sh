@@ -2,9 +2,9 @@
 # Installs what is needed, builds with warnings as errors, and runs a tier of
 # the tests (CTest, one test per GoogleTest suite; tests/CMakeLists.txt):
 #
-#   bash scripts/test.sh          the default tier (about 15 minutes from a
-#                                 fresh clone on 2 cores): the unit tests
-#                                 (invariants, fast paths against the shared
+#   bash scripts/test.sh          the default tier (5-15 minutes from a fresh
+#                                 clone on 2 cores, by the machine's speed):
+#                                 the unit tests (invariants, fast paths against the shared
 #                                 definitions, cache, post, globe) built with
 #                                 AddressSanitizer and UndefinedBehaviorSanitizer,
 #                                 but for three kinds that run in the release
