@@ -61,6 +61,10 @@ INLINE float simpson_weight(int i, int n, float dt) {
 //  - sunlit_ray_map: the single-scattering integrand itself (scattering
 //    coefficient x transmittance from the start x transmittance to the sun),
 //    which follows the planet's shadow and the reddened grazing sunlight.
+//    Its transmittance to the sun is transmittance_to_sun_estimate (one
+//    lookup per cell instead of one per point of the solar disc): the
+//    density's shape is what places the nodes, and the nodes weigh the
+//    exact transmittance_to_sun.
 struct RayNodes {
   int count;
   float t[RAY_NODES_CAPACITY];
@@ -156,8 +160,8 @@ INLINE RayMap sunlit_ray_map(IN(AtmosphereParams) atmosphere, IN(sampler2D) tran
     map.extinction[k] = extinction;
     map.optical_depth[k] = optical_depth;
     vec3 f = (beta_rayleigh + beta_aerosol) * exp(-optical_depth) *
-             transmittance_to_sun(atmosphere, transmittance_texture, r_t,
-                                  clamp_cosine(mu_s_along_ray(r, mu_s, nu, t, r_t))) *
+             transmittance_to_sun_estimate(atmosphere, transmittance_texture, r_t,
+                                           clamp_cosine(mu_s_along_ray(r, mu_s, nu, t, r_t))) *
              uniform_sunlight_visible_fraction(moons, atmosphere.sun_angular_radius, origin + view_ray * t,
                                                sun_direction);
     map.w[k] = f.x + f.y + f.z;

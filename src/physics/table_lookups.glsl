@@ -135,49 +135,65 @@ INLINE bool sun_needs_disc_average(IN(AtmosphereParams) atmosphere, float mu_s, 
   return mu_s - mu_h < SUN_DISC_AVERAGE_MARGIN + atmosphere.sun_angular_radius;
 }
 
-// Node k of the quadrature over the visible part of a uniform solar disc at
-// zenith cosine mu_s, seen from a point whose horizon is at mu_h. Disc
-// points at elevation offset x alpha from the centre (x in [-1, 1]) form a
-// chord of relative length sqrt(1 - x²); with x = cos θ the visible part
-// (x above the horizon) is θ in [0, θ_h] and the disc average of f is
+// The SUN_DISC_NODES (= 4) nodes of the quadrature over the visible part of
+// a uniform solar disc at zenith cosine mu_s, seen from a point whose
+// horizon is at mu_h. Disc points at elevation offset x alpha from the
+// centre (x in [-1, 1]) form a chord of relative length sqrt(1 - x²); with
+// x = cos θ the visible part (x above the horizon) is θ in [0, θ_h] and the
+// disc average of f is
 //   (2 / π) ∫_0^θ_h sin²θ f(cos θ) dθ,
 // integrated by the midpoint rule on SUN_DISC_NODES intervals — for the
 // whole disc (θ_h = π) the integrand is periodic and the rule gives the
 // disc's moments exactly (mean offset 0, variance alpha² / 4; 4-point
 // Gauss-Legendre is off by 12 % in the variance, which is what the average
-// is for); for part of the disc the weights are rescaled to sum to the exact
-// visible fraction. Returns the zenith cosine of the node and its weight. The node's sine of elevation is
-// sin(e + δ) = mu_s cos δ + sqrt(1 - mu_s²) sin δ with δ = alpha cos θ <= 0.3°,
-// where cos δ = 1 - δ²/2 and sin δ = δ to 1e-9; and for a disc wholly above
-// the horizon (the common case) cos θ and sin θ are constants: no
-// trigonometry, which the precomputation calls for most texels near the
-// horizon.
-INLINE float sun_disc_node(IN(AtmosphereParams) atmosphere, float mu_s, float mu_h, int k, OUT(float) weight) {
+// is for); for part of the disc the weights sin²θ_k are scaled to sum to the
+// exact visible fraction, (θ_h - sin θ_h cos θ_h) / π. The node angles
+// θ_k = (k + ½) θ_h / 4 follow from cos θ_h = x_h by the half-angle formulas
+// (cos(θ/2) = sqrt((1 + cos θ) / 2), sin(θ/2) = sin θ / (2 cos(θ/2)), without
+// cancellation for a thin visible sliver) and angle addition: square roots
+// instead of a sine and a cosine per node, which software rasterisers pay
+// for every pixel whether or not its disc is cut. Each node's sine of
+// elevation is sin(e + δ) = mu_s cos δ + sqrt(1 - mu_s²) sin δ with
+// δ = alpha cos θ <= 0.3°, where cos δ = 1 - δ²/2 and sin δ = δ to 1e-9; and
+// for a disc wholly above the horizon (the common case) cos θ and sin θ are
+// constants: no trigonometry, which the precomputation calls for most texels
+// near the horizon. `mu`: the nodes' zenith cosines, `weight`: their weights.
+#if SUN_DISC_NODES != 4
+#error "sun_disc_nodes halves the disc's angle three times: four nodes"
+#endif
+INLINE void sun_disc_nodes(IN(AtmosphereParams) atmosphere, float mu_s, float mu_h, OUT(vec4) mu,
+                           OUT(vec4) weight) {
   float alpha = atmosphere.sun_angular_radius;
   // cos θ_k and sin θ_k for θ_h = π: θ_k = 22.5°, 67.5°, 112.5°, 157.5°.
-  bool outer = k == 0 || k == 3;
-  float cos_theta = outer ? 0.9238795325f : 0.3826834324f;
-  float sin_theta = outer ? 0.3826834324f : 0.9238795325f;
-  if (k >= 2) cos_theta = -cos_theta;
-  float theta_h = PI;
+  vec4 cos_theta = vec4(0.9238795325f, 0.3826834324f, -0.3826834324f, -0.9238795325f);
+  vec4 sin_theta = vec4(0.3826834324f, 0.9238795325f, 0.9238795325f, 0.3826834324f);
+  weight = PI / float(SUN_DISC_NODES) * sin_theta * sin_theta * (2.0f / PI);
   if (mu_s - mu_h <= alpha) {
     // Part of the disc may be below the horizon (|d mu / d angle| <= 1).
     float x_h = clamp((asin(clamp_cosine(mu_h)) - asin(clamp_cosine(mu_s))) / alpha, -1.0f, 1.0f);
-    theta_h = acos(x_h);
-    float theta = theta_h * (float(k) + 0.5f) / float(SUN_DISC_NODES);
-    cos_theta = cos(theta);
-    sin_theta = sin(theta);
+    float sin_h = safe_sqrt((1.0f - x_h) * (1.0f + x_h));
+    float cos_2 = safe_sqrt(0.5f * (1.0f + x_h));  // θ_h / 2
+    float sin_2 = safe_sqrt(0.5f * (1.0f - x_h));
+    float cos_4 = sqrt(0.5f * (1.0f + cos_2));  // θ_h / 4
+    float sin_4 = sin_2 / (2.0f * cos_4);
+    float cos_8 = sqrt(0.5f * (1.0f + cos_4));  // θ_h / 8
+    float sin_8 = sin_4 / (2.0f * cos_8);
+    cos_theta.x = cos_8;
+    sin_theta.x = sin_8;
+    cos_theta.y = cos_theta.x * cos_4 - sin_theta.x * sin_4;
+    sin_theta.y = sin_theta.x * cos_4 + cos_theta.x * sin_4;
+    cos_theta.z = cos_theta.y * cos_4 - sin_theta.y * sin_4;
+    sin_theta.z = sin_theta.y * cos_4 + cos_theta.y * sin_4;
+    cos_theta.w = cos_theta.z * cos_4 - sin_theta.z * sin_4;
+    sin_theta.w = sin_theta.z * cos_4 + cos_theta.z * sin_4;
+    vec4 sin2 = sin_theta * sin_theta;
+    float sum = sin2.x + sin2.y + sin2.z + sin2.w;
+    float fraction = max(acos(x_h) - sin_h * x_h, 0.0f) / PI;
+    weight = sum > 0.0f ? sin2 * (fraction / sum) : vec4(0.0f);
   }
-  weight = theta_h / float(SUN_DISC_NODES) * sin_theta * sin_theta * (2.0f / PI);
-  if (theta_h < PI && theta_h > 1e-4f) {
-    // Rescale to the exact visible fraction, (θ_h - sin θ_h cos θ_h) / π;
-    // the midpoint sum of sin² is N / 2 - sin 2θ_h / (4 sin(θ_h / N)).
-    float n = float(SUN_DISC_NODES);
-    float midpoint_sum = theta_h / n * (2.0f / PI) * (0.5f * n - sin(2.0f * theta_h) / (4.0f * sin(theta_h / n)));
-    weight *= (theta_h - 0.5f * sin(2.0f * theta_h)) / PI / midpoint_sum;
-  }
-  float delta = alpha * cos_theta;
-  return clamp_cosine(mu_s * (1.0f - 0.5f * delta * delta) + safe_sqrt(1.0f - mu_s * mu_s) * delta);
+  vec4 delta = alpha * cos_theta;
+  float sin_s = safe_sqrt(1.0f - mu_s * mu_s);
+  mu = clamp(mu_s * (vec4(1.0f) - 0.5f * delta * delta) + sin_s * delta, vec4(-1.0f), vec4(1.0f));
 }
 
 // Transmittance from radius r to the sun, including the planet's shadow:
@@ -189,13 +205,29 @@ INLINE vec3 transmittance_to_sun(IN(AtmosphereParams) atmosphere, IN(sampler2D) 
   if (!sun_needs_disc_average(atmosphere, mu_s, mu_h))
     return transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, mu_s);
   if (mu_s - mu_h < -atmosphere.sun_angular_radius) return vec3(0.0f);
+  vec4 mu;
+  vec4 weight;
+  sun_disc_nodes(atmosphere, mu_s, mu_h, mu, weight);
   vec3 sum = vec3(0.0f);
-  for (int k = 0; k < SUN_DISC_NODES; ++k) {
-    float weight;
-    float mu_k = sun_disc_node(atmosphere, mu_s, mu_h, k, weight);
-    sum += weight * transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, mu_k);
-  }
+  for (int k = 0; k < SUN_DISC_NODES; ++k)
+    sum += weight[k] * transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, mu[k]);
   return sum;
+}
+
+// A one-lookup estimate of transmittance_to_sun, for densities that only
+// place quadrature nodes (sunlit_ray_map): the visible fraction of the disc,
+// taken linear in the height of its centre above the horizon (within 0.06 of
+// sun_visible_fraction's), times the transmittance towards the middle of its
+// visible part (the centre, or halfway between the horizon and the top of a
+// setting disc). The nodes themselves weigh the exact disc average, so the
+// estimate moves nodes and leaves the integrand as it is.
+INLINE vec3 transmittance_to_sun_estimate(IN(AtmosphereParams) atmosphere, IN(sampler2D) transmittance_texture,
+                                          float r, float mu_s) {
+  float mu_h = horizon_mu(atmosphere, r);
+  float alpha = atmosphere.sun_angular_radius;
+  float visible = clamp(0.5f + 0.5f * (mu_s - mu_h) / alpha, 0.0f, 1.0f);
+  float mu_middle = max(max(mu_s, 0.5f * (mu_s + alpha + mu_h)), mu_h);
+  return visible * transmittance_to_top_atmosphere_boundary(atmosphere, transmittance_texture, r, mu_middle);
 }
 
 // `set` reading the delta-M scaled medium's optical depth instead of its own

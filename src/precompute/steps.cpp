@@ -151,7 +151,7 @@ class GroundIrradiance {
 class SunTransmittanceAtRadius {
  public:
   SunTransmittanceAtRadius(const AtmosphereParams& a, const sampler2D& t, float r) : a_(a) {
-    // sun_disc_node() for a disc wholly above the horizon: θ_k = 22.5°,
+    // sun_disc_nodes() for a disc wholly above the horizon: θ_k = 22.5°,
     // 67.5°, 112.5°, 157.5°.
     for (int k = 0; k < SUN_DISC_NODES; ++k) {
       const bool outer = k == 0 || k == 3;
@@ -247,7 +247,7 @@ class SunTransmittanceAtRadius {
         out[i] = vec3(0.0f);
         continue;
       }
-      // The disc average of transmittance_to_sun(), sun_disc_node() for each
+      // The disc average of transmittance_to_sun(), sun_disc_nodes() for each
       // point: for a disc wholly above the horizon its weights and offsets
       // are constants (disc_weight_, disc_delta_ and 1 - delta² / 2 in
       // disc_cosine_), with the same arithmetic.
@@ -259,11 +259,12 @@ class SunTransmittanceAtRadius {
         continue;
       }
       // A disc cut by the horizon (rare): its own nodes and weights.
+      vec4 node_mu, node_weight;
+      sun_disc_nodes(a_, mu, mu_h_, node_mu, node_weight);
       v4f nodes, weights;
       for (int k = 0; k < SUN_DISC_NODES; ++k) {
-        float weight;
-        nodes[k] = sun_disc_node(a_, mu, mu_h_, k, weight);
-        weights[k] = weight;
+        nodes[k] = node_mu[k];
+        weights[k] = node_weight[k];
       }
       at8(concat(nodes, nodes), t);
       out[i] = disc_average(0, weights);
