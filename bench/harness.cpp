@@ -555,7 +555,16 @@ void run_all(const atmos::Atmosphere& atmosphere, const atmos::PrecomputeOptions
   time_instant(atmosphere, width, height, sink);
   time_ground_albedo(atmosphere, options, sink);
   time_post(renderer, camera, sink);
-  time_globe(*context, atmosphere, tables, width, height, sink);
+  {
+    // The globe and its descent in a context of their own, as an engine runs
+    // the pass: with the Renderer above in the same context, the programs
+    // that the descent's preparation compiles on another thread
+    // (AtmospherePass::link_programs) were seen to compile again at their
+    // first frame (docs/plugin.md, Compiling ahead of a flight).
+    const std::unique_ptr<atmos::GlContext> globe_context = atmos::GlContext::create_headless();
+    time_globe(*globe_context, atmosphere, tables, width, height, sink);
+  }
+  context->make_current();
   time_water(atmosphere, tables, width, height, sink);
 }
 
