@@ -287,12 +287,18 @@ TEST_F(Plugin, MatchesCpuTwin) {
   }
 }
 
+// An engine frame's input without its textures: link_programs reads none.
+atmos::FrameInput numbers_of(const EngineFrame& e) {
+  atmos::FrameInput numbers = e.input;
+  numbers.depth = numbers.colour = 0;
+  return numbers;
+}
+
 Plugin::ShotToRelink Plugin::shot_to_relink() {
   const Shot shot = comparison_shots().front().second;
   EngineFrame first = make_engine_frame(shot);
   ShotToRelink r{make_engine_frame(shot), run(first), {}};
-  r.numbers = r.frame.input;
-  r.numbers.depth = r.numbers.colour = 0;
+  r.numbers = numbers_of(r.frame);
   return r;
 }
 
@@ -374,10 +380,8 @@ TEST_F(Plugin, LinksOnAnotherThreadWhileDrawing) {
 // prepares programs is told so when its pass is about to go).
 TEST_F(Plugin, LinksNothingOnceStopped) {
   const Shot shot = comparison_shots().front().second;
-  EngineFrame e = make_engine_frame(shot);
+  const atmos::FrameInput numbers = numbers_of(make_engine_frame(shot));
   atmos::AtmospherePass pass(*earth_, *tables_, engine_frame(), atmos::PassPrograms::none);
-  atmos::FrameInput numbers = e.input;
-  numbers.depth = numbers.colour = 0;
   const std::atomic<bool> stop{true};
   pass.link_programs(numbers, atmos::ProgramScope::flight, &stop);
   EXPECT_FALSE(pass.programs_linked(numbers));

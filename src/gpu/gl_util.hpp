@@ -202,13 +202,6 @@ class GpuTables {
   // readers alike.
   physics::SkyViewFrame sky_view_frame(const glm::vec3& camera, const glm::vec3& sun) const;
 
-  // Computes this frame's sky-view table for a camera in the atmosphere
-  // (camera_uses_sky_view) at `camera` (m, planet-centred) with the sun in
-  // direction `sun`, in the frame `frame` (sky_view_frame); returns its GPU
-  // time in ms (0 without a timer). Leaves the sky-view framebuffer bound and
-  // the tables bound to units 0..4. With moons, the eclipsed table (the
-  // frame must then have full_azimuth). The instant mode's tables compute
-  // the instant mode's table (without moons).
   // Draws `program` (a sky-view program of sky_view_program's) once over 3x3
   // pixels of scratch targets of the table's formats in the CURRENT
   // context, with the state of update_sky_view: drivers that compile
@@ -217,6 +210,13 @@ class GpuTables {
   // be drawing with the program): the draw runs with those the program
   // holds, over pixels nobody reads.
   void warm_up_sky_view(GLuint program) const;
+  // Computes this frame's sky-view table for a camera in the atmosphere
+  // (camera_uses_sky_view) at `camera` (m, planet-centred) with the sun in
+  // direction `sun`, in the frame `frame` (sky_view_frame); returns its GPU
+  // time in ms (0 without a timer). Leaves the sky-view framebuffer bound and
+  // the tables bound to units 0..4. With moons, the eclipsed table (the
+  // frame must then have full_azimuth). The instant mode's tables compute
+  // the instant mode's table (without moons).
   double update_sky_view(const glm::vec3& camera, const glm::vec3& sun, const physics::SkyViewFrame& frame,
                          GpuTimer* timer, const physics::Moons& moons = physics::no_moons());
   // The slot of the program update_sky_view draws with for that camera,

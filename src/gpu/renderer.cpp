@@ -274,11 +274,8 @@ Image Renderer::render(const Camera& camera, const glm::dvec3& sun_direction) {
   const int tile_height = std::min(height, kTileSize);
   p.reserve_tile(tile_width, tile_height);
 
-  glDisable(GL_BLEND);
-  glDisable(GL_DEPTH_TEST);
-  glDisable(GL_SCISSOR_TEST);
+  gpu::set_full_screen_state();
   glDisable(GL_DITHER);
-  glDisable(GL_FRAMEBUFFER_SRGB);
 
   // Pass 1: this frame's sky-view table, for cameras in the atmosphere (see
   // sky_radiance); the test is the shared function's, on the same floats.
